@@ -1,0 +1,30 @@
+# Two commands on a fresh machine:
+#   make run    - set up everything, then run the main job (headless, CPU)
+#   make test   - set up everything, then run the test suite
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: run test setup system-deps bench docs clean
+
+$(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml) $(wildcard tests/fixture_plugins/*/pyproject.toml)
+	PYTHON=$(PYTHON) bash scripts/setup_env.sh
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+run: $(STAMP)
+	MUJOCO_GL=$${MUJOCO_GL:-} $(VENV)/bin/embodichain run-env --headless
+
+test: $(STAMP)
+	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)
+
+test-all: $(STAMP)
+	$(PY) -m pytest -q tests $(wildcard plugins/*/tests)
+
+bench: $(STAMP)
+	$(PY) benchmarks/env_throughput.py
+
+clean:
+	rm -rf $(VENV)

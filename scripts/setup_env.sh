@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Creates the project's virtual environment and installs the core, every plugin
+# under plugins/, and the test fixture plugins. Idempotent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON=${PYTHON:-python3}
+
+# System library for headless rendering (Mesa EGL / OSMesa). Only when missing
+# and only when we may install packages (root with apt).
+if ! ldconfig -p 2>/dev/null | grep -q -E "libOSMesa|libEGL_mesa"; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = "0" ]; then
+    echo "[setup] installing Mesa (EGL/OSMesa) for headless rendering"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+        libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 >/dev/null) \
+      || echo "[setup] warning: could not install Mesa; rendering will need a GL backend"
+  fi
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  "$PYTHON" -m venv .venv
+fi
+PIP=".venv/bin/python -m pip"
+$PIP install -q --upgrade pip >/dev/null 2>&1 || true
+# A CPU build of torch: pin the version so a bare 'torch' requirement does not
+# pull the newest CUDA build with several GB of dependencies.
+$PIP install -q "torch==${TORCH_VERSION:-2.13.0}"
+args=(-e ".[test]")
+for p in plugins/*/ tests/fixture_plugins/*/; do
+  [ -f "$p/pyproject.toml" ] && args+=(-e "$p")
+done
+$PIP install -q "${args[@]}"
+echo "[setup] environment ready in .venv"
