@@ -1,0 +1,97 @@
+"""``embodichain``: the console script dispatching to registered subcommands.
+
+Subcommands are ``"module:function"`` targets from the ``commands`` registry
+(``function(argv: list[str]) -> int``), imported only when they run: neither
+``embodichain --help`` nor ``embodichain --version`` imports a command module.
+``embodichain <command> ...`` forwards the rest of the arguments verbatim, so
+``embodichain <command> --help`` reaches the command's own parser.
+
+Example:
+    $ embodichain list tasks
+    $ embodichain run-env --help
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any, Callable, Sequence
+
+from embodichain_core.plugins.registry import Registry, TargetImportError
+from embodichain_core.utils.suggest import did_you_mean
+
+PROG = "embodichain"
+
+
+def build_parser(commands: Registry) -> argparse.ArgumentParser:
+    """The top-level parser: ``--help`` lists the commands, ``--version`` prints the version."""
+    from embodichain_core import __version__
+
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Configuration-driven robot-learning environments on MuJoCo.",
+        epilog=f"Run '{PROG} <command> --help' for the options of a command.",
+    )
+    parser.add_argument("--version", action="version", version=f"embodichain-core {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="<command>", title="commands")
+    for entry in commands.entries():
+        sub.add_parser(entry.name, help=entry.meta.get("help") or entry.description, add_help=False)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``embodichain`` with ``argv`` (default: ``sys.argv[1:]``); return the exit code."""
+    from embodichain_core.plugins import command_registry
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    commands = command_registry()
+    parser = build_parser(commands)
+    if not args:
+        parser.print_help()
+        return 0
+    if args[0].startswith("-"):
+        return _run(lambda: _top_level(parser, args))
+    entry = commands.find(args[0])
+    if entry is None:
+        parser.print_usage(sys.stderr)
+        hint = did_you_mean(args[0], commands.names())
+        print(f"{PROG}: error: unknown command {args[0]!r}.{hint}", file=sys.stderr)
+        return 2
+    try:
+        command = entry.resolve()
+    except TargetImportError as err:
+        print(f"{PROG}: error: {err}", file=sys.stderr)
+        return 1
+    return _run(lambda: command(args[1:]))
+
+
+def _top_level(parser: argparse.ArgumentParser, args: list[str]) -> int:
+    """Handle ``--help`` / ``--version`` (they exit); anything else is a usage error."""
+    parser.parse_args(args)
+    parser.print_usage(sys.stderr)
+    print(f"{PROG}: error: put the command before its options", file=sys.stderr)
+    return 2
+
+
+def _run(func: Callable[[], Any]) -> int:
+    try:
+        return exit_code(func())
+    except SystemExit as exc:
+        return exit_code(exc.code)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+def exit_code(code: Any) -> int:
+    """``None`` -> 0, ints as they are, anything else is printed and gives 1."""
+    if code is None:
+        return 0
+    if isinstance(code, int):
+        return int(code)
+    print(code, file=sys.stderr)
+    return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

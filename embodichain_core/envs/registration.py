@@ -1,0 +1,87 @@
+"""``register_env``: register a task class with gymnasium (``gym.make`` and ``gym.make_vec``).
+
+The episode limit stays inside the env: ``max_episode_steps`` is never given to
+gymnasium (its ``TimeLimit`` would collapse batched truncation); it becomes the
+env's limit unless the config sets another.
+
+Example:
+    >>> @register_env("MyTask-v0", max_episode_steps=200)
+    ... class MyTask(EmbodiedEnv):
+    ...     ...
+    >>> env = gym.make("MyTask-v0", cfg=MyTaskCfg(num_envs=8))
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+import gymnasium as gym
+
+REGISTERED_ENVS: dict[str, "EnvSpec"] = {}
+
+
+@dataclass
+class EnvSpec:
+    """What ``register_env`` recorded for a task id."""
+
+    uid: str
+    cls: type
+    max_episode_steps: Optional[int] = None
+    default_kwargs: dict = field(default_factory=dict)
+
+    def make(self, **kwargs: Any) -> Any:
+        return self.cls(**{**self.default_kwargs, **kwargs})
+
+
+def _entry(cls: type) -> str:
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
+    """Vector entry point: the env is already batched, so it is its own vector env."""
+    module, _, attr = cls_path.partition(":")
+    cls = getattr(__import__(module, fromlist=[attr]), attr)
+    kwargs.pop("vectorization_mode", None)
+    return cls(num_envs=num_envs, **kwargs)
+
+
+def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bool = False,
+                 **kwargs: Any) -> Callable[[type], type]:
+    """Class decorator registering ``uid`` with gymnasium.
+
+    Re-registering the same class (its module being imported again by gymnasium)
+    is a no-op; another class under a taken id warns and keeps the first unless
+    ``override=True``. ``kwargs`` must be JSON-serialisable default constructor args.
+    """
+    try:
+        json.dumps(kwargs)
+    except TypeError as err:
+        raise RuntimeError(f"register_env({uid!r}): kwargs must be JSON-serialisable: {err}") from err
+
+    def wrap(cls: type) -> type:
+        from embodichain_core.envs.base_env import BaseEnv
+
+        if not (isinstance(cls, type) and issubclass(cls, BaseEnv)):
+            raise TypeError(f"register_env({uid!r}) decorates BaseEnv subclasses, got {cls!r}")
+        existing = gym.envs.registry.get(uid)
+        if existing is not None and existing.entry_point == _entry(cls) and not override:
+            REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
+            return cls
+        if existing is not None and not override:
+            warnings.warn(f"env id {uid!r} is already registered by {existing.entry_point}; keeping it "
+                          f"(pass override=True to replace it)", stacklevel=2)
+            return cls
+        gym.envs.registry.pop(uid, None)
+        defaults = dict(kwargs)
+        if max_episode_steps is not None:
+            defaults["_registered_max_episode_steps"] = int(max_episode_steps)
+        gym.register(uid, entry_point=_entry(cls), disable_env_checker=True, order_enforce=False,
+                     vector_entry_point=functools.partial(make_vec_env, _entry(cls)), kwargs=defaults)
+        REGISTERED_ENVS[uid] = EnvSpec(uid, cls, max_episode_steps, dict(kwargs))
+        return cls
+
+    return wrap

@@ -1,0 +1,122 @@
+"""Scene construction of an ``EmbodiedEnv`` from its config, and config filters."""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.managers.cfg import DatasetFunctorCfg, EventCfg
+from embodichain_core.managers.manager_base import iter_section, resolve_func
+from embodichain_core.sim.scene import Scene
+
+
+def build_scene(env: Any, events: Any) -> Scene:
+    """Add every configured entity, let functors edit the spec, compile, reset."""
+    cfg = env.cfg
+    scene = Scene(cfg.sim_cfg, env.num_envs, str(env.device))
+    robot = cfg.robot
+    if robot.uid is None:
+        robot.uid = "robot"
+    scene.add_robot(robot, "robot")
+    for i, light in enumerate(cfg.light.direct):
+        scene.add_light(light, f"light.direct[{i}]")
+    _indirect_light(scene, cfg.light.indirect)
+    for i, obj in enumerate(cfg.background):
+        scene.add_rigid_object(obj, f"background[{i}]", background=True)
+    for i, art in enumerate(cfg.articulation):
+        scene.add_articulation(art, f"articulation[{i}]")
+    for i, art in enumerate(cfg.articulation_cfg):
+        scene.add_articulation(art, f"articulation_cfg[{i}]")
+    for i, obj in enumerate(cfg.rigid_object):
+        scene.add_rigid_object(obj, f"rigid_object[{i}]")
+    for i, group in enumerate(cfg.rigid_object_group):
+        scene.add_rigid_object_group(group, f"rigid_object_group[{i}]")
+    for i, sensor_cfg in enumerate(cfg.sensor):
+        scene.add_sensor(_make_sensor(sensor_cfg, scene, f"sensor[{i}]"), f"sensor[{i}]")
+    _run_scene_hooks(env, scene, events)
+    scene.build()
+    return scene
+
+
+def _indirect_light(scene: Scene, indirect: Any) -> None:
+    if not indirect:
+        return
+    if "ambient" in indirect:
+        scene.builder.spec.visual.headlight.ambient = [float(v) for v in indirect["ambient"]][:3]
+    if "emission_light" in indirect:
+        light = indirect["emission_light"]
+        color = [float(c) * float(light.get("intensity", 1.0)) / 30.0 for c in light.get("color", (1, 1, 1))]
+        scene.builder.spec.visual.headlight.diffuse = [min(1.0, c) for c in color[:3]]
+
+
+def _make_sensor(sensor_cfg: Any, scene: Scene, path: str) -> Any:
+    from embodichain_core.plugins import get_sensor_classes
+
+    name = getattr(sensor_cfg, "sensor_type", "") or type(sensor_cfg).__name__.removesuffix("Cfg")
+    try:
+        _, sensor_cls = get_sensor_classes(name)
+    except KeyError as err:
+        raise ConfigError(f"{path}.sensor_type", str(err).strip("\"'")) from None
+    return sensor_cls(sensor_cfg, scene)
+
+
+def _run_scene_hooks(env: Any, scene: Scene, events: Any) -> None:
+    """Class functors with ``modify_scene(cfg, scene)`` edit the spec before compile."""
+    for section, cfg_type, kind in ((events, EventCfg, "event"),):
+        for name, fcfg in iter_section(section, cfg_type, "env.events"):
+            func = resolve_func(fcfg.func, kind, join_path("env.events", name))
+            hook = getattr(func, "modify_scene", None)
+            if inspect.isclass(func) and callable(hook):
+                hook(fcfg, scene)
+
+
+def filter_functors(cfg: Any, section: str) -> Any:
+    """The ``events`` section without visual randomization when ``filter_visual_rand``;
+    the ``dataset`` section or ``None`` when ``filter_dataset_saving``."""
+    value = getattr(cfg, section)
+    if section == "dataset":
+        return None if cfg.filter_dataset_saving else value
+    if section != "events" or not cfg.filter_visual_rand or value is None:
+        return value
+    kept = {}
+    for name, fcfg in iter_section(value, EventCfg, "env.events"):
+        func = resolve_func(fcfg.func, "event", join_path("env.events", name))
+        if not is_visual_randomization(func, fcfg.func):
+            kept[name] = fcfg
+    return kept
+
+
+def is_visual_randomization(func: Any, given: Any) -> bool:
+    """``randomize_*`` functors of the visual randomization category."""
+    name = getattr(func, "__name__", "")
+    if isinstance(given, str) and ":" not in given:
+        from embodichain_core.plugins import is_visual_randomization as registered
+
+        return registered(given)
+    if not name.startswith("randomize_"):
+        return False
+    category = getattr(func, "embodichain_category", "")
+    module = getattr(func, "__module__", "") or ""
+    return category == "randomization.visual" or module.endswith(("randomization.visual", "randomization.rendering"))
+
+
+def resolve_active_joints(cfg: Any, robot: Any) -> list[int]:
+    """Active joints: from ``control_parts`` (mimics removed), else ``active_joint_ids``,
+    else every non-mimic joint."""
+    if cfg.control_parts and cfg.active_joint_ids:
+        raise ConfigError("control_parts", "set either control_parts or active_joint_ids, not both")
+    if cfg.control_parts:
+        ids: list[int] = []
+        for part in cfg.control_parts:
+            try:
+                ids += [i for i in robot.get_joint_ids(part, remove_mimic=True) if i not in ids]
+            except KeyError as err:
+                raise ConfigError("control_parts", str(err).strip("\"'")) from None
+        return ids
+    if cfg.active_joint_ids:
+        bad = [i for i in cfg.active_joint_ids if not 0 <= int(i) < robot.dof]
+        if bad:
+            raise ConfigError("active_joint_ids", f"joint ids {bad} out of range for {robot.dof} joints")
+        return [int(i) for i in cfg.active_joint_ids]
+    return robot.active_joint_ids

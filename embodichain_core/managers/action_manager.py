@@ -1,0 +1,102 @@
+"""Action manager: ``pre`` terms turn the policy action into robot commands.
+
+With several ``pre`` terms the flat policy action is split by the terms' dims in
+declaration order and the commands are merged by ``input_key`` (``qpos``,
+``qvel``, ``qf``), so velocity and effort terms really drive velocity and effort.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.managers.cfg import ActionTermCfg
+from embodichain_core.managers.functor import ActionTerm
+from embodichain_core.managers.manager_base import ManagerBase
+
+
+class ActionManager(ManagerBase):
+    """Builds the action space from its ``pre`` terms and processes actions."""
+
+    section = "actions"
+    kind = "action"
+    cfg_type = ActionTermCfg
+    min_argc = 0
+
+    def _check(self, func: Any, cfg: ActionTermCfg, where: str) -> None:
+        if not (isinstance(func, type) and issubclass(func, ActionTerm)):
+            raise ConfigError(join_path(where, "func"), f"an action term must be an ActionTerm class, got {func!r}")
+        if cfg.mode not in ("pre", "post"):
+            raise ConfigError(join_path(where, "mode"), f"mode must be 'pre' or 'post', got {cfg.mode!r}")
+
+    def terms(self, mode: str = "pre") -> list[ActionTerm]:
+        return [e.func for e in self.entries.values() if e.cfg.mode == mode]
+
+    def get_terms_by_mode(self, mode: str) -> dict[str, ActionTerm]:
+        return {n: e.func for n, e in self.entries.items() if e.cfg.mode == mode}
+
+    def get_action_dim_by_mode(self, mode: str) -> int:
+        return sum(t.action_dim for t in self.terms(mode))
+
+    @property
+    def total_action_dim(self) -> int:
+        return self.get_action_dim_by_mode("pre")
+
+    def get_term(self, name: str) -> ActionTerm:
+        return self.get_functor(name)
+
+    def single_action_space(self) -> gym.spaces.Box | None:
+        """The policy's per-env Box, or ``None`` without ``pre`` terms."""
+        terms = self.terms("pre")
+        if not terms:
+            return None
+        lows, highs = zip(*(t.action_bounds() for t in terms))
+        low = torch.cat([torch.as_tensor(x, dtype=torch.float32) for x in lows]).numpy()
+        high = torch.cat([torch.as_tensor(x, dtype=torch.float32) for x in highs]).numpy()
+        return gym.spaces.Box(low=low, high=high, dtype=np.float32)
+
+    def process_action(self, action: Any, mode: str = "pre") -> Any:
+        """Map the policy action to a command (tensor of qpos targets or a dict)."""
+        terms = self.get_terms_by_mode(mode)
+        if not terms:
+            return action
+        if isinstance(action, dict):
+            return self._process_dict(action, terms)
+        action = torch.as_tensor(action, dtype=torch.float32)
+        if len(terms) == 1:
+            return next(iter(terms.values())).process_action(action)
+        return self._process_flat(action, terms)
+
+    def _process_flat(self, action: torch.Tensor, terms: dict[str, ActionTerm]) -> dict:
+        dims = [t.action_dim for t in terms.values()]
+        if action.shape[-1] != sum(dims):
+            raise ValueError(f"action has {action.shape[-1]} values per env; the action terms "
+                             f"{list(terms)} take {dims} (total {sum(dims)})")
+        out: dict[str, Any] = {}
+        for term, chunk in zip(terms.values(), torch.split(action, dims, dim=-1)):
+            _merge(out, term.input_key, term.process_action(chunk))
+        return out
+
+    def _process_dict(self, action: dict, terms: dict[str, ActionTerm]) -> dict:
+        out: dict[str, Any] = {}
+        for name, term in terms.items():
+            key = name if name in action else term.input_key
+            if key not in action:
+                raise KeyError(f"action dict needs key {name!r} (or {term.input_key!r}); got {list(action)}")
+            _merge(out, term.input_key, term.process_action(torch.as_tensor(action[key], dtype=torch.float32)))
+        return out
+
+    def summary_rows(self) -> list[tuple[str, str, str]]:
+        return [(e.cfg.mode, n, f"{type(e.func).__name__} ({e.func.input_key}, dim {e.func.action_dim})")
+                for n, e in self.entries.items()]
+
+
+def _merge(out: dict, key: str, command: Any) -> None:
+    if isinstance(command, dict):
+        out.update(command)
+    else:
+        out[key] = command

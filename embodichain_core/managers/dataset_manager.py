@@ -1,0 +1,74 @@
+"""Dataset manager: drives recorder functors at fixed points of the env loop.
+
+* after every step: ``record_step(obs, action, reward, terminated, truncated, info)``;
+* before a reset, for the envs whose episode ended: commit (``functor(env, env_ids)``)
+  the successful ones (all with ``save_failed_episodes``) and ``discard`` the rest;
+* on ``close()``: ``finalize()``, which never commits a partial episode.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+import torch
+
+from embodichain_core.managers.cfg import DatasetFunctorCfg
+from embodichain_core.managers.manager_base import ManagerBase
+
+
+class DatasetManager(ManagerBase):
+    """Runs dataset recorder functors."""
+
+    section = "dataset"
+    kind = "dataset"
+    cfg_type = DatasetFunctorCfg
+    min_argc = 2
+
+    def __init__(self, cfg: Any, env: Any, path: str | None = None):
+        super().__init__(cfg, env, path)
+        self._finalized: Optional[list] = None
+
+    @property
+    def save_failed_episodes(self) -> bool:
+        return any(e.cfg.save_failed_episodes for e in self.entries.values())
+
+    def record_step(self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
+                    truncated: torch.Tensor, info: dict) -> None:
+        for e in self.entries.values():
+            if hasattr(e.func, "record_step"):
+                e.func.record_step(obs, action, reward, terminated, truncated, info)
+
+    def record_reset(self, obs: Any, env_ids: torch.Tensor) -> None:
+        for e in self.entries.values():
+            if hasattr(e.func, "record_reset"):
+                e.func.record_reset(obs, env_ids)
+
+    def commit(self, env_ids: torch.Tensor) -> None:
+        """Save the finished episodes of ``env_ids``."""
+        if len(env_ids) == 0:
+            return
+        for e in self.entries.values():
+            e(self._env, env_ids)
+
+    def discard(self, env_ids: torch.Tensor) -> None:
+        if len(env_ids) == 0:
+            return
+        for e in self.entries.values():
+            if hasattr(e.func, "discard"):
+                e.func.discard(env_ids)
+
+    def finalize(self) -> list:
+        """Finalize every recorder once (idempotent); errors are collected and raised together."""
+        if self._finalized is not None:
+            return self._finalized
+        paths, errors = [], []
+        for name, e in self.entries.items():
+            try:
+                if hasattr(e.func, "finalize"):
+                    paths.append(e.func.finalize())
+            except Exception as err:  # keep finalizing the others
+                errors.append(f"{name}: {err!r}")
+        self._finalized = paths
+        if errors:
+            raise RuntimeError("dataset finalize failed: " + "; ".join(errors))
+        return paths

@@ -1,0 +1,93 @@
+"""Event manager: startup, reset, interval and custom-mode event functors.
+
+Interval counters are per env and restart with each env's episode, so an
+``interval_step=5`` event fires on steps 5, 10, ... of every episode of every env
+(``is_global=True`` keeps one counter and fires for all envs at once).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.managers.cfg import EventCfg
+from embodichain_core.managers.manager_base import FunctorEntry, ManagerBase
+
+
+class EventManager(ManagerBase):
+    """Runs event functors ``f(env, env_ids, **params)`` by mode."""
+
+    section = "events"
+    kind = "event"
+    cfg_type = EventCfg
+    min_argc = 2
+
+    def __init__(self, cfg: Any, env: Any, path: str | None = None):
+        super().__init__(cfg, env, path)
+        self._modes: dict[str, list[str]] = {}
+        self._counters: dict[str, torch.Tensor] = {}
+        for name, entry in self.entries.items():
+            self._modes.setdefault(entry.cfg.mode, []).append(name)
+            if entry.cfg.mode == "interval":
+                size = 1 if entry.cfg.is_global else env.num_envs
+                self._counters[name] = torch.zeros(size, dtype=torch.long)
+
+    def _check(self, func: Any, cfg: EventCfg, where: str) -> None:
+        super()._check(func, cfg, where)
+        if cfg.mode == "interval" and (isinstance(cfg.interval_step, bool) or int(cfg.interval_step) < 1):
+            raise ConfigError(join_path(where, "interval_step"), f"must be an int >= 1, got {cfg.interval_step!r}")
+
+    @property
+    def available_modes(self) -> list[str]:
+        return list(self._modes)
+
+    def functors_of(self, mode: str) -> list[str]:
+        return list(self._modes.get(mode, []))
+
+    def apply(self, mode: str, env_ids: Any = None) -> None:
+        """Run the functors of ``mode``. ``interval`` advances the counters one step."""
+        if mode == "interval":
+            if env_ids is not None:
+                raise ValueError("interval events run for all envs; do not pass env_ids")
+            self._apply_interval()
+            return
+        for name in self._modes.get(mode, []):
+            ids = env_ids
+            if ids is None and mode != "startup":
+                ids = torch.arange(self._env.num_envs)
+            self.entries[name](self._env, ids)
+
+    def _apply_interval(self) -> None:
+        for name in self._modes.get("interval", []):
+            entry: FunctorEntry = self.entries[name]
+            counter = self._counters[name]
+            counter += 1
+            fire = counter % int(entry.cfg.interval_step) == 0
+            if entry.cfg.is_global:
+                if bool(fire[0]):
+                    entry(self._env, None)
+            elif fire.any():
+                entry(self._env, torch.nonzero(fire).flatten())
+
+    def reset(self, env_ids: Any = None) -> dict:
+        """Restart the per-env interval counters and reset class functors."""
+        for name, counter in self._counters.items():
+            if self.entries[name].cfg.is_global:
+                if env_ids is None or len(torch.as_tensor(env_ids).reshape(-1)) == self._env.num_envs:
+                    counter.zero_()
+            else:
+                counter[torch.arange(len(counter)) if env_ids is None else torch.as_tensor(env_ids).long()] = 0
+        return super().reset(env_ids)
+
+    def summary_rows(self) -> list[tuple[str, str, str]]:
+        rows = []
+        for mode, names in self._modes.items():
+            for n in names:
+                cfg = self.entries[n].cfg
+                detail = getattr(cfg.func, "__name__", str(cfg.func))
+                if mode == "interval":
+                    detail += f" (every {cfg.interval_step} steps{', global' if cfg.is_global else ''})"
+                rows.append((mode, n, detail))
+        return rows

@@ -1,0 +1,220 @@
+"""Shared machinery of the managers: reading a config section, resolving functors,
+checking their params against their signatures, resolving ``SceneEntityCfg``."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import importlib
+import inspect
+from dataclasses import dataclass
+from typing import Any, Iterator, Optional
+
+from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.managers.cfg import FunctorCfg, SceneEntityCfg
+from embodichain_core.managers.functor import Functor
+from embodichain_core.utils.configclass import MISSING, is_configclass
+from embodichain_core.utils.suggest import did_you_mean
+
+ENTITY_PARAM_KEYS = {"entity_cfg", "source_entity_cfg", "target_entity_cfg", "object_cfg", "goal_cfg",
+                     "reference_entity_cfg", "end_effector_cfg", "robot_cfg", "obj_a_cfg", "obj_b_cfg"}
+
+
+@dataclass
+class FunctorEntry:
+    """One resolved functor of a manager."""
+
+    name: str
+    cfg: FunctorCfg
+    func: Any
+    is_class: bool
+    path: str
+
+    def __call__(self, *args: Any) -> Any:
+        return self.func(*args, **self.cfg.params)
+
+
+def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str, FunctorCfg]]:
+    """Yield ``(name, functor cfg)`` of a manager section (config object or dict)."""
+    if section is None:
+        return
+    if isinstance(section, dict):
+        items = list(section.items())
+    elif is_configclass(section):
+        items = [(f.name, getattr(section, f.name)) for f in dataclasses.fields(section)]
+    else:
+        items = [(k, v) for k, v in vars(section).items() if not k.startswith("_")]
+    for name, value in items:
+        where = join_path(path, name)
+        if value is None:
+            continue
+        if isinstance(value, dict):
+            if "func" not in value:
+                continue  # plain metadata next to functors (e.g. dataset robot_meta)
+            value = cfg_type.from_dict(value, where)
+        if not isinstance(value, FunctorCfg):
+            raise ConfigError(where, f"expected a {cfg_type.__name__}, got {type(value).__name__}")
+        yield name, value
+
+
+def resolve_func(func: Any, kind: str, path: str) -> Any:
+    """A functor from a callable, a ``"module:attr"`` string or a registered name."""
+    if func is MISSING or func is None:
+        raise ConfigError(f"{path}.func", "no 'func' given")
+    if not isinstance(func, str):
+        if not callable(func):
+            raise ConfigError(f"{path}.func", f"{func!r} is not callable")
+        return func
+    if ":" in func:
+        module, _, attr = func.partition(":")
+        try:
+            obj = importlib.import_module(module)
+            for part in attr.split("."):
+                obj = getattr(obj, part)
+            return obj
+        except (ImportError, AttributeError) as err:
+            raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}") from err
+    return _from_registry(func, kind, path)
+
+
+def _from_registry(name: str, kind: str, path: str) -> Any:
+    from embodichain_core.plugins.manager import load_plugins
+    from embodichain_core.plugins.registry import get_registry
+
+    load_plugins()
+    registry = get_registry("functors")
+    if name not in registry:
+        same_kind = [e.name for e in registry.entries() if e.meta.get("kind") == kind] or registry.names()
+        hint = did_you_mean(name, same_kind) or " No functor plugin registers it (is the plugin installed?)."
+        raise ConfigError(f"{path}.func", f"unknown {kind} functor {name!r}.{hint}")
+    return registry.get(name)
+
+
+def check_params(func: Any, params: dict, min_argc: int, path: str) -> None:
+    """Unknown params and missing required params are errors naming the functor."""
+    target = func.__call__ if inspect.isclass(func) else func
+    try:
+        sig = inspect.signature(target)
+    except (TypeError, ValueError):
+        return
+    args = [p for p in sig.parameters.values() if p.name != "self"]
+    if any(p.kind is p.VAR_KEYWORD for p in args):
+        allowed = None
+    else:
+        allowed = {p.name for p in args[min_argc:] if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    required = [p.name for p in args[min_argc:]
+                if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    name = getattr(func, "__name__", repr(func))
+    if allowed is not None:
+        for key in params:
+            if key not in allowed:
+                raise ConfigError(join_path(path, "params", key),
+                                  f"functor {name!r} has no parameter {key!r}.{did_you_mean(key, allowed)}")
+    missing = [r for r in required if r not in params]
+    if missing:
+        raise ConfigError(join_path(path, "params"), f"functor {name!r} needs parameter(s) {missing}")
+
+
+def check_ranges(params: dict, path: str, name: str) -> None:
+    """A ``*_range`` param given as ``[low, high]`` must have low <= high everywhere."""
+    import numpy as np
+
+    for key, value in params.items():
+        if not key.endswith("_range") or not isinstance(value, (list, tuple)) or len(value) != 2:
+            continue
+        try:
+            low, high = np.asarray(value[0], dtype=float), np.asarray(value[1], dtype=float)
+        except (TypeError, ValueError):
+            continue
+        if low.shape == high.shape and (low > high).any():
+            raise ConfigError(join_path(path, "params", key),
+                              f"functor {name!r}: low {value[0]!r} is above high {value[1]!r}")
+
+
+def resolve_entities(value: Any, scene: Any, path: str, key: str = "") -> Any:
+    """Resolve every ``SceneEntityCfg`` (or entity dict) anywhere in ``value``."""
+    if isinstance(value, SceneEntityCfg):
+        return value.resolve(scene, path)
+    if isinstance(value, dict):
+        if (key in ENTITY_PARAM_KEYS or key.endswith("entity_cfg")) and "uid" in value:
+            return SceneEntityCfg.from_dict(value, path).resolve(scene, path)
+        return {k: resolve_entities(v, scene, join_path(path, k), k) for k, v in value.items()}
+    if isinstance(value, list):
+        return [resolve_entities(v, scene, f"{path}[{i}]", key) for i, v in enumerate(value)]
+    if isinstance(value, tuple):
+        return tuple(resolve_entities(v, scene, f"{path}[{i}]", key) for i, v in enumerate(value))
+    return value
+
+
+class ManagerBase:
+    """Builds the functors of one config section.
+
+    Subclasses set ``section`` (the config key), ``kind`` (functor kind in the
+    registry), ``cfg_type`` and ``min_argc`` (positional args before params).
+    """
+
+    section = ""
+    kind = ""
+    cfg_type: type = FunctorCfg
+    min_argc = 2
+
+    def __init__(self, cfg: Any, env: Any, path: Optional[str] = None):
+        self._env = env
+        self.path = path or f"env.{self.section}"
+        self.entries: dict[str, FunctorEntry] = {}
+        for name, fcfg in iter_section(cfg, self.cfg_type, self.path):
+            self.entries[name] = self._build_entry(name, copy.deepcopy(fcfg))
+
+    def _build_entry(self, name: str, cfg: FunctorCfg) -> FunctorEntry:
+        where = join_path(self.path, name)
+        func = resolve_func(cfg.func, self.kind, where)
+        is_class = inspect.isclass(func)
+        if is_class and not issubclass(func, Functor):
+            raise ConfigError(f"{where}.func", f"class {func.__name__} must subclass Functor")
+        self._check(func, cfg, where)
+        cfg.params = resolve_entities(dict(cfg.params), self._env.scene, join_path(where, "params"))
+        cfg.func = func
+        if is_class:
+            try:
+                func = func(cfg=cfg, env=self._env)
+            except ConfigError:
+                raise
+            except Exception as err:
+                raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err
+        return FunctorEntry(name, cfg, func, is_class, where)
+
+    def _check(self, func: Any, cfg: FunctorCfg, where: str) -> None:
+        check_params(func, cfg.params, self.min_argc, where)
+        check_ranges(cfg.params, where, getattr(func, "__name__", str(func)))
+
+    @property
+    def active_functors(self) -> list[str]:
+        return list(self.entries)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    def get_functor(self, name: str) -> Any:
+        if name not in self.entries:
+            raise KeyError(f"{self.section}: no functor {name!r}.{did_you_mean(name, self.entries)}")
+        return self.entries[name].func
+
+    def get_functor_cfg(self, name: str) -> FunctorCfg:
+        self.get_functor(name)
+        return self.entries[name].cfg
+
+    def reset(self, env_ids: Any = None) -> dict:
+        """Call ``reset(env_ids)`` on every class functor."""
+        for entry in self.entries.values():
+            if entry.is_class:
+                entry.func.reset(env_ids)
+        return {}
+
+    def summary_rows(self) -> list[tuple[str, str, str]]:
+        """(mode, name, detail) rows for the construction summary."""
+        return [(getattr(e.cfg, "mode", ""), n, _func_name(e)) for n, e in self.entries.items()]
+
+
+def _func_name(entry: FunctorEntry) -> str:
+    func = entry.cfg.func
+    return getattr(func, "__name__", type(func).__name__)

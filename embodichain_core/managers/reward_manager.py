@@ -1,0 +1,46 @@
+"""Reward manager: weighted reward terms ``f(env, obs, action, info, **params)``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.managers.cfg import RewardCfg
+from embodichain_core.managers.manager_base import ManagerBase
+
+
+class RewardManager(ManagerBase):
+    """Sums weighted terms; a ``replace`` term sets the total (task reward included)."""
+
+    section = "rewards"
+    kind = "reward"
+    cfg_type = RewardCfg
+    min_argc = 4
+
+    def _check(self, func: Any, cfg: RewardCfg, where: str) -> None:
+        if cfg.mode not in ("add", "replace"):
+            raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'replace', got {cfg.mode!r}")
+        super()._check(func, cfg, where)
+
+    def compute(self, obs: Any, action: Any, info: dict, base: torch.Tensor) -> tuple[torch.Tensor, dict]:
+        """Return ``(total, {term: unweighted value})`` starting from the task's ``base`` reward."""
+        total = base.clone()
+        terms: dict[str, torch.Tensor] = {}
+        n = self._env.num_envs
+        for name, entry in self.entries.items():
+            value = entry.func(self._env, obs, action, info, **entry.cfg.params)
+            value = torch.as_tensor(value, dtype=torch.float32)
+            if value.dim() == 0:
+                value = value.expand(n)
+            if value.shape != (n,):
+                raise ValueError(f"{entry.path}: a reward term must have shape ({n},), got {tuple(value.shape)}")
+            terms[name] = value
+            weighted = float(entry.cfg.weight) * value
+            total = weighted.clone() if entry.cfg.mode == "replace" else total + weighted
+        return total, terms
+
+    def summary_rows(self) -> list[tuple[str, str, str]]:
+        return [(e.cfg.mode, n, f"{getattr(e.cfg.func, '__name__', e.cfg.func)} (weight {e.cfg.weight:g})")
+                for n, e in self.entries.items()]

@@ -1,0 +1,131 @@
+"""The embodichain plugin host: hooks, registries and the plugin manager.
+
+Plugin authors need :data:`hookimpl` (and the register objects' types for
+annotations); the env and CLI use the registry accessors below, which load the
+installed plugins on first use.
+
+Example:
+    >>> from embodichain_core.plugins import functor_registry
+    >>> fn = functor_registry().get("randomize_light")  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from embodichain_core.plugins.hookspecs import (
+    FUNCTOR_KINDS,
+    VISUAL_RANDOMIZATION,
+    AssetRegister,
+    CommandRegister,
+    FunctorRegister,
+    RobotRegister,
+    SensorRegister,
+    TaskRegister,
+    hookimpl,
+    hookspec,
+)
+from embodichain_core.plugins.manager import (
+    CORE_PLUGIN_NAME,
+    EmbodichainPluginManager,
+    PluginInfo,
+    PluginLoadWarning,
+    failed_plugins,
+    get_plugin_manager,
+    get_registry,
+    isolated_plugins,
+    list_plugins,
+    load_plugins,
+    register_plugin,
+    unregister_plugin,
+)
+from embodichain_core.plugins.registry import (
+    KINDS,
+    DuplicateRegistrationError,
+    Entry,
+    Registry,
+    RegistryError,
+    TargetImportError,
+    UnknownNameError,
+)
+
+__all__ = [
+    "hookimpl", "hookspec", "FUNCTOR_KINDS", "VISUAL_RANDOMIZATION", "KINDS",
+    "FunctorRegister", "RobotRegister", "SensorRegister", "AssetRegister", "TaskRegister",
+    "CommandRegister", "Entry", "Registry", "RegistryError", "DuplicateRegistrationError",
+    "UnknownNameError", "TargetImportError", "EmbodichainPluginManager", "PluginInfo",
+    "PluginLoadWarning", "CORE_PLUGIN_NAME", "get_plugin_manager", "load_plugins",
+    "register_plugin", "unregister_plugin", "isolated_plugins", "list_plugins",
+    "failed_plugins", "get_registry", "functor_registry", "robot_registry", "sensor_registry",
+    "asset_registry", "task_registry", "command_registry", "get_functor", "get_robot_cfg_class",
+    "get_sensor_classes", "get_asset_root", "asset_roots", "is_visual_randomization",
+]
+
+
+def functor_registry() -> Registry:
+    """Functors by name; entry meta: ``kind``, ``category``, ``description``."""
+    return get_registry("functors")
+
+
+def robot_registry() -> Registry:
+    """Robot config classes; lookups ignore case and a trailing ``Cfg``."""
+    return get_registry("robots")
+
+
+def sensor_registry() -> Registry:
+    """Sensor config classes by ``sensor_type``; meta ``sensor_class``."""
+    return get_registry("sensors")
+
+
+def asset_registry() -> Registry:
+    """Data roots (paths or zero-arg callables) by name."""
+    return get_registry("assets")
+
+
+def task_registry() -> Registry:
+    """Tasks by gym id; meta ``max_episode_steps``, ``kwargs``, ``config``, ``description``."""
+    return get_registry("tasks")
+
+
+def command_registry() -> Registry:
+    """``embodichain`` subcommands; meta ``help``."""
+    return get_registry("commands")
+
+
+def get_functor(name: str) -> Any:
+    """The functor registered as ``name`` (imported on first use)."""
+    return functor_registry().get(name)
+
+
+def get_robot_cfg_class(name: str) -> Any:
+    """The robot config class for a ``class_type``/``robot_type`` (``"DexforceW1"``)."""
+    return robot_registry().get(name)
+
+
+def get_sensor_classes(sensor_type: str) -> tuple[Any, Any]:
+    """``(cfg_class, sensor_class)`` registered for ``sensor_type``."""
+    entry = sensor_registry().entry(sensor_type)
+    return entry.resolve(), entry.resolve_meta("sensor_class")
+
+
+def get_asset_root(name: str) -> Path:
+    """The data root registered as ``name`` (a callable root is called once)."""
+    entry = asset_registry().entry(name)
+    if "root_path" not in entry.meta:
+        root = entry.resolve()
+        entry.meta["root_path"] = Path(root() if callable(root) else root)
+    return entry.meta["root_path"]
+
+
+def asset_roots() -> dict[str, Path]:
+    """Every registered data root, by name (in name order)."""
+    return {name: get_asset_root(name) for name in asset_registry().names()}
+
+
+def is_visual_randomization(name: str) -> bool:
+    """True for functors ``filter_visual_rand`` removes: ``randomize_*`` names whose
+    category is ``"randomization.visual"``. Unknown names are not visual."""
+    entry = functor_registry().find(name)
+    return (entry is not None and name.startswith("randomize_")
+            and entry.meta.get("category") == VISUAL_RANDOMIZATION)

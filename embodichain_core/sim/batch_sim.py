@@ -1,0 +1,219 @@
+"""Batched simulation backend: ``num_envs`` simulations on ``mujoco.batch.Batch``.
+
+One state row per env, stepped on a thread pool with the GIL released and
+bit-identical to a loop. State fields are exposed as zero-copy torch views
+(float64) created once. Per-env model fields come in two ways:
+
+* expanded fields (``Batch.expand``): cheap, while envs share one structure;
+* per-env models (``Batch.set_models``), once envs differ in structure (a
+  different mesh per env). Switching rebuilds the batch and copies the state.
+
+This class is the only stepping path; a GPU backend would implement the same
+small interface (``step``, ``reset``, ``forward``, state views, model fields).
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import warnings
+from typing import Any, Iterable, Optional, Sequence
+
+import mujoco
+import mujoco.batch as mjbatch
+import numpy as np
+import torch
+
+STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
+OUTPUT_FIELDS = ("xpos", "xquat", "xmat", "cvel", "site_xpos", "site_xmat", "qfrc_actuator", "actuator_force",
+                 "cfrc_ext", "qacc", "sensordata", "light_xpos", "light_xdir", "cam_xpos", "cam_xmat", "geom_xpos",
+                 "geom_xmat", "ncon")
+_VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
+
+
+class SimulationDiverged(RuntimeError):
+    """Some envs' simulations failed; ``env_ids`` lists them."""
+
+    def __init__(self, env_ids: list[int], messages: list[str]):
+        self.env_ids, self.messages = env_ids, messages
+        super().__init__(f"simulation diverged in envs {env_ids}: {messages[:1]}")
+
+
+class BatchSim:
+    """``num_envs`` MuJoCo simulations of one compiled model."""
+
+    def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
+                 persistent: bool = True):
+        self.model = model
+        self.num_envs = int(num_envs)
+        self.substeps = int(substeps)
+        self.nthread = int(nthread) or min(os.cpu_count() or 1, self.num_envs)
+        self.persistent = persistent
+        self.env_models: Optional[list[mujoco.MjModel]] = None
+        self._dirty = np.zeros(self.num_envs, dtype=bool)
+        self._make_batch()
+        self.batch.reset(None)
+
+    # -- construction and views --------------------------------------------------------------
+    def _make_batch(self) -> None:
+        self.batch = mjbatch.Batch(self.model, self.num_envs, nthread=self.nthread, persistent=self.persistent)
+        self._views: dict[str, torch.Tensor] = {}
+        for name in STATE_FIELDS:
+            self._views[name] = torch.from_numpy(self.batch.bind(name))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # outputs are read-only numpy arrays
+            for name in OUTPUT_FIELDS:
+                try:
+                    self._views[name] = torch.from_numpy(self.batch.bind(name))
+                except (ValueError, AttributeError):
+                    continue
+
+    def __getattr__(self, name: str) -> torch.Tensor:
+        views = self.__dict__.get("_views")
+        if views is not None and name in views:
+            if name not in STATE_FIELDS and self._dirty.any():
+                self.forward(np.flatnonzero(self._dirty))
+            return views[name]
+        raise AttributeError(f"BatchSim has no field {name!r}")
+
+    @property
+    def state(self) -> np.ndarray:
+        """The raw (num_envs, nstate) integration state rows."""
+        return self.batch.state
+
+    def mark_dirty(self, env_ids: Any = None) -> None:
+        """Note that state was written directly; derived fields get recomputed lazily."""
+        self._dirty[_np_ids(env_ids, self.num_envs)] = True
+
+    # -- stepping ------------------------------------------------------------------------------
+    def step(self, nstep: int = 1) -> list[int]:
+        """Advance every env by ``nstep`` physics steps; return envs that diverged."""
+        if self._dirty.any():
+            self.forward(np.flatnonzero(self._dirty))
+        failed: list[int] = []
+        try:
+            self.batch.step(nstep=nstep * self.substeps, stage=_VEL)
+        except mjbatch.SimulationError as err:
+            failed = [int(i) for i in err.ids]
+        bad = ~np.isfinite(self.batch.state).all(axis=1)
+        if bad.any():
+            failed = sorted(set(failed) | set(np.flatnonzero(bad).tolist()))
+        return failed
+
+    def forward(self, env_ids: Any = None) -> None:
+        """Recompute derived fields (kinematics, sensors) of ``env_ids``."""
+        ids = _batch_ids(env_ids, self.num_envs)
+        try:
+            self.batch.forward(ids, stage=_VEL)
+        except mjbatch.SimulationError:
+            pass
+        self._dirty[_np_ids(env_ids, self.num_envs)] = False
+
+    def reset(self, env_ids: Any = None) -> None:
+        """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls)."""
+        ids = _batch_ids(env_ids, self.num_envs)
+        self.batch.reset(ids, stage=_VEL)
+        self._dirty[_np_ids(env_ids, self.num_envs)] = False
+
+    def error(self, env_id: int) -> str:
+        return self.batch.error(int(env_id))
+
+    # -- per-env model fields -----------------------------------------------------------------
+    def model_field(self, name: str) -> np.ndarray:
+        """Read-only (num_envs, ...) values of a model field (shared fields broadcast)."""
+        if self.env_models is not None:
+            return np.stack([getattr(m, name) for m in self.env_models])
+        values = self.batch.expanded(name)
+        if values is None:
+            base = getattr(self.model, name)
+            values = np.broadcast_to(base, (self.num_envs,) + base.shape)
+        return values
+
+    def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any) -> None:
+        """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
+
+        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape``.
+        """
+        ids = _np_ids(env_ids, self.num_envs)
+        values = np.asarray(values.detach().cpu().numpy() if isinstance(values, torch.Tensor) else values)
+        if self.env_models is not None:
+            vals = np.broadcast_to(values, (len(ids),) + np.shape(getattr(self.model, name)[index]))
+            for k, env in enumerate(ids):
+                getattr(self.env_models[env], name)[index] = vals[k]
+            if name in mujoco.MjModel._setconst_inputs:
+                self._set_const_models(ids)
+            return
+        field = self.batch.expand(name)
+        sel = (ids,) + (index if isinstance(index, tuple) else (index,))
+        field[sel] = values if np.ndim(values) else values
+        if name in mujoco.MjModel._setconst_inputs:
+            self.batch.set_const(_batch_ids(ids, self.num_envs))
+
+    def _set_const_models(self, ids: Iterable[int]) -> None:
+        data = mujoco.MjData(self.model)
+        for env in ids:
+            model = self.env_models[env]
+            self.batch.get_data(int(env), data)
+            mujoco.mj_setConst(model, data)
+
+    def use_env_models(self, models: Sequence[mujoco.MjModel]) -> None:
+        """Run env ``i`` on ``models[i]`` (same data layout), keeping every env's state.
+
+        Expanded fields are folded into the new models first, so values written
+        before the switch are kept.
+        """
+        if len(models) != self.num_envs:
+            raise ValueError(f"need one model per env ({self.num_envs}), got {len(models)}")
+        state = self.batch.state.copy()
+        expanded = {name: self.batch.expanded(name) for name in list(self.batch._expanded)}
+        models = [copy.copy(m) for m in models]
+        for name, values in expanded.items():
+            if values is None or name.startswith("opt."):
+                continue
+            for env, model in enumerate(models):
+                if getattr(model, name).shape == values[env].shape:
+                    getattr(model, name)[...] = values[env]
+        self._make_batch()
+        self.batch.state[...] = state
+        self.batch.set_models(models)
+        self.env_models = models
+        self.forward(None)
+
+    def set_env_model(self, env_ids: Any, model: mujoco.MjModel) -> None:
+        """Give ``env_ids`` a copy of ``model`` (e.g. a structural variant)."""
+        if self.env_models is None:
+            self.use_env_models([self.batch.get_model(i) for i in range(self.num_envs)])
+        for env in _np_ids(env_ids, self.num_envs):
+            self.env_models[env] = copy.copy(model)
+        self.batch.set_models(self.env_models)
+        self.mark_dirty(env_ids)
+
+    def get_model(self, env_id: int) -> mujoco.MjModel:
+        """The model env ``env_id`` runs on (for rendering or any mj_ function)."""
+        if self.env_models is not None:
+            return self.env_models[int(env_id)]
+        return self.batch.get_model(int(env_id))
+
+    def get_data(self, env_id: int, data: Optional[mujoco.MjData] = None) -> mujoco.MjData:
+        """Env ``env_id``'s MjData (whole in a persistent batch)."""
+        if self._dirty[int(env_id)]:
+            self.forward([int(env_id)])
+        return self.batch.get_data(int(env_id), data)
+
+
+def _np_ids(env_ids: Any, n: int) -> np.ndarray:
+    if env_ids is None or (isinstance(env_ids, slice) and env_ids == slice(None)):
+        return np.arange(n)
+    if isinstance(env_ids, torch.Tensor):
+        env_ids = env_ids.detach().cpu().numpy()
+    arr = np.asarray(env_ids)
+    if arr.dtype == bool:
+        return np.flatnonzero(arr)
+    return np.atleast_1d(arr).astype(np.int64)
+
+
+def _batch_ids(env_ids: Any, n: int) -> Optional[np.ndarray]:
+    if env_ids is None:
+        return None
+    ids = np.unique(_np_ids(env_ids, n)).astype(np.int32)
+    return None if len(ids) == n else ids

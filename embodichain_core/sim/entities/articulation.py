@@ -1,0 +1,272 @@
+"""Articulations: batched joint state, drives and link poses in EmbodiChain joint order.
+
+Joint ids follow EmbodiChain's breadth-first link order (not MuJoCo's depth-first
+qpos order); a name-to-address map makes ``get_qpos()[:, i]`` joint ``i``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import mujoco
+import numpy as np
+import torch
+
+from embodichain_core.sim.entities.base import Entity, as_values, find_names
+from embodichain_core.utils.math import pose_to_matrix
+
+
+class Articulation(Entity):
+    """A jointed object; joint-indexed tensors are ``(N, dof)``."""
+
+    kind = "articulation"
+
+    def __init__(self, uid: str, cfg: Any, scene: Any, record: Any):
+        super().__init__(uid, cfg, scene)
+        model, p = scene.model, f"{uid}/"
+        self.joint_names: list[str] = list(record.extra["joints"])
+        self.link_names: list[str] = list(record.extra["bodies"])
+        self._joint_ids = [self._name2id(mujoco.mjtObj.mjOBJ_JOINT, p + j) for j in self.joint_names]
+        self.qpos_adr = torch.as_tensor([model.jnt_qposadr[j] for j in self._joint_ids], dtype=torch.long)
+        self.dof_adr = torch.as_tensor([model.jnt_dofadr[j] for j in self._joint_ids], dtype=torch.long)
+        self.body_ids = torch.as_tensor([self._name2id(mujoco.mjtObj.mjOBJ_BODY, p + b) for b in self.link_names])
+        self.root_body_id = int(self.body_ids[0])
+        self._init_mimic(record.extra.get("mimic", {}))
+        self._init_drives(record.extra.get("driven", []), p)
+        self._init_root(model)
+        self.default_qpos = self._default_qpos(model)
+
+    # -- construction helpers ----------------------------------------------------------------
+    def _init_mimic(self, mimic: dict) -> None:
+        names = self.joint_names
+        self.mimic_ids = [names.index(j) for j in mimic]
+        self.mimic_parents = [names.index(par) for par, _, _ in mimic.values()]
+        self.mimic_multipliers = [k for _, k, _ in mimic.values()]
+        self.mimic_offsets = [o for _, _, o in mimic.values()]
+
+    def _init_drives(self, driven: Sequence[str], prefix: str) -> None:
+        model = self.scene.model
+        pos = [-1] * self.dof
+        vel = [-1] * self.dof
+        for name in driven:
+            i = self.joint_names.index(name)
+            pos[i] = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{prefix}{name}:pos")
+            vel[i] = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{prefix}{name}:vel")
+        self.driven_ids = torch.as_tensor([i for i in range(self.dof) if pos[i] >= 0], dtype=torch.long)
+        self.pos_act = torch.as_tensor(pos, dtype=torch.long)
+        self.vel_act = torch.as_tensor(vel, dtype=torch.long)
+
+    def _init_root(self, model: mujoco.MjModel) -> None:
+        jnt = model.body_jntadr[self.root_body_id]
+        self.is_floating = jnt >= 0 and model.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE
+        self.root_qpos_adr = int(model.jnt_qposadr[jnt]) if self.is_floating else -1
+        self.root_dof_adr = int(model.jnt_dofadr[jnt]) if self.is_floating else -1
+
+    def _default_qpos(self, model: mujoco.MjModel) -> torch.Tensor:
+        init = getattr(self.cfg, "init_qpos", None)
+        if init is None:
+            return torch.as_tensor(model.qpos0[self.qpos_adr.numpy()], dtype=torch.float64)
+        init = torch.as_tensor(np.asarray(init, dtype=np.float64))
+        if init.shape != (self.dof,):
+            raise ValueError(
+                f"{self.uid}: init_qpos has {init.numel()} values but the articulation has {self.dof} joints "
+                f"(in this order: {self.joint_names})"
+            )
+        return init
+
+    # -- sizes and names --------------------------------------------------------------------------
+    @property
+    def dof(self) -> int:
+        return len(self.joint_names)
+
+    @property
+    def num_links(self) -> int:
+        return len(self.link_names)
+
+    @property
+    def root_link_name(self) -> str:
+        return self.link_names[0]
+
+    def find_joints(self, names: Any, preserve_order: bool = False) -> tuple[list[int], list[str]]:
+        """Joint ids and names matching regexes ``names`` (full match)."""
+        return find_names(self.joint_names, names, preserve_order, "joint", self.uid)
+
+    def find_bodies(self, names: Any, preserve_order: bool = False) -> tuple[list[int], list[str]]:
+        """Link ids and names matching regexes ``names``."""
+        return find_names(self.link_names, names, preserve_order, "link", self.uid)
+
+    def _jids(self, joint_ids: Any) -> torch.Tensor:
+        if joint_ids is None or (isinstance(joint_ids, slice) and joint_ids == slice(None)):
+            return torch.arange(self.dof)
+        return torch.as_tensor(joint_ids, dtype=torch.long).reshape(-1)
+
+    # -- joint state ------------------------------------------------------------------------------
+    def get_qpos(self, target: bool = False) -> torch.Tensor:
+        """(N, dof) joint positions, or the drive targets with ``target=True``."""
+        if target:
+            out = self.sim.qpos[:, self.qpos_adr].clone()
+            mask = self.pos_act >= 0
+            out[:, mask] = self.sim.ctrl[:, self.pos_act[mask]]
+            return self._out(out)
+        return self._out(self.sim.qpos[:, self.qpos_adr])
+
+    def set_qpos(self, qpos: Any, joint_ids: Any = None, env_ids: Any = None, target: bool = True) -> None:
+        """Set drive targets (``target=True``) or teleport the joints (``target=False``).
+
+        Teleporting also sets the drive targets, and mimic joints follow their parents.
+        """
+        ids, jids = self._ids(env_ids), self._jids(joint_ids)
+        values = as_values(qpos, len(ids), len(jids))
+        acts = self.pos_act[jids]
+        driven = acts >= 0
+        if driven.any():
+            self.sim.ctrl[ids[:, None], acts[driven][None, :]] = values[:, driven]
+        if not target:
+            self.sim.qpos[ids[:, None], self.qpos_adr[jids][None, :]] = values
+            self._apply_mimic(ids)
+            self.sim.mark_dirty(ids)
+
+    def _apply_mimic(self, ids: torch.Tensor) -> None:
+        for child, parent, k, off in zip(self.mimic_ids, self.mimic_parents, self.mimic_multipliers, self.mimic_offsets):
+            q = self.sim.qpos[ids, int(self.qpos_adr[parent])]
+            self.sim.qpos[ids, int(self.qpos_adr[child])] = k * q + off
+
+    def get_qvel(self, target: bool = False) -> torch.Tensor:
+        """(N, dof) joint velocities, or velocity targets with ``target=True``."""
+        if target:
+            out = torch.zeros(self.num_envs, self.dof, dtype=torch.float64)
+            mask = self.vel_act >= 0
+            out[:, mask] = self.sim.ctrl[:, self.vel_act[mask]]
+            return self._out(out)
+        return self._out(self.sim.qvel[:, self.dof_adr])
+
+    def set_qvel(self, qvel: Any, joint_ids: Any = None, env_ids: Any = None, target: bool = True) -> None:
+        """Set velocity targets of the drives, or the joint velocities (``target=False``)."""
+        ids, jids = self._ids(env_ids), self._jids(joint_ids)
+        values = as_values(qvel, len(ids), len(jids))
+        if target:
+            acts = self.vel_act[jids]
+            driven = acts >= 0
+            self.sim.ctrl[ids[:, None], acts[driven][None, :]] = values[:, driven]
+        else:
+            self.sim.qvel[ids[:, None], self.dof_adr[jids][None, :]] = values
+            self.sim.mark_dirty(ids)
+
+    def get_qf(self) -> torch.Tensor:
+        """(N, dof) joint efforts: drive forces plus applied forces."""
+        dof = self.dof_adr
+        return self._out(self.sim.qfrc_actuator[:, dof] + self.sim.qfrc_applied[:, dof])
+
+    def set_qf(self, qf: Any, joint_ids: Any = None, env_ids: Any = None) -> None:
+        """Apply joint efforts (held until changed) through ``qfrc_applied``."""
+        ids, jids = self._ids(env_ids), self._jids(joint_ids)
+        self.sim.qfrc_applied[ids[:, None], self.dof_adr[jids][None, :]] = as_values(qf, len(ids), len(jids))
+
+    # -- limits ---------------------------------------------------------------------------------
+    def get_qpos_limits(self) -> torch.Tensor:
+        """(N, dof, 2) joint position limits (+-inf where unlimited)."""
+        jnt = np.asarray(self._joint_ids)
+        rng = np.array(self.sim.model_field("jnt_range")[:, jnt])
+        limited = self.scene.model.jnt_limited[jnt].astype(bool)
+        rng[:, ~limited] = [-np.inf, np.inf]
+        return self._out(torch.as_tensor(rng))
+
+    def get_qvel_limits(self) -> torch.Tensor:
+        """(N, dof) velocity limits from the drive config (``max_velocity``)."""
+        from embodichain_core.sim.builder_articulation import joint_value
+
+        vals = [joint_value(self.cfg.drive_pros.max_velocity, j, "drive_pros.max_velocity") for j in self.joint_names]
+        vals = [v if np.isfinite(v) else 1e10 for v in vals]
+        return self._out(torch.as_tensor(vals).expand(self.num_envs, self.dof))
+
+    def get_qf_limits(self) -> torch.Tensor:
+        """(N, dof) effort limits (``max_effort``; 1e10 where unlimited)."""
+        jnt = np.asarray(self._joint_ids)
+        rng = np.array(self.sim.model_field("jnt_actfrcrange")[:, jnt, 1])
+        rng[:, ~self.scene.model.jnt_actfrclimited[jnt].astype(bool)] = 1e10
+        return self._out(torch.as_tensor(rng))
+
+    # -- links and root -------------------------------------------------------------------------------
+    def get_link_pose(self, link_name: str, env_ids: Any = None, to_matrix: bool = False) -> torch.Tensor:
+        """Pose of one link in the env frame, (n, 7) or (n, 4, 4)."""
+        ids, names = self.find_bodies(link_name)
+        body = int(self.body_ids[ids[0]])
+        env = self._ids(env_ids)
+        pose = self._out(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), dim=-1))
+        return pose_to_matrix(pose) if to_matrix else pose
+
+    def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
+        """Root link pose, (N, 7) or (N, 4, 4)."""
+        if self.is_floating:
+            pose = self._out(self.sim.qpos[:, self.root_qpos_adr : self.root_qpos_adr + 7])
+        else:
+            pose = self._out(torch.cat((self.sim.xpos[:, self.root_body_id], self.sim.xquat[:, self.root_body_id]), -1))
+        return pose_to_matrix(pose) if to_matrix else pose
+
+    def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
+        """Move the root of a floating-base articulation (fixed bases cannot move)."""
+        if not self.is_floating:
+            raise ValueError(f"{self.uid}: the base is fixed (fix_base=True); its root pose cannot be set")
+        from embodichain_core.utils.math import as_pose7
+
+        ids = self._ids(env_ids)
+        pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7)
+        self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = pose7
+        self.sim.mark_dirty(ids)
+
+    # -- drives and masses ----------------------------------------------------------------------------
+    def set_joint_drive(self, stiffness: Any = None, damping: Any = None, max_effort: Any = None,
+                        joint_ids: Any = None, env_ids: Any = None) -> None:
+        """Change per-env drive gains and effort limits of driven joints."""
+        ids, jids = self._ids(env_ids), self._jids(joint_ids)
+        jids = jids[self.pos_act[jids] >= 0]
+        for j in jids.tolist():
+            pa, va, jnt = int(self.pos_act[j]), int(self.vel_act[j]), self._joint_ids[j]
+            if stiffness is not None:
+                kp = as_values(stiffness, len(ids)).numpy()
+                self.sim.set_model_field("actuator_gainprm", ids, (pa, 0), kp)
+                self.sim.set_model_field("actuator_biasprm", ids, (pa, 1), -kp)
+            if damping is not None:
+                kv = as_values(damping, len(ids)).numpy()
+                self.sim.set_model_field("actuator_gainprm", ids, (va, 0), kv)
+                self.sim.set_model_field("actuator_biasprm", ids, (va, 2), -kv)
+            if max_effort is not None:
+                eff = as_values(max_effort, len(ids)).numpy()
+                self.sim.set_model_field("jnt_actfrcrange", ids, jnt, np.stack((-eff, eff), -1))
+
+    def get_mass(self, link_names: Any = None) -> torch.Tensor:
+        """(N, n_links) link masses."""
+        ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
+        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_mass")[:, ids.numpy()])))
+
+    def set_mass(self, mass: Any, link_names: Any = None, env_ids: Any = None) -> None:
+        """Set (n, n_links) link masses; inertias scale along."""
+        env = self._ids(env_ids)
+        ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
+        mass = as_values(mass, len(env), len(ids)).numpy()
+        old = np.asarray(self.sim.model_field("body_mass")[env.numpy()][:, ids.numpy()])
+        for k, body in enumerate(ids.tolist()):
+            inertia = np.asarray(self.sim.model_field("body_inertia")[env.numpy(), body])
+            ratio = mass[:, k] / np.maximum(old[:, k], 1e-12)
+            self.sim.set_model_field("body_inertia", env, body, inertia * ratio[:, None])
+            self.sim.set_model_field("body_mass", env, body, mass[:, k])
+
+    def clear_dynamics(self, env_ids: Any = None) -> None:
+        """Zero joint velocities and applied efforts of ``env_ids``."""
+        ids = self._ids(env_ids)
+        self.sim.qvel[ids[:, None], self.dof_adr[None, :]] = 0.0
+        self.sim.qfrc_applied[ids[:, None], self.dof_adr[None, :]] = 0.0
+        if self.is_floating:
+            self.sim.qvel[ids, self.root_dof_adr : self.root_dof_adr + 6] = 0.0
+        self.sim.mark_dirty(ids)
+
+    def reset(self, env_ids: Any = None) -> None:
+        ids = self._ids(env_ids)
+        if self.is_floating:
+            pose = torch.as_tensor(self.scene.model.qpos0[self.root_qpos_adr : self.root_qpos_adr + 7])
+            self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = pose
+        self.set_qpos(self.default_qpos.expand(len(ids), self.dof), env_ids=ids, target=False)
+        mask = self.vel_act >= 0
+        if mask.any():
+            self.sim.ctrl[ids[:, None], self.vel_act[mask][None, :]] = 0.0
+        self.clear_dynamics(ids)

@@ -1,0 +1,163 @@
+"""Rigid objects (dynamic: free joint; kinematic/static: mocap body), batched."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+import torch
+
+from embodichain_core.sim.entities.base import Entity, as_values
+from embodichain_core.utils.math import (
+    as_pose7,
+    init_pos_from_cfg,
+    init_quat_from_cfg,
+    pose_to_matrix,
+    quat_conjugate,
+    quat_rotate,
+)
+
+
+class RigidObject(Entity):
+    """One rigid body per env.
+
+    Poses are ``(N, 7)`` xyz + wxyz in the env frame (or ``(N, 4, 4)`` with
+    ``to_matrix=True``); velocities are world-frame ``(N, 6)`` linear + angular.
+
+    Example:
+        >>> cube = env.scene["cube"]
+        >>> cube.set_local_pose(torch.tensor([[0.5, 0, 0.1, 1, 0, 0, 0]]), env_ids=[0])
+        >>> cube.get_local_pose().shape
+        torch.Size([N, 7])
+    """
+
+    kind = "rigid_object"
+
+    def __init__(self, uid: str, cfg: Any, scene: Any, body: str | None = None, parts: dict | None = None):
+        super().__init__(uid, cfg, scene)
+        model = scene.model
+        self.body_id = self._name2id(mujoco.mjtObj.mjOBJ_BODY, body or uid)
+        self.is_dynamic = cfg.body_type == "dynamic"
+        parts = parts or {}
+        self.geom_ids = [self._name2id(mujoco.mjtObj.mjOBJ_GEOM, g) for g in parts.get("collision_geoms", [])]
+        self.visual_geom_ids = [self._name2id(mujoco.mjtObj.mjOBJ_GEOM, g) for g in parts.get("visual_geoms", [])]
+        self.material_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_MATERIAL, parts.get("material", ""))
+        if self.is_dynamic:
+            jid = model.body_jntadr[self.body_id]
+            self.qpos_adr = int(model.jnt_qposadr[jid])
+            self.dof_adr = int(model.jnt_dofadr[jid])
+        else:
+            self.mocap_id = int(model.body_mocapid[self.body_id])
+        self.init_pose = torch.as_tensor(
+            np.concatenate([init_pos_from_cfg(cfg.init_pos, cfg.init_local_pose),
+                            init_quat_from_cfg(cfg.init_rot, cfg.init_local_pose)]), dtype=torch.float64)
+        self.default_mass = float(model.body_mass[self.body_id])
+
+    @property
+    def body_scale(self) -> torch.Tensor:
+        """(N, 3) scale applied to the shape."""
+        return torch.as_tensor(self.cfg.body_scale, dtype=torch.float32).expand(self.num_envs, 3).clone()
+
+    # -- pose ------------------------------------------------------------------------------
+    def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
+        """Pose in the env frame, ``(N, 7)`` or ``(N, 4, 4)``."""
+        if self.is_dynamic:
+            pose = self.sim.qpos[:, self.qpos_adr : self.qpos_adr + 7]
+        else:
+            pose = torch.cat((self.sim.mocap_pos[:, self.mocap_id], self.sim.mocap_quat[:, self.mocap_id]), dim=-1)
+        pose = self._out(pose)
+        return pose_to_matrix(pose) if to_matrix else pose
+
+    def set_local_pose(self, pose: torch.Tensor, env_ids: Any = None) -> None:
+        """Teleport ``env_ids`` to ``pose`` ((n, 7) or (n, 4, 4))."""
+        ids = self._ids(env_ids)
+        pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7)
+        pose7 = pose7.clone()
+        pose7[:, 3:] = pose7[:, 3:] / pose7[:, 3:].norm(dim=-1, keepdim=True).clamp_min(1e-12)
+        if self.is_dynamic:
+            self.sim.qpos[ids, self.qpos_adr : self.qpos_adr + 7] = pose7
+        else:
+            self.sim.mocap_pos[ids, self.mocap_id] = pose7[:, :3]
+            self.sim.mocap_quat[ids, self.mocap_id] = pose7[:, 3:]
+        self.sim.mark_dirty(ids)
+
+    # -- velocity --------------------------------------------------------------------------
+    def get_velocity(self) -> torch.Tensor:
+        """World-frame ``(N, 6)`` linear and angular velocity (zeros for kinematic)."""
+        if not self.is_dynamic:
+            return torch.zeros(self.num_envs, 6, device=self.device)
+        qvel = self.sim.qvel[:, self.dof_adr : self.dof_adr + 6]
+        quat = self.sim.qpos[:, self.qpos_adr + 3 : self.qpos_adr + 7]
+        ang = quat_rotate(quat, qvel[:, 3:])
+        return self._out(torch.cat((qvel[:, :3], ang), dim=-1))
+
+    def get_linear_velocity(self) -> torch.Tensor:
+        return self.get_velocity()[:, :3]
+
+    def get_angular_velocity(self) -> torch.Tensor:
+        return self.get_velocity()[:, 3:]
+
+    def set_velocity(self, velocity: torch.Tensor, env_ids: Any = None) -> None:
+        """Set world-frame ``(n, 6)`` velocities of dynamic objects."""
+        if not self.is_dynamic:
+            return
+        ids = self._ids(env_ids)
+        vel = as_values(velocity, len(ids), 6)
+        quat = self.sim.qpos[ids, self.qpos_adr + 3 : self.qpos_adr + 7]
+        local = quat_rotate(quat_conjugate(quat), vel[:, 3:])
+        self.sim.qvel[ids, self.dof_adr : self.dof_adr + 6] = torch.cat((vel[:, :3], local), dim=-1)
+        self.sim.mark_dirty(ids)
+
+    def clear_dynamics(self, env_ids: Any = None) -> None:
+        """Zero velocities and applied wrenches of ``env_ids``."""
+        ids = self._ids(env_ids)
+        if self.is_dynamic:
+            self.sim.qvel[ids, self.dof_adr : self.dof_adr + 6] = 0.0
+        self.sim.xfrc_applied[ids, self.body_id] = 0.0
+        self.sim.mark_dirty(ids)
+
+    # -- physical attributes -----------------------------------------------------------------
+    def get_mass(self) -> torch.Tensor:
+        """(N,) body masses."""
+        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_mass")[:, self.body_id])))
+
+    def set_mass(self, mass: Any, env_ids: Any = None) -> None:
+        """Set per-env masses; inertia scales with the mass (same density distribution)."""
+        ids = self._ids(env_ids)
+        mass = as_values(mass, len(ids)).numpy()
+        if (mass <= 0).any():
+            raise ValueError(f"{self.uid}: masses must be > 0, got {mass.min()}")
+        old = np.asarray(self.sim.model_field("body_mass")[ids.numpy(), self.body_id])
+        inertia = np.asarray(self.sim.model_field("body_inertia")[ids.numpy(), self.body_id])
+        self.sim.set_model_field("body_inertia", ids, self.body_id, inertia * (mass / old)[:, None])
+        self.sim.set_model_field("body_mass", ids, self.body_id, mass)
+
+    def get_com(self) -> torch.Tensor:
+        """(N, 3) centre of mass in the body frame."""
+        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_ipos")[:, self.body_id])))
+
+    def set_com(self, com: Any, env_ids: Any = None) -> None:
+        ids = self._ids(env_ids)
+        self.sim.set_model_field("body_ipos", ids, self.body_id, as_values(com, len(ids), 3).numpy())
+
+    def get_friction(self) -> torch.Tensor:
+        """(N,) sliding friction of the collision geoms (first geom)."""
+        gid = self.geom_ids[0] if self.geom_ids else self.visual_geom_ids[0]
+        return self._out(torch.as_tensor(np.array(self.sim.model_field("geom_friction")[:, gid, 0])))
+
+    def set_friction(self, friction: Any, env_ids: Any = None) -> None:
+        ids = self._ids(env_ids)
+        vals = as_values(friction, len(ids)).numpy()
+        for gid in self.geom_ids:
+            self.sim.set_model_field("geom_friction", ids, (gid, 0), vals)
+
+    def set_color(self, rgba: Any, env_ids: Any = None) -> None:
+        """Per-env base colour (RGBA) of the object's material."""
+        ids = self._ids(env_ids)
+        self.sim.set_model_field("mat_rgba", ids, self.material_id, as_values(rgba, len(ids), 4).numpy())
+
+    def reset(self, env_ids: Any = None) -> None:
+        ids = self._ids(env_ids)
+        self.set_local_pose(self.init_pose.expand(len(ids), 7), ids)
+        self.clear_dynamics(ids)

@@ -1,0 +1,130 @@
+"""The scene: builds entities into one model, owns the batch and the entities.
+
+Example:
+    >>> scene = Scene(SimulationManagerCfg(), num_envs=4)
+    >>> scene.add_rigid_object(RigidObjectCfg(uid="cube", init_pos=(0, 0, 0.1)))
+    >>> scene.build()
+    >>> scene["cube"].get_local_pose().shape
+    torch.Size([4, 7])
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+import mujoco
+import torch
+
+from embodichain_core.sim.batch_sim import BatchSim
+from embodichain_core.sim.builder import GROUND_UID, SceneBuilder
+from embodichain_core.sim.builder_articulation import add_articulation
+from embodichain_core.sim.builder_objects import add_rigid_object, add_rigid_object_group
+from embodichain_core.sim.cfg import ArticulationCfg, LightCfg, RigidObjectCfg, RigidObjectGroupCfg, SimulationManagerCfg
+from embodichain_core.sim.entities.articulation import Articulation
+from embodichain_core.sim.entities.base import Entity
+from embodichain_core.sim.entities.group import RigidObjectGroup
+from embodichain_core.sim.entities.light import Light
+from embodichain_core.sim.entities.rigid_object import RigidObject
+from embodichain_core.sim.entities.robot import Robot
+from embodichain_core.utils.suggest import did_you_mean
+
+
+class Scene:
+    """Entities of one env definition, simulated ``num_envs`` times."""
+
+    def __init__(self, sim_cfg: SimulationManagerCfg, num_envs: int, device: str = "cpu"):
+        self.sim_cfg = sim_cfg
+        self.num_envs = int(num_envs)
+        self.device = torch.device(device)
+        self.builder: Optional[SceneBuilder] = SceneBuilder(sim_cfg)
+        self.model: Optional[mujoco.MjModel] = None
+        self.sim: Optional[BatchSim] = None
+        self.entities: dict[str, Entity] = {}
+        self.robots: dict[str, Robot] = {}
+        self.articulations: dict[str, Articulation] = {}
+        self.rigid_objects: dict[str, RigidObject] = {}
+        self.backgrounds: dict[str, RigidObject] = {}
+        self.groups: dict[str, RigidObjectGroup] = {}
+        self.lights: dict[str, Light] = {}
+        self.sensors: dict[str, Any] = {}
+
+    # -- adding (before build) -------------------------------------------------------------
+    def add_robot(self, cfg: ArticulationCfg, path: str = "robot") -> None:
+        add_articulation(self._b(), cfg, "robot", path)
+
+    def add_articulation(self, cfg: ArticulationCfg, path: str = "articulation") -> None:
+        add_articulation(self._b(), cfg, "articulation", path)
+
+    def add_rigid_object(self, cfg: RigidObjectCfg, path: str = "rigid_object", background: bool = False) -> None:
+        add_rigid_object(self._b(), cfg, "background" if background else "rigid_object", path)
+
+    def add_rigid_object_group(self, cfg: RigidObjectGroupCfg, path: str = "rigid_object_group") -> None:
+        add_rigid_object_group(self._b(), cfg, path)
+
+    def add_light(self, cfg: LightCfg, path: str = "light.direct") -> None:
+        self._b().add_light(cfg, path)
+
+    def add_sensor(self, sensor: Any, path: str = "sensor") -> None:
+        """Add a constructed sensor (a :class:`BaseSensor`); it edits the spec now."""
+        self._b().claim_uid(sensor.uid, "sensor", sensor.cfg, path)
+        sensor.build(self._b())
+        self.sensors[sensor.uid] = sensor
+
+    def _b(self) -> SceneBuilder:
+        if self.builder is None or self.model is not None:
+            raise RuntimeError("the scene is already built; add entities before build()")
+        return self.builder
+
+    # -- build -------------------------------------------------------------------------------
+    def build(self) -> None:
+        """Compile the model, create the batch and the entities, reset every env."""
+        self.model = self._b().compile()
+        cfg = self.sim_cfg
+        self.sim = BatchSim(self.model, self.num_envs, substeps=cfg.physics_substeps,
+                            nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent)
+        for uid, rec in self.builder.records.items():
+            self._make_entity(uid, rec)
+        for sensor in self.sensors.values():
+            sensor.bind()
+        self.reset()
+
+    def _make_entity(self, uid: str, rec: Any) -> None:
+        kinds = {
+            "robot": (Robot, self.robots), "articulation": (Articulation, self.articulations),
+        }
+        if rec.kind in kinds:
+            cls, store = kinds[rec.kind]
+            store[uid] = self.entities[uid] = cls(uid, rec.cfg, self, rec)
+        elif rec.kind in ("rigid_object", "background"):
+            obj = RigidObject(uid, rec.cfg, self, parts=rec.extra)
+            (self.rigid_objects if rec.kind == "rigid_object" else self.backgrounds)[uid] = obj
+            self.entities[uid] = obj
+        elif rec.kind == "group":
+            self.groups[uid] = self.entities[uid] = RigidObjectGroup(uid, rec.cfg, self, rec, rec.extra["parts"])
+        elif rec.kind == "light":
+            self.lights[uid] = self.entities[uid] = Light(uid, rec.cfg, self)
+        elif rec.kind == "sensor":
+            self.entities[uid] = self.sensors[uid]
+
+    # -- access ------------------------------------------------------------------------------------
+    @property
+    def asset_uids(self) -> list[str]:
+        """Every uid a ``SceneEntityCfg`` may name."""
+        return [GROUND_UID] + list(self.entities)
+
+    def __getitem__(self, uid: str) -> Any:
+        if uid not in self.entities:
+            raise KeyError(f"no entity with uid {uid!r} in the scene.{did_you_mean(uid, self.asset_uids)}")
+        return self.entities[uid]
+
+    def __contains__(self, uid: str) -> bool:
+        return uid in self.entities
+
+    def get(self, uid: str, default: Any = None) -> Any:
+        return self.entities.get(uid, default)
+
+    def reset(self, env_ids: Any = None, excluded_uids: Any = ()) -> None:
+        """Restore every entity (except ``excluded_uids``) of ``env_ids`` to its initial state."""
+        for uid, ent in self.entities.items():
+            if uid not in excluded_uids:
+                ent.reset(env_ids)

@@ -1,0 +1,39 @@
+"""Testing helpers for embodichain plugin authors.
+
+Public helpers (imported lazily, so ``import embodichain_core.testing`` is cheap):
+
+* :func:`isolated_plugins`: context manager with a fresh plugin manager and empty
+  registries (built-ins only), restoring the global state afterwards.
+* :func:`register_plugin`: register a plugin object or module at runtime.
+* ``make_env`` / ``check_batched_env``: env checks from
+  :mod:`embodichain_core.testing.env_checks`, when that module is available.
+
+The pytest fixtures live in :mod:`embodichain_core.testing.pytest_plugin`, which
+pytest loads automatically (entry point ``pytest11``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_PLUGIN_HELPERS = {
+    "isolated_plugins": "embodichain_core.plugins.manager",
+    "register_plugin": "embodichain_core.plugins.manager",
+    "unregister_plugin": "embodichain_core.plugins.manager",
+}
+_ENV_HELPERS = ("make_env", "check_batched_env")
+
+__all__ = [*_PLUGIN_HELPERS, *_ENV_HELPERS]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _PLUGIN_HELPERS:
+        return getattr(importlib.import_module(_PLUGIN_HELPERS[name]), name)
+    if name in _ENV_HELPERS:
+        try:
+            module = importlib.import_module("embodichain_core.testing.env_checks")
+        except ImportError as err:
+            raise AttributeError(f"{name} needs embodichain_core.testing.env_checks: {err}") from err
+        return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,282 @@
+"""The plugin host: loading, failures, blocking, hook checks, gymnasium tasks."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import types
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import pluggy
+import pytest
+
+from embodichain_core.plugins import (
+    CORE_PLUGIN_NAME,
+    DuplicateRegistrationError,
+    PluginLoadWarning,
+    failed_plugins,
+    get_asset_root,
+    get_plugin_manager,
+    get_sensor_classes,
+    hookimpl,
+    is_visual_randomization,
+    isolated_plugins,
+    list_plugins,
+    load_plugins,
+    manager,
+    register_plugin,
+    unregister_plugin,
+)
+from embodichain_core.testing.pytest_plugin import plugin_manager  # noqa: F401  (fixture)
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@dataclass
+class FakeEntryPoint:
+    """Stands in for ``importlib.metadata.EntryPoint``."""
+
+    name: str
+    loader: Callable[[], Any]
+    value: str = "fake.module"
+    dist: Any = field(default_factory=lambda: types.SimpleNamespace(version="1.2.3"))
+    loaded: int = 0
+
+    def load(self) -> Any:
+        self.loaded += 1
+        return self.loader()
+
+
+class FunctorPlugin:
+    @hookimpl
+    def embodichain_register_functors(self, register: Any) -> None:
+        register("randomize_light", "json:dumps", kind="event", category="randomization.visual")
+        register("joint_pos", "json:loads", kind="observation")
+
+
+class OtherFunctorPlugin:
+    @hookimpl
+    def embodichain_register_functors(self, register: Any) -> None:
+        register("reach_reward", "json:dumps", kind="reward")
+        register("randomize_light", "json:loads", kind="event")
+
+
+class RaisingPlugin:
+    @hookimpl
+    def embodichain_register_functors(self, register: Any) -> None:
+        register("partial", "json:dumps", kind="event")
+        raise RuntimeError("boom in hook")
+
+
+class MisspelledPlugin:
+    @hookimpl
+    def embodichain_register_functor(self, register: Any) -> None:  # missing "s"
+        pass
+
+
+class UnmarkedMisspelledPlugin:
+    def embodichain_register_task(self, register: Any) -> None:  # no @hookimpl, missing "s"
+        pass
+
+
+class WrongArgumentPlugin:
+    @hookimpl
+    def embodichain_register_robots(self, reg: Any) -> None:  # the argument must be "register"
+        pass
+
+
+class TaskPlugin:
+    @hookimpl
+    def embodichain_register_tasks(self, register: Any) -> None:
+        register("EcTestTask-v0", "ec_test_tasks:TestEnv", max_episode_steps=123, kwargs={"a": 1})
+        register("EcTestTaskNoLimit-v0", "ec_test_tasks:TestEnv")
+
+
+def _fail_import() -> Any:
+    raise ImportError("cannot import name 'thing' from 'bad_plugin'")
+
+
+def _entry_points(monkeypatch: pytest.MonkeyPatch, *eps: FakeEntryPoint) -> None:
+    monkeypatch.setattr(manager, "_iter_entry_points", lambda: list(eps))
+
+
+def _load_with(monkeypatch: pytest.MonkeyPatch, *eps: FakeEntryPoint) -> Any:
+    _entry_points(monkeypatch, *eps)
+    return isolated_plugins(load_entry_points=True)
+
+
+def test_builtins_and_idempotent_load(plugin_manager: Any) -> None:  # noqa: F811
+    assert load_plugins() is plugin_manager is get_plugin_manager()
+    commands = plugin_manager.registry("commands")
+    assert {"list", "run-env", "decompose", "new", "bench"} <= set(commands.names())
+    assert commands.entry("list").provider == CORE_PLUGIN_NAME
+    assert commands.entry("run-env").lazy and not commands.entry("run-env").resolved
+    assert [i.name for i in list_plugins()] == [CORE_PLUGIN_NAME]
+    plugin_manager.check_pending()
+
+
+def test_failing_plugin_reported_others_load(monkeypatch: pytest.MonkeyPatch) -> None:
+    good = FakeEntryPoint("good-plugin", FunctorPlugin)
+    bad = FakeEntryPoint("bad-plugin", _fail_import)
+    with pytest.warns(PluginLoadWarning, match="'bad-plugin'") as record:
+        with _load_with(monkeypatch, bad, good) as pm:
+            assert pm.registry("functors").names() == ["joint_pos", "randomize_light"]
+            (name, tb), = failed_plugins()
+            infos = {i.name: i for i in list_plugins()}
+    assert name == "bad-plugin" and "Traceback" in tb and "cannot import name 'thing'" in tb
+    assert infos["bad-plugin"].status == "failed"
+    assert infos["bad-plugin"].error_summary.startswith("ImportError: cannot import name")
+    assert infos["good-plugin"].status == "loaded" and infos["good-plugin"].version == "1.2.3"
+    assert infos["good-plugin"].registered == {"functors": ["randomize_light", "joint_pos"]}
+    assert "Traceback" in str(record[0].message)
+
+
+def test_raising_hook_rolls_back_and_others_load(monkeypatch: pytest.MonkeyPatch) -> None:
+    eps = FakeEntryPoint("raising", RaisingPlugin), FakeEntryPoint("good", FunctorPlugin)
+    with pytest.warns(PluginLoadWarning, match="'raising'(.|\n)*boom in hook"):
+        with _load_with(monkeypatch, *eps) as pm:
+            assert "partial" not in pm.registry("functors")
+            assert "joint_pos" in pm.registry("functors")
+            assert pm.get_plugin("raising") is None
+
+
+def test_duplicate_across_plugins_names_both(monkeypatch: pytest.MonkeyPatch) -> None:
+    eps = FakeEntryPoint("plugin-a", FunctorPlugin), FakeEntryPoint("plugin-b", OtherFunctorPlugin)
+    with pytest.warns(PluginLoadWarning, match="'plugin-a' and by 'plugin-b'"):
+        with _load_with(monkeypatch, *eps) as pm:
+            functors = pm.registry("functors")
+            assert functors.entry("randomize_light").provider == "plugin-a"
+            assert "reach_reward" not in functors  # plugin-b contributes nothing
+
+
+def test_block_env_var(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("EMBODICHAIN_BLOCK_PLUGINS", "other, blocked-plugin")
+    blocked = FakeEntryPoint("blocked-plugin", FunctorPlugin)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with _load_with(monkeypatch, blocked) as pm:
+            assert blocked.loaded == 0 and len(pm.registry("functors")) == 0
+            assert {i.name: i.status for i in list_plugins()}["blocked-plugin"] == "blocked"
+
+
+@pytest.mark.parametrize("plugin_cls", [MisspelledPlugin, UnmarkedMisspelledPlugin])
+def test_misspelled_hook_entry_point(monkeypatch: pytest.MonkeyPatch, plugin_cls: type) -> None:
+    eps = FakeEntryPoint("typo-plugin", plugin_cls), FakeEntryPoint("good", FunctorPlugin)
+    with pytest.warns(PluginLoadWarning, match="plugin 'typo-plugin' implements unknown hook") as rec:
+        with _load_with(monkeypatch, *eps) as pm:
+            pm.check_pending()  # the bad plugin was removed
+            assert "joint_pos" in pm.registry("functors")
+    assert "Did you mean 'embodichain_register_" in str(rec[0].message)
+
+
+def test_wrong_hook_argument_is_reported(monkeypatch: pytest.MonkeyPatch) -> None:
+    eps = FakeEntryPoint("bad-args", WrongArgumentPlugin), FakeEntryPoint("good", FunctorPlugin)
+    with pytest.warns(PluginLoadWarning, match="'bad-args'(.|\n)*PluginValidationError"):
+        with _load_with(monkeypatch, *eps) as pm:
+            assert "joint_pos" in pm.registry("functors")
+            assert [name for name, _ in failed_plugins()] == ["bad-args"]
+
+
+def test_misspelled_hook_runtime_raises(plugin_manager: Any) -> None:  # noqa: F811
+    with pytest.raises(pluggy.PluginValidationError, match="'typo' implements unknown hook"):
+        register_plugin(MisspelledPlugin(), name="typo")
+    assert plugin_manager.get_plugin("typo") is None
+
+
+def test_register_and_unregister_plugin(plugin_manager: Any) -> None:  # noqa: F811
+    name = register_plugin(FunctorPlugin())
+    assert name.endswith("FunctorPlugin")
+    entry = plugin_manager.registry("functors").entry("randomize_light")
+    assert entry.provider == name and is_visual_randomization("randomize_light")
+    assert not is_visual_randomization("joint_pos") and not is_visual_randomization("nope")
+    unregister_plugin(name)
+    assert len(plugin_manager.registry("functors")) == 0
+
+
+def test_module_plugin_and_helpers(plugin_manager: Any, tmp_path: Path) -> None:  # noqa: F811
+    module = types.ModuleType("ec_test_module_plugin")
+    calls: list[int] = []
+
+    @hookimpl
+    def embodichain_register_sensors(register: Any) -> None:
+        register("Camera", "json:JSONDecoder", "json:JSONEncoder")
+
+    def embodichain_register_assets(register: Any) -> None:  # unmarked: still a hook
+        register("pack", lambda: calls.append(1) or tmp_path)
+
+    module.embodichain_register_sensors = embodichain_register_sensors
+    module.embodichain_register_assets = embodichain_register_assets
+    assert register_plugin(module) == "ec_test_module_plugin"
+    import json
+
+    assert get_sensor_classes("camera") == (json.JSONDecoder, json.JSONEncoder)
+    assert get_asset_root("pack") == tmp_path == get_asset_root("pack") and calls == [1]
+
+
+def test_tasks_reach_gymnasium_without_time_limit(plugin_manager: Any) -> None:  # noqa: F811
+    import gymnasium
+
+    register_plugin(TaskPlugin(), name="tasks-plugin")
+    spec = gymnasium.registry["EcTestTask-v0"]
+    assert spec.entry_point == "ec_test_tasks:TestEnv" and spec.max_episode_steps is None
+    assert spec.kwargs == {"a": 1, "max_episode_steps": 123}
+    assert spec.disable_env_checker and not spec.order_enforce
+    assert gymnasium.registry["EcTestTaskNoLimit-v0"].kwargs == {}
+    entry = plugin_manager.registry("tasks").entry("EcTestTask-v0")
+    assert entry.meta["max_episode_steps"] == 123 and entry.provider == "tasks-plugin"
+
+
+def test_isolation_removes_gym_ids_and_restores_state() -> None:
+    import gymnasium
+
+    outer = get_plugin_manager()
+    with isolated_plugins() as pm:
+        assert pm is not outer
+        register_plugin(TaskPlugin())
+        assert "EcTestTask-v0" in gymnasium.registry
+    assert "EcTestTask-v0" not in gymnasium.registry
+    assert get_plugin_manager() is outer
+
+
+def test_gym_id_same_entry_point_ok_other_is_duplicate(plugin_manager: Any) -> None:  # noqa: F811
+    import gymnasium
+
+    gymnasium.register("EcTestTask-v0", entry_point="ec_test_tasks:TestEnv")
+    try:
+        register_plugin(TaskPlugin(), name="tasks-plugin")  # same entry point: kept as is
+        assert gymnasium.registry["EcTestTask-v0"].order_enforce  # untouched
+        unregister_plugin("tasks-plugin")
+        assert "EcTestTask-v0" in gymnasium.registry  # not ours to remove
+
+        class Clash:
+            @hookimpl
+            def embodichain_register_tasks(self, register: Any) -> None:
+                register("EcTestTask-v0", "other_pkg:OtherEnv")
+
+        with pytest.raises(DuplicateRegistrationError, match="gymnasium registry(.|\n)*'clash'"):
+            register_plugin(Clash(), name="clash")
+    finally:
+        gymnasium.registry.pop("EcTestTask-v0", None)
+
+
+def test_trace_env_var(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("EMBODICHAIN_TRACE_PLUGINS", "1")
+    with isolated_plugins():
+        register_plugin(FunctorPlugin(), name="traced")
+    assert "embodichain_register_functors" in capsys.readouterr().err
+
+
+def test_plugin_modules_import_cheaply() -> None:
+    code = (
+        "import sys, embodichain_core.plugins, embodichain_core.cli.main, embodichain_core.testing;"
+        "embodichain_core.plugins.load_plugins();"
+        "heavy = [m for m in ('torch', 'mujoco', 'gymnasium') if m in sys.modules];"
+        "assert not heavy, heavy"
+    )
+    env = {**os.environ, "EMBODICHAIN_BLOCK_PLUGINS": "*", "PYTHONPATH": str(REPO)}
+    result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
