@@ -246,8 +246,9 @@ def test_unknown_method_is_an_error():
 
 def test_importing_mesh_modules_does_not_import_trimesh_or_coacd():
     code = (
-        "import sys, embodichain_core.sim.mesh, embodichain_core.sim.convex; "
-        "print(sorted(m for m in ('trimesh', 'coacd', 'mujoco') if m in sys.modules))"
+        "import sys, embodichain_core; before = set(sys.modules); "
+        "import embodichain_core.sim.mesh, embodichain_core.sim.convex; "
+        "print(sorted(m for m in ('trimesh', 'coacd', 'mujoco') if m in set(sys.modules) - before))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

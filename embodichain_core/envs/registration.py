@@ -21,6 +21,8 @@ from typing import Any, Callable, Optional
 
 import gymnasium as gym
 
+from embodichain_core.gym_vector import make_vec_env
+
 REGISTERED_ENVS: dict[str, "EnvSpec"] = {}
 
 
@@ -39,14 +41,6 @@ class EnvSpec:
 
 def _entry(cls: type) -> str:
     return f"{cls.__module__}:{cls.__qualname__}"
-
-
-def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
-    """Vector entry point: the env is already batched, so it is its own vector env."""
-    module, _, attr = cls_path.partition(":")
-    cls = getattr(__import__(module, fromlist=[attr]), attr)
-    kwargs.pop("vectorization_mode", None)
-    return cls(num_envs=num_envs, **kwargs)
 
 
 def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bool = False,
@@ -69,7 +63,10 @@ def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bo
             raise TypeError(f"register_env({uid!r}) decorates BaseEnv subclasses, got {cls!r}")
         existing = gym.envs.registry.get(uid)
         if existing is not None and existing.entry_point == _entry(cls) and not override:
+            # gymnasium imported the module of a plugin-registered task: same class
             REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
+            if existing.vector_entry_point is None:
+                existing.vector_entry_point = functools.partial(make_vec_env, _entry(cls))
             return cls
         if existing is not None and not override:
             warnings.warn(f"env id {uid!r} is already registered by {existing.entry_point}; keeping it "

@@ -79,7 +79,7 @@ def resolve_func(func: Any, kind: str, path: str) -> Any:
 
 def _from_registry(name: str, kind: str, path: str) -> Any:
     from embodichain_core.plugins.manager import load_plugins
-    from embodichain_core.plugins.registry import get_registry
+    from embodichain_core.plugins import get_registry
 
     load_plugins()
     registry = get_registry("functors")

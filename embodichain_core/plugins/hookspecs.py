@@ -149,7 +149,7 @@ class TaskRegister(BaseRegister):
                              f"'module:Class' string, got {entry_point!r}")
         gym_kwargs = dict(kwargs or {})
         if max_episode_steps is not None:
-            gym_kwargs["max_episode_steps"] = max_episode_steps
+            gym_kwargs["_registered_max_episode_steps"] = max_episode_steps
         meta = {"max_episode_steps": max_episode_steps, "kwargs": gym_kwargs,
                 "config": config, "description": description}
         return self._add(task_id, entry_point, meta)

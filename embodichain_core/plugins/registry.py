@@ -311,9 +311,14 @@ class TaskRegistry(Registry):
 
         spec = gymnasium.registry.get(entry.name)
         if spec is None:
+            import functools
+
+            from embodichain_core.gym_vector import make_vec_env
+
             gymnasium.register(
                 entry.name, entry_point=entry.target, disable_env_checker=True,
                 order_enforce=False, max_episode_steps=None, kwargs=entry.meta["kwargs"],
+                vector_entry_point=functools.partial(make_vec_env, entry.target),
             )
             entry.meta["gym_registered"] = True
         elif describe_target(spec.entry_point) != entry.target_repr:

@@ -1,0 +1,134 @@
+"""Shared helpers of the benchmarks: scene generator, timing, JSON, tables.
+
+Timing follows the project's rule for this shared 2-core box: warm up first,
+repeat each measurement several times, interleave the things being compared
+(so a noisy neighbour hits both alike) and report medians.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+from typing import Any, Callable, Iterable, Mapping, Optional, Sequence
+
+
+def seven_dof_arm_mjcf() -> str:
+    """A 7-DoF arm with a two-finger gripper (mimic second finger).
+
+    A copy of ``tests/scenes.py:seven_dof_arm_mjcf`` so the benchmarks do not import
+    from the test tree; keep the two in step.
+    """
+    axes = ["0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1"]
+    body, close = "", ""
+    for i, ax in enumerate(axes):
+        body += (f'<body name="link{i+1}" pos="0 0 {0.1 if i else 0.08}">'
+                 f'<joint name="joint{i+1}" axis="{ax}" range="-2.8 2.8"/>'
+                 f'<geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.04" mass="1"/>')
+        close += "</body>"
+    hand = ('<body name="hand" pos="0 0 0.1"><geom type="box" size="0.02 0.06 0.02" mass="0.3"/>'
+            '<body name="finger_l" pos="0 0.02 0.04"><joint name="finger_joint1" type="slide" axis="0 1 0" range="0 0.04"/>'
+            '<geom type="box" size="0.01 0.01 0.03" mass="0.05"/></body>'
+            '<body name="finger_r" pos="0 -0.02 0.04"><joint name="finger_joint2" type="slide" axis="0 -1 0" range="0 0.04"/>'
+            '<geom type="box" size="0.01 0.01 0.03" mass="0.05"/></body></body>')
+    return (f'<mujoco model="arm7"><compiler angle="radian"/><worldbody><body name="base"><geom type="cylinder" size="0.08 0.04" mass="5"/>'
+            f'{body}{hand}{close}</body></worldbody>'
+            '<equality><joint joint1="finger_joint2" joint2="finger_joint1" polycoef="0 1 0 0 0"/></equality></mujoco>')
+
+
+# -- timing --------------------------------------------------------------------------------------
+def time_once(fn: Callable[[], Any]) -> float:
+    """Wall-clock seconds of one call of ``fn``."""
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+def interleaved_timings(fns: Mapping[str, Callable[[], Any]], repeats: int,
+                        warmup: int = 1) -> dict[str, list[float]]:
+    """Call every function ``warmup`` times, then ``repeats`` rounds of all of them in turn.
+
+    Returns ``{name: [seconds per round]}``. Interleaving makes background load
+    (other processes on a shared box) hit every contender alike.
+    """
+    for _ in range(max(0, warmup)):
+        for fn in fns.values():
+            fn()
+    out: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(max(1, repeats)):
+        for name, fn in fns.items():
+            out[name].append(time_once(fn))
+    return out
+
+
+def median(values: Sequence[float]) -> float:
+    return float(statistics.median(values))
+
+
+def spread(values: Sequence[float]) -> float:
+    """Relative spread (max - min) / median of ``values``; 0 for one value."""
+    if len(values) < 2:
+        return 0.0
+    mid = statistics.median(values)
+    return float((max(values) - min(values)) / mid) if mid else 0.0
+
+
+# -- machine and output ------------------------------------------------------------------------------
+def machine_info() -> dict[str, Any]:
+    """What the numbers were measured on (versions and core count)."""
+    info: dict[str, Any] = {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+    }
+    try:
+        info["cpu_affinity"] = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        pass
+    for module in ("mujoco", "torch", "numpy"):
+        try:
+            info[module] = __import__(module).__version__
+        except Exception:  # pragma: no cover - reporting only
+            info[module] = None
+    try:
+        import torch
+
+        info["torch_threads"] = torch.get_num_threads()
+    except Exception:  # pragma: no cover
+        pass
+    return info
+
+
+def write_json(path: str, payload: Any) -> str:
+    """Write ``payload`` as indented JSON (creating folders); return the path."""
+    folder = os.path.dirname(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(payload, fh, indent=2, sort_keys=False)
+        fh.write("\n")
+    return path
+
+
+def format_table(rows: Iterable[Mapping[str, Any]], columns: Sequence[tuple[str, str, str]]) -> str:
+    """A Markdown table. ``columns`` are ``(key, header, format spec)`` triples."""
+    rows = list(rows)
+    header = [h for _, h, _ in columns]
+    body = [[format(row[key], spec) if row.get(key) is not None else "-" for key, _, spec in columns] for row in rows]
+    widths = [max(len(h), *(len(r[i]) for r in body)) if body else len(h) for i, h in enumerate(header)]
+    lines = ["| " + " | ".join(h.rjust(w) for h, w in zip(header, widths)) + " |",
+             "|" + "|".join("-" * (w + 1) + ":" for w in widths) + "|"]
+    lines += ["| " + " | ".join(c.rjust(w) for c, w in zip(r, widths)) + " |" for r in body]
+    return "\n".join(lines)
+
+
+def print_table(rows: Iterable[Mapping[str, Any]], columns: Sequence[tuple[str, str, str]],
+                title: Optional[str] = None, file: Any = None) -> None:
+    file = file or sys.stdout
+    if title:
+        print(title, file=file)
+    print(format_table(rows, columns), file=file)
+    file.flush()

@@ -1,0 +1,1 @@
+"""Test-only embodichain plugin (installed into the test environment)."""

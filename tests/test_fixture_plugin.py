@@ -1,0 +1,70 @@
+"""The fixture plugin under tests/fixture_plugins is installed through a real
+``embodichain`` entry point: its task, functor, robot and data root must be
+discoverable from a plain ``import embodichain_core``."""
+
+import subprocess
+import sys
+
+import gymnasium as gym
+import pytest
+import torch
+
+from embodichain_core.plugins import get_registry
+from embodichain_core.sim.cfg import RobotCfg
+from embodichain_core.testing.env_checks import check_batched_env, make_env_instance
+
+pytest.importorskip("embodichain_fixture", reason="the fixture plugin is installed by scripts/setup_env.sh")
+
+
+def test_task_id_registered_on_import_without_importing_the_task_module():
+    code = (
+        "import sys, embodichain_core, gymnasium as gym\n"
+        "assert 'FixtureReach-v0' in gym.registry, 'task id not registered'\n"
+        "assert 'embodichain_fixture.tasks' not in sys.modules, 'task module imported eagerly'\n"
+        "assert 'torch' not in sys.modules and 'mujoco' not in sys.modules, 'import is not cheap'\n"
+        "env = gym.make('FixtureReach-v0', num_envs=2, verbose=False)\n"
+        "assert 'embodichain_fixture.tasks' in sys.modules\n"
+        "print(env.unwrapped.num_envs)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().endswith("2")
+
+
+def test_gym_make_runs_the_plugin_task():
+    env = make_env_instance("FixtureReach-v0", num_envs=3)
+    assert env.max_episode_steps == 15  # the registered limit, kept inside the env
+    assert not isinstance(gym.make("FixtureReach-v0", verbose=False), gym.wrappers.TimeLimit)
+    check_batched_env(env)
+    obs, _ = env.reset(seed=1)
+    assert obs["object"]["cube_pos"].shape == (3, 3)
+    # the reset event resolved "fixture_nudge_cube" from the registry: cube x varies per env
+    assert len(set(obs["object"]["cube_pos"][:, 0].tolist())) == 3
+
+
+def test_make_vec_uses_the_batched_env():
+    env = gym.make_vec("FixtureReach-v0", num_envs=2, vectorization_mode="vector_entry_point", verbose=False)
+    obs, _ = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(torch.zeros(2, 3))
+    assert reward.shape == (2,) and env.num_envs == 2
+    env.close()
+
+
+def test_episode_limit_truncates_every_env():
+    env = gym.make("FixtureReach-v0", num_envs=2, verbose=False).unwrapped
+    env.reset(seed=0)
+    for _ in range(14):
+        _, _, _, truncated, _ = env.step(torch.zeros(2, 3))
+        assert not truncated.any()
+    _, _, _, truncated, info = env.step(torch.zeros(2, 3))
+    assert truncated.all() and info["_final_obs"].all()
+    assert (env.elapsed_steps == 0).all()
+
+
+def test_plugin_robot_and_data_root_resolve():
+    cfg = RobotCfg.from_dict({"class_type": "FixtureArm", "init_pos": [0, 0, 0.1]})
+    assert type(cfg).__name__ == "FixtureArmCfg" and cfg.init_pos == (0, 0, 0.1)
+    assert "fixture_nudge_cube" in get_registry("functors")
+    from embodichain_core.sim.data import get_data_path
+
+    assert get_data_path("tetra.obj").endswith("tetra.obj")
