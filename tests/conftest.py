@@ -36,7 +36,6 @@ def base_cfg(**overrides: Any) -> EmbodiedEnvCfg:
         num_envs=2,
         seed=0,
         verbose=False,
-        max_episode_steps=50,
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
         control_parts=["arm"],
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=CUBE_INIT)],
@@ -78,3 +77,25 @@ def make_env() -> Iterator[Callable[..., EmbodiedEnv]]:
 def zero_action(env: EmbodiedEnv) -> torch.Tensor:
     """A zero action of the env's (batched) action space shape."""
     return torch.zeros(env.action_space.shape, dtype=torch.float32)
+
+
+class FlagEnv(EmbodiedEnv):
+    """An env whose per-env success/fail the test sets: ``env.success_flags[i] = True``."""
+
+    def compute_task_state(self, **kwargs: Any) -> tuple[torch.Tensor, torch.Tensor, dict]:
+        if "success_flags" not in self.__dict__:
+            self.success_flags = torch.zeros(self.num_envs, dtype=torch.bool)
+            self.fail_flags = torch.zeros(self.num_envs, dtype=torch.bool)
+        return self.success_flags.clone(), self.fail_flags.clone(), {"steps": self._elapsed_steps.clone()}
+
+
+def call_log(env: Any) -> list:
+    """A per-env-instance list the fixture functors append their calls to."""
+    return env.__dict__.setdefault("call_log", [])
+
+
+def ids_list(env_ids: Any) -> Any:
+    """``env_ids`` as a plain list (``None`` stays ``None``)."""
+    if env_ids is None:
+        return None
+    return torch.as_tensor(env_ids).reshape(-1).tolist()

@@ -68,7 +68,12 @@ class ActionManager(ManagerBase):
             return self._process_dict(action, terms)
         action = torch.as_tensor(action, dtype=torch.float32)
         if len(terms) == 1:
-            return next(iter(terms.values())).process_action(action)
+            term = next(iter(terms.values()))
+            command = term.process_action(action)
+            if mode == "pre" and term.input_key != "qpos" and not isinstance(command, dict):
+                # a bare tensor is applied as qpos: key velocity/effort commands by input_key
+                return {term.input_key: command}
+            return command
         return self._process_flat(action, terms)
 
     def _process_flat(self, action: torch.Tensor, terms: dict[str, ActionTerm]) -> dict:

@@ -59,7 +59,7 @@ def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str,
 
 def resolve_func(func: Any, kind: str, path: str) -> Any:
     """A functor from a callable, a ``"module:attr"`` string or a registered name."""
-    if func is MISSING or func is None:
+    if func is None or isinstance(func, type(MISSING)):  # a deep-copied cfg holds a copy of MISSING
         raise ConfigError(f"{path}.func", "no 'func' given")
     if not isinstance(func, str):
         if not callable(func):

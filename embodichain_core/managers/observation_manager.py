@@ -9,7 +9,6 @@ import torch
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ObservationCfg
 from embodichain_core.managers.manager_base import ManagerBase
-from embodichain_core.utils.configclass import MISSING
 
 
 def get_nested(obs: dict, name: str) -> Any:
@@ -44,7 +43,8 @@ class ObservationManager(ManagerBase):
     min_argc = 2
 
     def _check(self, func: Any, cfg: ObservationCfg, where: str) -> None:
-        if cfg.name is MISSING or not cfg.name:
+        # not ``is MISSING``: configs are deep-copied, which copies the sentinel too
+        if not isinstance(cfg.name, str) or not cfg.name:
             raise ConfigError(join_path(where, "name"), "an observation functor needs a 'name' (e.g. 'object/cube_pose')")
         if cfg.mode not in ("add", "modify"):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'modify', got {cfg.mode!r}")

@@ -142,6 +142,7 @@ class BatchSim:
                 getattr(self.env_models[env], name)[index] = vals[k]
             if name in mujoco.MjModel._setconst_inputs:
                 self._set_const_models(ids)
+            self.batch.set_models(self.env_models)
             return
         field = self.batch.expand(name)
         sel = (ids,) + (index if isinstance(index, tuple) else (index,))

@@ -21,7 +21,7 @@ from embodichain_core.sim.builder import EntityRecord, SceneBuilder
 from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg
 from embodichain_core.utils.math import init_pos_from_cfg, init_quat_from_cfg
 
-ALL_COLLISION_BITS = (1 << 31) - 1
+ALL_COLLISION_BITS = (1 << 30) - 1  # bit 30: parked geoms (see variants.py)
 _MOVABLE = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
 
 
@@ -198,5 +198,5 @@ def _configure_bodies(spec: mujoco.MjSpec, cfg: ArticulationCfg, is_robot: bool,
             continue
         geom.friction = [float(cfg.attrs.static_friction), geom.friction[1], geom.friction[2]]
         if cfg.disable_self_collision:
-            own = 1 << min(bit, 30)
+            own = 1 << min(bit, 29)
             geom.contype, geom.conaffinity = own, ALL_COLLISION_BITS ^ own

@@ -47,6 +47,7 @@ class Scene:
         self.groups: dict[str, RigidObjectGroup] = {}
         self.lights: dict[str, Light] = {}
         self.sensors: dict[str, Any] = {}
+        self.current_mesh: dict[str, list] = {}
 
     # -- adding (before build) -------------------------------------------------------------
     def add_robot(self, cfg: ArticulationCfg, path: str = "robot") -> None:
@@ -69,6 +70,27 @@ class Scene:
         self._b().claim_uid(sensor.uid, "sensor", sensor.cfg, path)
         sensor.build(self._b())
         self.sensors[sensor.uid] = sensor
+
+    def reserve_mesh_variants(self, uid: str, files: list[str]) -> None:
+        """Before build: let mesh object ``uid`` take any mesh of ``files`` per env."""
+        from embodichain_core.sim.variants import add_variants
+
+        record = self._b().record(uid)
+        if record.kind not in ("rigid_object", "background") or "mesh_file" not in record.extra:
+            raise ValueError(f"{uid!r} is not a mesh rigid object; only those can swap meshes per env")
+        add_variants(self._b(), uid, [str(f) for f in files])
+
+    def set_mesh_variant(self, uid: str, fpath: str, env_ids: Any = None) -> None:
+        """After build: ``env_ids`` simulate and render ``uid`` with the mesh ``fpath``
+        (reserved before build). The object's body keeps its pose."""
+        from embodichain_core.sim.entities.base import env_index
+        from embodichain_core.sim.variants import apply_variant
+
+        ids = env_index(env_ids, self.num_envs)
+        apply_variant(self, uid, str(fpath), ids)
+        current = self.current_mesh.setdefault(uid, [self.builder.record(uid).extra.get("mesh_file")] * self.num_envs)
+        for env in ids.tolist():
+            current[env] = str(fpath)
 
     def _b(self) -> SceneBuilder:
         if self.builder is None or self.model is not None:
