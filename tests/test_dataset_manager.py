@@ -21,6 +21,7 @@ class EpisodeRecorder(DatasetFunctor):
         self.frames: list[list] = [[] for _ in range(env.num_envs)]
         self.saved: list[tuple[int, int, str]] = []  # (env id, frames, tag)
         self.discarded: list[tuple[int, int]] = []
+        self.dropped: dict[int, list] = {}
         self.resets: list[list[int]] = []
         self.first_obs: list[list[int]] = []
         self.finalized = 0
@@ -43,6 +44,7 @@ class EpisodeRecorder(DatasetFunctor):
         for i in env_ids.tolist():
             if self.frames[i]:
                 self.discarded.append((i, len(self.frames[i])))
+                self.dropped[i] = self.frames[i]
             self.frames[i] = []
 
     def reset(self, env_ids: Optional[torch.Tensor] = None) -> None:
@@ -82,7 +84,6 @@ def test_commits_successful_episodes_only(make_env, make_cfg) -> None:
     env.success_flags[0] = False
     assert rec.saved == [(0, 4, "t")]
     assert rec.frames[0] == [] and len(rec.frames[1]) == 4
-    assert rec.frames_terminal if False else True
     env.fail_flags[1] = True
     env.step(zero_action(env))  # env 1 fails at its 5th step: dropped
     assert rec.saved == [(0, 4, "t")]
@@ -95,10 +96,11 @@ def test_recorded_step_sees_the_terminal_frame(make_env, make_cfg) -> None:
     env, rec = make_recording_env(make_env, make_cfg, max_episode_steps=3)
     env.reset()
     steps(env, 2)
-    assert [f[2] for f in rec.frames[0]] == [False, False]
     env.step(torch.full((2, 7), 0.2))
-    # the third frame (truncated) was recorded before the auto-reset, then discarded as failed
+    # the truncated third frame was recorded before the auto-reset, then discarded (not a success)
     assert rec.discarded == [(0, 3), (1, 3)]
+    assert [f[2] for f in rec.dropped[0]] == [False, False, True]
+    assert rec.frames == [[], []]
 
 
 def test_save_failed_episodes_commits_every_finished_episode(make_env, make_cfg) -> None:
@@ -114,23 +116,14 @@ def test_save_failed_episodes_commits_every_finished_episode(make_env, make_cfg)
     assert rec.discarded == []
 
 
-def test_manual_reset_commits_successful_state_and_save_data_false_discards(make_env, make_cfg) -> None:
+def test_manual_reset_commits_only_envs_in_a_successful_state(make_env, make_cfg) -> None:
     env, rec = make_recording_env(make_env, make_cfg)
     env.reset()
     steps(env, 2)
-    env.success_flags[:] = True
-    env.reset(options={"reset_ids": [1]})  # env 1 is in a successful state: committed
+    env.success_flags[1] = True
+    env.reset()
     assert rec.saved == [(1, 2, "t")]
-    steps(env, 1)  # success flags still set: both envs terminate, but ...
-    env.success_flags[:] = False
-    rec.saved.clear()
-    steps(env, 2)
-    env.reset(options={"save_data": False})
-    assert rec.saved == []
-    assert rec.discarded == [(0, 2), (1, 2)]
-    env.success_flags[:] = True
-    steps(env, 1)  # ends both episodes successfully ...
-    assert rec.saved == [(0, 1, "t"), (1, 1, "t")]
+    assert rec.discarded == [(0, 2)]
 
 
 def test_save_data_false_discards_even_successful_episodes(make_env, make_cfg) -> None:

@@ -84,7 +84,7 @@ def test_modify_missing_key_names_the_functor(make_env) -> None:
 def test_observation_needs_a_name(make_env) -> None:
     from embodichain_core.config.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=r"env\.observations\.x\.name"):
+    with pytest.raises(ConfigError, match=r"observations\.x\.name"):
         make_env(observations={"x": ObservationCfg(func=env_index, mode="add")})
 
 

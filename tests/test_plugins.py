@@ -223,7 +223,7 @@ def test_tasks_reach_gymnasium_without_time_limit(plugin_manager: Any) -> None: 
     register_plugin(TaskPlugin(), name="tasks-plugin")
     spec = gymnasium.registry["EcTestTask-v0"]
     assert spec.entry_point == "ec_test_tasks:TestEnv" and spec.max_episode_steps is None
-    assert spec.kwargs == {"a": 1, "max_episode_steps": 123}
+    assert spec.kwargs == {"a": 1, "_registered_max_episode_steps": 123}
     assert spec.disable_env_checker and not spec.order_enforce
     assert gymnasium.registry["EcTestTaskNoLimit-v0"].kwargs == {}
     entry = plugin_manager.registry("tasks").entry("EcTestTask-v0")

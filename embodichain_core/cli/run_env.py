@@ -30,11 +30,13 @@ _CONFIG_EXTS = (".json", ".yaml", ".yml")
 
 @dataclass
 class RunPlan:
-    """What to build: the task id, its cfg (``None``: the task's own default) and the extras."""
+    """What to build: the task id, its cfg (``None``: the task's own default), the
+    run-level extras and further ``gym.make`` kwargs (cfg fields, for a bare task id)."""
 
     task_id: str
     cfg: Any = None
     extras: dict = field(default_factory=dict)
+    make_kwargs: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -148,22 +150,26 @@ def prepare(args: argparse.Namespace) -> RunPlan:
 
 
 def _bare_task_plan(task_id: str, overrides: dict) -> RunPlan:
-    """A task id without a config: ``gym.make(id)``, or the env's default cfg class
-    instantiated when CLI values must be applied to it."""
-    from embodichain_core.config.loader import RUN_DEFAULTS, apply_overrides
+    """A task id without a config: CLI values become ``gym.make`` kwargs; simulation
+    options (``--device``, ``--renderer``, ...) need the env's default cfg class."""
+    from embodichain_core.config.loader import RUN_DEFAULTS, SIM_KEYS, apply_overrides
+    from embodichain_core.sim.cfg import SimulationManagerCfg
 
     _check_task(task_id)
     extras = {**RUN_DEFAULTS, "id": task_id}
     apply_overrides(None, extras, {k: v for k, v in overrides.items() if k in RUN_DEFAULTS})
     given = {k: v for k, v in overrides.items() if k not in RUN_DEFAULTS and v is not None}
-    if not given:
-        return RunPlan(task_id, None, extras)
+    defaults = SimulationManagerCfg()
+    sim = {k: v for k, v in given.items() if k in SIM_KEYS or k == "renderer"}
+    sim = {k: v for k, v in sim.items() if k == "renderer" or getattr(defaults, SIM_KEYS[k]) != v}
+    if not sim:
+        return RunPlan(task_id, None, extras, {k: v for k, v in given.items() if k not in SIM_KEYS})
     cls = _task_cfg_class(task_id)
-    missing = cls().validate("cfg") if cls is not None else ["a config class"]
+    missing = cls().validate("cfg") if cls is not None else ["(no config class)"]
     if missing:
         raise ConfigError("", f"task {task_id!r} has no complete default config (unset: "
                               f"{', '.join(m.removeprefix('cfg.') for m in missing)}); "
-                              f"pass --gym_config to use --{' --'.join(given)}")
+                              f"pass --gym_config to use --{' --'.join(sim)}")
     cfg = cls()
     apply_overrides(cfg, extras, given)
     return RunPlan(task_id, cfg, extras)
@@ -214,10 +220,12 @@ def _task_cfg_class(task_id: Any) -> Optional[type]:
 
 
 def make_env(plan: RunPlan) -> Any:
-    """``gymnasium.make(id, cfg=cfg)``, or ``gymnasium.make(id)`` without a cfg."""
+    """``gymnasium.make(id, cfg=cfg)``, or ``gymnasium.make(id, **cli_values)`` without a cfg."""
     import gymnasium as gym
 
-    return gym.make(plan.task_id) if plan.cfg is None else gym.make(plan.task_id, cfg=plan.cfg)
+    if plan.cfg is None:
+        return gym.make(plan.task_id, **plan.make_kwargs)
+    return gym.make(plan.task_id, cfg=plan.cfg)
 
 
 # -- running -----------------------------------------------------------------------------------------

@@ -138,11 +138,12 @@ def gym_config_to_cfg(data: Mapping[str, Any], cfg_cls: type = EmbodiedEnvCfg) -
     if "sim_cfg" in data:
         _merge_into(cfg.sim_cfg, data["sim_cfg"], "sim_cfg")
         given["sim_cfg"] = "sim_cfg"
-    for key, value in data.items():
-        if key in SIM_KEYS or key == "renderer":
-            _set_sim_key(cfg, key, value, key)
-        elif key in TOP_CFG_FIELDS and key != "sim_cfg":
-            setattr(cfg, key, convert_value(value, hints[key], key))
+    for key in (*SIM_KEYS, "renderer"):  # fixed order: ``renderer`` after ``render_cfg``
+        if key in data:
+            _set_sim_key(cfg, key, data[key], key)
+    for key in ("num_envs", "max_episode_steps"):
+        if key in data:
+            setattr(cfg, key, convert_value(data[key], hints[key], key))
             given[key] = key
     _apply_env_section(cfg, data["env"], hints, given)
     _check_missing(cfg)
@@ -164,8 +165,8 @@ def _check_top_level(data: Mapping[str, Any], hints: dict) -> None:
 
 def _run_value(key: str, value: Any) -> Any:
     if key == "id":
-        if value is not None and (not isinstance(value, str) or not value):
-            raise ConfigError("id", f"expected a non-empty string, got {value!r}")
+        if not isinstance(value, str) or not value:
+            raise ConfigError("id", f"expected a non-empty gym task id, got {value!r}")
         return value
     value = convert_value(value, int, key)
     if value < 1:
@@ -196,11 +197,17 @@ def _merge_into(obj: Any, value: Any, path: str) -> None:
 
 
 def _set_sim_key(cfg: Any, key: str, value: Any, path: str) -> None:
-    """Set a flat simulation key (``headless``, ``device``, ``renderer``...)."""
+    """Set a flat simulation key (``headless``, ``device``, ``renderer``...) on ``sim_cfg``."""
+    sim = cfg.sim_cfg
     if key == "renderer":
-        cfg.sim_cfg.render_cfg.renderer = convert_value(value, str, path)
+        sim.render_cfg.renderer = convert_value(value, str, path)
         return
-    _merge_into(cfg.sim_cfg, {SIM_KEYS[key]: value}, "sim_cfg")
+    name = SIM_KEYS[key]
+    current = getattr(sim, name)
+    if is_configclass(current) and isinstance(value, Mapping):
+        _merge_into(current, value, path)
+    else:
+        setattr(sim, name, convert_value(value, _type_hints(type(sim))[name], path))
 
 
 def _apply_env_section(cfg: Any, env: Any, hints: dict, given: dict[str, str]) -> None:
@@ -272,7 +279,7 @@ def apply_overrides(cfg: Any, extras: dict, overrides: Optional[Mapping[str, Any
             continue
         if key in RUN_DEFAULTS:
             extras[key] = _run_value(key, value)
-        elif key in SIM_KEYS or key == "renderer":
+        elif cfg is not None and (key in SIM_KEYS or key == "renderer"):
             _set_sim_key(cfg, key, value, key)
         elif key in hints and key not in SCENE_SECTIONS:
             setattr(cfg, key, convert_value(value, hints[key], key))

@@ -62,7 +62,7 @@ class BaseEnv(gym.Env):
             cfg = self.cfg_cls.from_dict(cfg)
         else:
             cfg = cfg.copy()
-        if registered_limit is not None and cfg.max_episode_steps == type(cfg)().max_episode_steps:
+        if registered_limit is not None and cfg.max_episode_steps == EnvCfg().max_episode_steps:
             cfg.max_episode_steps = int(registered_limit)
         names = {f for f in cfg.__dataclass_fields__}
         for key, value in overrides.items():
@@ -181,11 +181,11 @@ class BaseEnv(gym.Env):
         self._step_action(command)
         diverged = self._physics_step()
         self._update_sim_state()
+        self._elapsed_steps += 1
         obs = self.get_obs()
         info = self.get_info()
         reward = self._compute_reward(obs, command, info)
-        self._postprocess_action(command)
-        self._elapsed_steps += 1
+        self.last_action = self._postprocess_action(command)
         terminated = info["success"] | info["fail"]
         if self.cfg.ignore_terminations:
             terminated = torch.zeros_like(terminated)

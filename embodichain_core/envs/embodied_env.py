@@ -166,6 +166,7 @@ class EmbodiedEnv(BaseEnv):
     # -- reset -------------------------------------------------------------------------------------
     def _reset_envs(self, env_ids: torch.Tensor, options: dict) -> None:
         self._commit_or_discard(env_ids, bool(options.get("save_data", True)))
+        self.sim.reset(env_ids)  # whole state rows (also clears a diverged env)
         self.scene.reset(env_ids, excluded_uids=self._detached_uids_for_reset)
         self.event_manager.apply("reset", env_ids)
         for manager in (self.event_manager, self.observation_manager, self.reward_manager, self.action_manager,

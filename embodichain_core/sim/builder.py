@@ -70,6 +70,9 @@ class SceneBuilder:
         opt.integrator = _INTEGRATORS[phys.integrator]
         opt.solver = _SOLVERS[phys.solver]
         opt.iterations = int(phys.iterations)
+        # a diverging simulation must surface (non-finite state) so the env can
+        # warn and reset that env, instead of MuJoCo silently resetting it
+        opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
         opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC if phys.cone == "elliptic" else mujoco.mjtCone.mjCONE_PYRAMIDAL
         self.spec.compiler.autolimits = True
         self.spec.visual.global_.offwidth = max(int(cfg.width), 640)

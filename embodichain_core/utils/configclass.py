@@ -212,7 +212,7 @@ def _find_missing(obj: Any, prefix: str) -> list[str]:
     elif isinstance(obj, (list, tuple)):
         for i, v in enumerate(obj):
             out += _find_missing(v, f"{prefix}[{i}]")
-    elif obj is MISSING:
+    elif obj is MISSING or isinstance(obj, type(MISSING)):
         out.append(prefix)
     return out
 
