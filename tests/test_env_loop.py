@@ -309,7 +309,8 @@ def test_register_env_rejects_non_env_classes() -> None:
 
 
 # -- divergence --------------------------------------------------------------------------------------------
-def test_diverged_env_is_reset_with_a_warning(make_env) -> None:
+def test_diverged_env_is_reset_with_a_warning(make_env, tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warning to ./MUJOCO_LOG.TXT
     env = make_env(num_envs=3)
     env.reset()
     for _ in range(2):

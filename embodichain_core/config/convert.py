@@ -113,7 +113,9 @@ def _convert_class(value: Any, hint: type, path: str) -> Any:
         if not isinstance(value, str):
             raise ConfigError(path, f"expected a string, got {type(value).__name__} {value!r}")
         return value
-    if hint in (list, tuple) and isinstance(value, (list, tuple)):
+    if hint in (list, tuple):
+        if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+            raise ConfigError(path, f"expected a list of values, got {type(value).__name__} {value!r}")
         return hint(value)
     return value
 
