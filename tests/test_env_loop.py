@@ -391,3 +391,20 @@ def test_active_joints_do_not_leak_between_envs(make_env) -> None:
     assert c.active_joint_ids == list(range(7)) and a.active_joint_ids == list(range(7))
     with pytest.raises(ConfigError, match="control_parts"):
         make_env(active_joint_ids=[0])  # together with control_parts
+
+
+def test_rollout_buffer_holds_each_envs_episode_and_clears_on_reset(make_cfg):
+    from embodichain_core.envs import EmbodiedEnv
+
+    env = EmbodiedEnv(make_cfg(init_rollout_buffer=True, max_episode_steps=10), num_envs=2)
+    obs0, _ = env.reset(seed=0)
+    actions = [torch.full((2, 7), 0.1 * (k + 1)) for k in range(3)]
+    for a in actions:
+        env.step(a)
+    buf = env.rollout_buffer
+    assert buf.length.tolist() == [3, 3]
+    ep = buf.episode(1)
+    assert torch.allclose(ep["actions"], torch.stack([a[1] for a in actions]))
+    assert torch.equal(ep["obs/robot/qpos"][0], obs0["robot"]["qpos"][1])  # frame 0 = the obs acted on
+    env.reset(options={"reset_ids": [0]})
+    assert buf.length.tolist() == [0, 3]

@@ -17,6 +17,7 @@ import torch
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
+from embodichain_core.envs.rollout_buffer import RolloutBuffer
 from embodichain_core.envs.scene_setup import build_scene, filter_functors, resolve_active_joints
 from embodichain_core.envs.summary import print_summary
 from embodichain_core.managers.action_manager import ActionManager
@@ -45,7 +46,12 @@ class EmbodiedEnv(BaseEnv):
         self.dataset_manager: Optional[DatasetManager] = None
         self.affordance_datas: dict[str, Any] = {}
         self._detached_uids_for_reset: list[str] = []
+        self.rollout_buffer: Optional[RolloutBuffer] = None
         super().__init__(cfg, num_envs, **kwargs)
+        if self.cfg.init_rollout_buffer or self.dataset_manager is not None:
+            self.cfg.init_rollout_buffer = True
+            self.rollout_buffer = RolloutBuffer(self._init_obs, self.single_action_space.shape, self.num_envs,
+                                                self.max_episode_steps)
         if self.cfg.verbose:
             print_summary(self)
 
@@ -160,12 +166,16 @@ class EmbodiedEnv(BaseEnv):
         return reward
 
     def _after_step(self, obs, action, reward, terminated, truncated, info) -> None:
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.add(obs, action, reward, terminated, truncated, info["success"])
         if self.dataset_manager is not None:
             self.dataset_manager.record_step(obs, action, reward, terminated, truncated, info)
 
     # -- reset -------------------------------------------------------------------------------------
     def _reset_envs(self, env_ids: torch.Tensor, options: dict) -> None:
         self._commit_or_discard(env_ids, bool(options.get("save_data", True)))
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.clear(env_ids)
         self.sim.reset(env_ids)  # whole state rows (also clears a diverged env)
         self.scene.reset(env_ids, excluded_uids=self._detached_uids_for_reset)
         self.event_manager.apply("reset", env_ids)
@@ -190,9 +200,11 @@ class EmbodiedEnv(BaseEnv):
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
         obs, info = super().reset(seed=seed, options=options)
+        ids = (options or {}).get("reset_ids")
+        ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.set_first_obs(obs, ids)
         if self.dataset_manager is not None:
-            ids = (options or {}).get("reset_ids")
-            ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
             self.dataset_manager.record_reset(obs, ids)
         return obs, info
 
