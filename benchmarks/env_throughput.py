@@ -190,8 +190,13 @@ def make_actions(env: EmbodiedEnv, period: int = ACTION_PERIOD) -> list[torch.Te
 
 # -- measurement ------------------------------------------------------------------------------------
 def measure(num_envs: int, sim_steps_per_control: int, steps: Optional[int], repeats: int, warmup_steps: int,
-            target_seconds: float, episode_length: int, seed: int = 0) -> dict[str, Any]:
-    """One configuration: env and raw timings, interleaved; returns the JSON record."""
+            target_seconds: float, episode_length: int, seed: int = 0, breakdown: bool = True) -> dict[str, Any]:
+    """One configuration: env and raw timings, interleaved; returns the JSON record.
+
+    With ``breakdown``, a second, instrumented pass times the MuJoCo calls inside
+    ``env.step`` (reported under ``breakdown``; the headline numbers come from the
+    uninstrumented pass).
+    """
     env = make_env(num_envs, sim_steps_per_control, episode_length, seed)
     base = env.unwrapped
     model = base.scene.model
@@ -238,6 +243,7 @@ def measure(num_envs: int, sim_steps_per_control: int, steps: Optional[int], rep
     env_sps = steps * num_envs / t_env
     raw_sps = steps * num_envs / t_raw
     paired = [r / e for e, r in zip(times["env"], times["raw"])]
+    parts = _breakdown(base.sim, run_env, run_raw, steps, min(3, repeats)) if breakdown else None
     env.close()
     del raw
     return {
@@ -260,6 +266,79 @@ def measure(num_envs: int, sim_steps_per_control: int, steps: Optional[int], rep
         "raw_spread": spread(times["raw"]),
         "env_times_s": times["env"],
         "raw_times_s": times["raw"],
+        "breakdown": parts,
+    }
+
+
+class _TimedBatch:
+    """Stands in for ``BatchSim.batch``: forwards everything, times step/forward/reset."""
+
+    def __init__(self, batch: Any):
+        self._batch = batch
+        self.acc = {"step": 0.0, "forward": 0.0, "reset": 0.0}
+        self.calls = {"step": 0, "forward": 0, "reset": 0}
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._batch, name)
+
+    def _timed(self, name: str, *args: Any, **kwargs: Any) -> Any:
+        start = time.perf_counter()
+        try:
+            return getattr(self._batch, name)(*args, **kwargs)
+        finally:
+            self.acc[name] += time.perf_counter() - start
+            self.calls[name] += 1
+
+    def step(self, *args: Any, **kwargs: Any) -> Any:
+        return self._timed("step", *args, **kwargs)
+
+    def forward(self, *args: Any, **kwargs: Any) -> Any:
+        return self._timed("forward", *args, **kwargs)
+
+    def reset(self, *args: Any, **kwargs: Any) -> Any:
+        return self._timed("reset", *args, **kwargs)
+
+
+def _breakdown(sim: Any, run_env: Any, run_raw: Any, steps: int, repeats: int) -> Optional[dict[str, Any]]:
+    """Where an env step's time goes: MuJoCo calls inside it vs the Python around them.
+
+    ``physics_excess_ms`` (env ``Batch.step`` minus raw ``Batch.step`` per call) is
+    physics the env really does more of (cubes pushed and reset keep contacts
+    active) plus thread-pool wake-ups after the Python part of the step.
+    """
+    batch = sim.__dict__.get("batch")
+    if batch is None:  # BatchSim changed shape; nothing to instrument
+        return None
+    timed = _TimedBatch(batch)
+    sim.__dict__["batch"] = timed
+    rows: dict[str, list[float]] = {k: [] for k in ("env", "step", "forward", "reset", "raw")}
+    calls = {"step": 0, "forward": 0, "reset": 0}
+    try:
+        for _ in range(max(1, repeats)):
+            for k in timed.acc:
+                timed.acc[k] = 0.0
+                timed.calls[k] = 0
+            rows["env"].append(_timed(run_env, steps))
+            for k in ("step", "forward", "reset"):
+                rows[k].append(timed.acc[k])
+                calls[k] += timed.calls[k]
+            rows["raw"].append(_timed(run_raw, steps))
+    finally:
+        sim.__dict__["batch"] = batch
+    per_call = {k: median(v) / steps * 1e3 for k, v in rows.items()}
+    n = max(1, repeats) * steps
+    python_ms = [(e - s - f - r) / steps * 1e3 for e, s, f, r in zip(rows["env"], rows["step"], rows["forward"], rows["reset"])]
+    return {
+        "repeats": max(1, repeats),
+        "env_ms_per_call": per_call["env"],
+        "env_batch_step_ms": per_call["step"],
+        "env_batch_forward_ms": per_call["forward"],
+        "env_batch_reset_ms": per_call["reset"],
+        "forward_calls_per_step": calls["forward"] / n,
+        "reset_calls_per_step": calls["reset"] / n,
+        "env_python_ms": median(python_ms),
+        "raw_ms_per_call": per_call["raw"],
+        "physics_excess_ms": per_call["step"] - per_call["raw"],
     }
 
 
@@ -296,7 +375,15 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output (default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true",
                    help="smoke run: num_envs 2, 5 steps, 1 repeat (structure check, not a measurement)")
+    p.add_argument("--no-breakdown", dest="breakdown", action="store_false",
+                   help="skip the instrumented pass that splits env time into MuJoCo calls and Python")
+    p.add_argument("--profile", action="store_true",
+                   help="profile env.step instead (pyinstrument if installed, else cProfile); "
+                        "default --num-envs 64, --steps 300; writes no JSON")
     args = p.parse_args(argv)
+    if args.profile:
+        args.num_envs = args.num_envs or [64]
+        args.steps = args.steps or 300
     if args.quick:
         args.num_envs = args.num_envs or [2]
         args.steps = args.steps or 5
@@ -310,13 +397,60 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     return args
 
 
+def profile(num_envs: int, sim_steps_per_control: int, steps: int, episode_length: int, seed: int = 0) -> None:
+    """Print where ``env.step`` spends its time at ``num_envs``."""
+    env = make_env(num_envs, sim_steps_per_control, episode_length, seed)
+    actions = make_actions(env)
+    for i in range(50):
+        env.step(actions[i % ACTION_PERIOD])
+    try:
+        from pyinstrument import Profiler
+    except ImportError:
+        Profiler = None
+    print(f"# profile of {steps} env.step calls, num_envs={num_envs}, sim_steps_per_control={sim_steps_per_control}")
+    if Profiler is not None:
+        prof = Profiler(interval=0.0001)
+        prof.start()
+        for i in range(steps):
+            env.step(actions[i % ACTION_PERIOD])
+        prof.stop()
+        print(prof.output_text(unicode=False, color=False, show_all=False))
+    else:
+        import cProfile
+        import pstats
+
+        prof = cProfile.Profile()
+        prof.enable()
+        for i in range(steps):
+            env.step(actions[i % ACTION_PERIOD])
+        prof.disable()
+        pstats.Stats(prof).sort_stats("cumulative").print_stats(40)
+    env.close()
+
+
+BREAKDOWN_COLUMNS = [
+    ("num_envs", "num_envs", "d"),
+    ("env_ms_per_call", "env ms/call", ".3f"),
+    ("env_batch_step_ms", "Batch.step in env", ".3f"),
+    ("raw_ms_per_call", "raw ms/call", ".3f"),
+    ("physics_excess_ms", "physics excess", "+.3f"),
+    ("env_batch_forward_ms", "forward", ".3f"),
+    ("env_batch_reset_ms", "reset", ".3f"),
+    ("env_python_ms", "Python", ".3f"),
+]
+
+
 def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     args = parse_args(argv)
     torch.set_grad_enabled(False)
+    if args.profile:
+        for n in args.num_envs:
+            profile(n, args.sim_steps_per_control, args.steps, args.episode_length, args.seed)
+        return {}
     records = []
     for n in args.num_envs:
         rec = measure(n, args.sim_steps_per_control, args.steps, args.repeats, args.warmup_steps,
-                      args.target_seconds, args.episode_length, args.seed)
+                      args.target_seconds, args.episode_length, args.seed, args.breakdown)
         records.append(rec)
         print(f"num_envs={n:<4d} env {rec['env_steps_per_s']:>9,.0f} steps/s  raw {rec['raw_steps_per_s']:>9,.0f} "
               f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call", flush=True)
@@ -343,6 +477,10 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     print()
     print_table(records, COLUMNS, title=f"EmbodiedEnv vs raw Batch, sim_steps_per_control={args.sim_steps_per_control} "
                                         f"(median of {args.repeats} runs)")
+    parts = [dict(r["breakdown"], num_envs=r["num_envs"]) for r in records if r.get("breakdown")]
+    if parts:
+        print()
+        print_table(parts, BREAKDOWN_COLUMNS, title="Where an env step goes (instrumented pass, ms per env.step call)")
     at64 = [r for r in records if r["num_envs"] == 64]
     if at64 and not args.quick:
         verdict = "meets" if at64[0]["ratio"] >= TARGET_RATIO_AT_64 else "MISSES"

@@ -43,7 +43,7 @@ def gym_config(**top: Any) -> dict:
         "num_envs": 2,
         "max_episode_steps": 20,
         "env": {"seed": 1, "verbose": False,
-                "events": {"tick": {"func": "test_config_loader:count_event", "mode": "interval",
+                "events": {"tick": {"func": f"{__name__}:count_event", "mode": "interval",
                                     "interval_step": 2, "is_global": True, "params": {"tag": "t"}}},
                 "dataset": {"robot_meta": {"robot_type": "Arm3"}}},
         "robot": {"uid": "arm", "mjcf": ARM_MJCF},
@@ -78,7 +78,7 @@ def test_json_and_yaml_load_to_equal_cfgs(tmp_path: Path) -> None:
     assert cfg_json.light.direct[0].uid == "lamp"
     event = cfg_json.events["tick"]
     assert isinstance(event, EventCfg) and event.is_global and event.interval_step == 2
-    assert event.func == "test_config_loader:count_event"  # kept as given; managers resolve it
+    assert event.func == f"{__name__}:count_event"  # kept as given; managers resolve it
     assert cfg_json.dataset == {"robot_meta": {"robot_type": "Arm3"}}  # plain metadata kept
 
 

@@ -166,7 +166,7 @@ def test_bare_task_without_default_cfg_needs_a_config(task: Callable, capsys: py
 
 def test_demo_action_list_retries_failed_attempts(tmp_path: Path, task: Callable,
                                                   capsys: pytest.CaptureFixture) -> None:
-    dataset = {"rec": {"func": "test_run_env_cli:Recorder", "params": {"out": str(tmp_path / "data")}}}
+    dataset = {"rec": {"func": f"{__name__}:Recorder", "params": {"out": str(tmp_path / "data")}}}
     config = write_config(tmp_path / "c.json", task(DemoTask), max_episode_steps=10, max_episodes=2,
                           env={"seed": 0, "verbose": False, "dataset": dataset})
     SAVED.clear()

@@ -1,0 +1,62 @@
+"""Smoke test of ``benchmarks/env_throughput.py``: the ``--quick`` run works and writes
+the documented JSON. No timing is asserted (the box is shared and noisy)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCRIPT = os.path.join(ROOT, "benchmarks", "env_throughput.py")
+
+RECORD_KEYS = {
+    "num_envs", "sim_steps_per_control", "physics_substeps", "mujoco_steps_per_env_step", "nthread", "steps",
+    "repeats", "env_steps_per_s", "raw_steps_per_s", "raw_sim_steps_per_s", "ratio", "manager_overhead_ms",
+    "env_ms_per_call", "raw_ms_per_call", "env_times_s", "raw_times_s", "breakdown",
+}
+BREAKDOWN_KEYS = {
+    "env_ms_per_call", "env_batch_step_ms", "env_batch_forward_ms", "env_batch_reset_ms", "env_python_ms",
+    "raw_ms_per_call", "physics_excess_ms", "forward_calls_per_step", "reset_calls_per_step",
+}
+
+
+@pytest.mark.timeout(300)
+def test_quick_run_writes_json(tmp_path):
+    out = tmp_path / "env_throughput.json"
+    proc = subprocess.run(
+        [sys.executable, SCRIPT, "--quick", "--num-envs", "2", "--steps", "3", "--out", str(out)],
+        cwd=ROOT, capture_output=True, text=True, timeout=280,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "| num_envs |" in proc.stdout  # the table is printed
+
+    data = json.loads(out.read_text())
+    assert data["benchmark"] == "env_throughput"
+    assert data["settings"]["quick"] is True
+    assert data["machine"]["mujoco"]
+    assert len(data["results"]) == 1
+    rec = data["results"][0]
+    assert RECORD_KEYS <= set(rec), RECORD_KEYS - set(rec)
+    assert rec["num_envs"] == 2
+    assert rec["sim_steps_per_control"] == 4
+    assert rec["steps"] == 3
+    assert rec["mujoco_steps_per_env_step"] == rec["sim_steps_per_control"] * rec["physics_substeps"]
+    assert rec["nthread"] == min(os.cpu_count() or 1, 2)
+    for key in ("env_steps_per_s", "raw_steps_per_s", "ratio", "env_ms_per_call", "raw_ms_per_call"):
+        assert isinstance(rec[key], float) and math.isfinite(rec[key]) and rec[key] > 0, key
+    assert isinstance(rec["manager_overhead_ms"], float) and math.isfinite(rec["manager_overhead_ms"])
+    assert rec["ratio"] == pytest.approx(rec["env_steps_per_s"] / rec["raw_steps_per_s"])
+    assert len(rec["env_times_s"]) == len(rec["raw_times_s"]) == rec["repeats"] == 1
+    assert BREAKDOWN_KEYS <= set(rec["breakdown"]), BREAKDOWN_KEYS - set(rec["breakdown"])
+
+
+def test_bad_arguments_are_rejected():
+    proc = subprocess.run([sys.executable, SCRIPT, "--num-envs", "0", "--out", ""], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "must be positive" in proc.stderr
