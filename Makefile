@@ -15,13 +15,18 @@ $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.tom
 setup: $(STAMP)
 
 run: $(STAMP)
-	MUJOCO_GL=$${MUJOCO_GL:-} $(VENV)/bin/embodichain run-env --headless
+	$(VENV)/bin/embodichain run-env --headless
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q tests $(wildcard plugins/*/tests)
+
+# The docs site (mkdocs, material theme) into site/; strict: a broken link or anchor, or a
+# page missing from the nav in mkdocs.yml, fails the build.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir site
 
 bench: $(STAMP)
 	$(PY) benchmarks/env_throughput.py

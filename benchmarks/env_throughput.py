@@ -189,8 +189,9 @@ def make_actions(env: EmbodiedEnv, period: int = ACTION_PERIOD) -> list[torch.Te
 
 
 # -- measurement ------------------------------------------------------------------------------------
-def measure(num_envs: int, sim_steps_per_control: int, steps: Optional[int], repeats: int, warmup_steps: int,
-            target_seconds: float, episode_length: int, seed: int = 0, breakdown: bool = True) -> dict[str, Any]:
+def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] = None, repeats: int = 7,
+            warmup_steps: int = 20, target_seconds: float = 0.6, episode_length: int = 100, seed: int = 0,
+            breakdown: bool = True) -> dict[str, Any]:
     """One configuration: env and raw timings, interleaved; returns the JSON record.
 
     With ``breakdown``, a second, instrumented pass times the MuJoCo calls inside
@@ -259,6 +260,7 @@ def measure(num_envs: int, sim_steps_per_control: int, steps: Optional[int], rep
         "raw_sim_steps_per_s": raw_sps * nstep,
         "ratio": env_sps / raw_sps,
         "ratio_paired_median": median(paired),
+        "ratio_best": min(times["raw"]) / min(times["env"]),
         "manager_overhead_ms": (t_env - t_raw) / steps * 1e3,
         "env_ms_per_call": t_env / steps * 1e3,
         "raw_ms_per_call": t_raw / steps * 1e3,
@@ -342,6 +344,14 @@ def _breakdown(sim: Any, run_env: Any, run_raw: Any, steps: int, repeats: int) -
     }
 
 
+def _loadavg() -> Optional[list[float]]:
+    """1/5/15-minute load averages (a busy neighbour shows here), or None."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
+
+
 def _timed(fn: Any, n: int) -> float:
     start = time.perf_counter()
     fn(n)
@@ -366,10 +376,10 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--num-envs", type=int, nargs="+", default=None, help="env counts (default 1 16 64 256)")
     p.add_argument("--steps", type=int, default=None,
                    help="env.step calls per timed run (default: sized to ~--target-seconds per run)")
-    p.add_argument("--repeats", type=int, default=None, help="timed runs of env and raw, interleaved (default 5)")
+    p.add_argument("--repeats", type=int, default=None, help="timed runs of env and raw, interleaved (default 7)")
     p.add_argument("--sim-steps-per-control", type=int, default=4)
     p.add_argument("--episode-length", type=int, default=100, help="env steps per episode (staggered)")
-    p.add_argument("--target-seconds", type=float, default=1.0, help="length of one timed run when --steps is not given")
+    p.add_argument("--target-seconds", type=float, default=0.6, help="length of one timed run when --steps is not given")
     p.add_argument("--warmup-steps", type=int, default=None, help="untimed env.step calls first (default 20)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output (default {DEFAULT_OUT})")
@@ -390,7 +400,7 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
         args.repeats = args.repeats or 1
         args.warmup_steps = args.warmup_steps if args.warmup_steps is not None else 2
     args.num_envs = args.num_envs or [1, 16, 64, 256]
-    args.repeats = args.repeats or 5
+    args.repeats = args.repeats or 7
     args.warmup_steps = args.warmup_steps if args.warmup_steps is not None else 20
     if any(n < 1 for n in args.num_envs) or args.repeats < 1 or (args.steps is not None and args.steps < 1):
         p.error("--num-envs, --steps and --repeats must be positive")
@@ -448,6 +458,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             profile(n, args.sim_steps_per_control, args.steps, args.episode_length, args.seed)
         return {}
     records = []
+    load_before = _loadavg()
     for n in args.num_envs:
         rec = measure(n, args.sim_steps_per_control, args.steps, args.repeats, args.warmup_steps,
                       args.target_seconds, args.episode_length, args.seed, args.breakdown)
@@ -470,7 +481,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             "raw_batch": "persistent=True, stage=mjSTAGE_VEL, nthread=min(cpu_count, num_envs)",
             "target_ratio_at_64_envs": TARGET_RATIO_AT_64,
         },
-        "machine": machine_info(),
+        "machine": dict(machine_info(), loadavg_before=load_before, loadavg_after=_loadavg()),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "results": records,
     }

@@ -5,14 +5,22 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 
-# System library for headless rendering (Mesa EGL / OSMesa). Only when missing
-# and only when we may install packages (root with apt).
-if ! ldconfig -p 2>/dev/null | grep -q -E "libOSMesa|libEGL_mesa"; then
+# System library for headless rendering (Mesa EGL / OSMesa; embodichain_core/rendering.py
+# picks MUJOCO_GL=egl when libEGL is found, else osmesa). Only when no EGL vendor
+# library (Mesa or NVIDIA) and no OSMesa is present, and only when we may install
+# packages (root with apt). Both Mesa backends render on the CPU (llvmpipe).
+# (ldconfig's output is captured first: with pipefail, 'ldconfig | grep -q' can fail on SIGPIPE.)
+GL_LIBS=$(ldconfig -p 2>/dev/null || true)
+if ! grep -q -E "libOSMesa|libEGL_mesa|libEGL_nvidia" <<<"$GL_LIBS"; then
   if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = "0" ]; then
     echo "[setup] installing Mesa (EGL/OSMesa) for headless rendering"
     (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
         libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 >/dev/null) \
-      || echo "[setup] warning: could not install Mesa; rendering will need a GL backend"
+      || echo "[setup] warning: could not install Mesa; rendering needs libEGL or libOSMesa" \
+              "(apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6)"
+  else
+    echo "[setup] warning: no EGL/OSMesa library found; camera sensors need one" \
+         "(apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6)"
   fi
 fi
 

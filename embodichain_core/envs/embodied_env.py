@@ -176,7 +176,8 @@ class EmbodiedEnv(BaseEnv):
         self._commit_or_discard(env_ids, bool(options.get("save_data", True)))
         if self.rollout_buffer is not None:
             self.rollout_buffer.clear(env_ids)
-        self.sim.reset(env_ids)  # whole state rows (also clears a diverged env)
+        # whole state rows (also clears a diverged env), detached entities kept as they are
+        self.scene.reset_state(env_ids, keep_uids=self._detached_uids_for_reset)
         self.scene.reset(env_ids, excluded_uids=self._detached_uids_for_reset)
         self.event_manager.apply("reset", env_ids)
         for manager in (self.event_manager, self.observation_manager, self.reward_manager, self.action_manager,

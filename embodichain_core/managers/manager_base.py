@@ -174,6 +174,7 @@ class ManagerBase:
         self._check(func, cfg, where)
         cfg.params = resolve_entities(dict(cfg.params), self._env.scene, join_path(where, "params"))
         cfg.func = func
+        self._run_param_check(func, cfg, where)
         if is_class:
             try:
                 func = func(cfg=cfg, env=self._env)
@@ -182,6 +183,22 @@ class ManagerBase:
             except Exception as err:
                 raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err
         return FunctorEntry(name, cfg, func, is_class, where)
+
+    def _run_param_check(self, func: Any, cfg: FunctorCfg, where: str) -> None:
+        """A function functor may carry ``check_params(env, **params)``; it runs
+        now, so bad values are reported when the manager is built."""
+        hook = getattr(func, "check_params", None)
+        if inspect.isclass(func) or not callable(hook):
+            return
+        try:
+            hook(self._env, **cfg.params)
+        except ConfigError as err:
+            param = getattr(err, "param", None)  # errors naming the param they are about
+            if param is not None:
+                raise ConfigError(join_path(where, "params", param), err.reason) from err
+            raise err if err.path.startswith(where) else err.under(join_path(where, "params"))
+        except (TypeError, ValueError) as err:
+            raise ConfigError(join_path(where, "params"), f"{getattr(func, '__name__', func)}: {err}") from err
 
     def _check(self, func: Any, cfg: FunctorCfg, where: str) -> None:
         check_params(func, cfg.params, self.min_argc, where)

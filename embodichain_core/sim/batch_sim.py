@@ -51,6 +51,7 @@ class BatchSim:
         self.persistent = persistent
         self.env_models: Optional[list[mujoco.MjModel]] = None
         self._dirty = np.zeros(self.num_envs, dtype=bool)
+        self._const_dirty = np.zeros(self.num_envs, dtype=bool)
         self._make_batch()
         self.batch.reset(None)
 
@@ -88,6 +89,7 @@ class BatchSim:
     # -- stepping ------------------------------------------------------------------------------
     def step(self, nstep: int = 1) -> list[int]:
         """Advance every env by ``nstep`` physics steps; return envs that diverged."""
+        self.flush_const()
         if self._dirty.any():
             self.forward(np.flatnonzero(self._dirty))
         failed: list[int] = []
@@ -102,6 +104,7 @@ class BatchSim:
 
     def forward(self, env_ids: Any = None) -> None:
         """Recompute derived fields (kinematics, sensors) of ``env_ids``."""
+        self.flush_const()
         ids = _batch_ids(env_ids, self.num_envs)
         try:
             self.batch.forward(ids, stage=_VEL)
@@ -140,14 +143,28 @@ class BatchSim:
             vals = np.broadcast_to(values, (len(ids),) + np.shape(getattr(self.model, name)[index]))
             for k, env in enumerate(ids):
                 getattr(self.env_models[env], name)[index] = vals[k]
-            if name in mujoco.MjModel._setconst_inputs:
-                self._set_const_models(ids)
             self.batch.set_models(self.env_models)
-            return
-        field = self.batch.expand(name)
-        sel = (ids,) + (index if isinstance(index, tuple) else (index,))
-        field[sel] = values if np.ndim(values) else values
+        else:
+            field = self.batch.expand(name)
+            field[(ids,) + (index if isinstance(index, tuple) else (index,))] = values
         if name in mujoco.MjModel._setconst_inputs:
+            self._const_dirty[ids] = True
+
+    def flush_const(self) -> None:
+        """Run ``mj_setConst`` once for every env whose constant inputs changed.
+
+        Deferred from :meth:`set_model_field` so that a reset writing several fields
+        (mass, centre of mass, light position) pays for one call; run automatically
+        before stepping, forward and ``get_model``/``get_data``.
+        """
+        if not self._const_dirty.any():
+            return
+        ids = np.flatnonzero(self._const_dirty)
+        self._const_dirty[:] = False
+        if self.env_models is not None:
+            self._set_const_models(ids)
+            self.batch.set_models(self.env_models)
+        else:
             self.batch.set_const(_batch_ids(ids, self.num_envs))
 
     def _set_const_models(self, ids: Iterable[int]) -> None:
@@ -165,6 +182,7 @@ class BatchSim:
         """
         if len(models) != self.num_envs:
             raise ValueError(f"need one model per env ({self.num_envs}), got {len(models)}")
+        self.flush_const()
         state = self.batch.state.copy()
         expanded = {name: self.batch.expanded(name) for name in list(self.batch._expanded)}
         models = [copy.copy(m) for m in models]
@@ -189,14 +207,20 @@ class BatchSim:
         self.batch.set_models(self.env_models)
         self.mark_dirty(env_ids)
 
-    def get_model(self, env_id: int) -> mujoco.MjModel:
-        """The model env ``env_id`` runs on (for rendering or any mj_ function)."""
+    def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
+        """The model env ``env_id`` runs on (for rendering or any mj_ function).
+
+        Pass ``model`` (a copy of ``self.model`` kept by the caller) to have it
+        filled in place instead of allocating a copy per call.
+        """
+        self.flush_const()
         if self.env_models is not None:
             return self.env_models[int(env_id)]
-        return self.batch.get_model(int(env_id))
+        return self.batch.get_model(int(env_id), model)
 
     def get_data(self, env_id: int, data: Optional[mujoco.MjData] = None) -> mujoco.MjData:
         """Env ``env_id``'s MjData (whole in a persistent batch)."""
+        self.flush_const()
         if self._dirty[int(env_id)]:
             self.forward([int(env_id)])
         return self.batch.get_data(int(env_id), data)

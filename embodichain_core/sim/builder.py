@@ -138,7 +138,11 @@ class SceneBuilder:
             light.cutoff = float(cfg.spot_angle_outer)
             light.exponent = max(1.0, float(cfg.spot_angle_outer - cfg.spot_angle_inner))
         else:
-            light.type = mujoco.mjtLightType.mjLIGHT_POINT
+            # MuJoCo's OpenGL renderer draws no mjLIGHT_POINT: an all-round spot
+            # without falloff lights the same way and renders everywhere
+            light.type = mujoco.mjtLightType.mjLIGHT_SPOT
+            light.cutoff, light.exponent = 180.0, 0.0
+            light.attenuation = [1.0, 0.0, 0.0]
             light.range = float(cfg.radius)
         light.diffuse = light_diffuse(cfg.color, cfg.intensity)
         light.specular = [0.2, 0.2, 0.2]

@@ -107,8 +107,10 @@ def _geom_common(geom: Any, cfg: RigidObjectCfg) -> None:
     attrs = cfg.attrs
     geom.friction = [float(attrs.static_friction), 0.005, 0.0001]
     geom.contype, geom.conaffinity = 1, ALL_COLLISION_BITS
-    geom.margin = float(attrs.contact_offset)
-    geom.gap = float(attrs.contact_offset)
+    # MuJoCo rests contacts at the sum of the two margins, so only PhysX's
+    # rest_offset (default 0) maps onto margin; contact_offset has no MuJoCo twin
+    geom.margin = float(attrs.rest_offset)
+    geom.gap = 0.0
     if not attrs.enable_collision:
         geom.contype = geom.conaffinity = 0
 

@@ -145,6 +145,49 @@ class Scene:
     def get(self, uid: str, default: Any = None) -> Any:
         return self.entities.get(uid, default)
 
+    def state_indices(self, uids: Any) -> dict[str, list[int]]:
+        """qpos, qvel, ctrl and mocap indices owned by the entities ``uids``."""
+        out: dict[str, list[int]] = {"qpos": [], "qvel": [], "ctrl": [], "mocap": []}
+        for uid in uids:
+            ent = self[uid]
+            members = getattr(ent, "members", [ent])
+            for e in members:
+                if isinstance(e, RigidObject):
+                    if e.is_dynamic:
+                        out["qpos"] += range(e.qpos_adr, e.qpos_adr + 7)
+                        out["qvel"] += range(e.dof_adr, e.dof_adr + 6)
+                    else:
+                        out["mocap"].append(e.mocap_id)
+                elif isinstance(e, Articulation):
+                    out["qpos"] += e.qpos_adr.tolist()
+                    out["qvel"] += e.dof_adr.tolist()
+                    out["ctrl"] += [int(a) for a in torch.cat((e.pos_act, e.vel_act)) if a >= 0]
+                    if e.is_floating:
+                        out["qpos"] += range(e.root_qpos_adr, e.root_qpos_adr + 7)
+                        out["qvel"] += range(e.root_dof_adr, e.root_dof_adr + 6)
+        return out
+
+    def reset_state(self, env_ids: Any, keep_uids: Any = ()) -> None:
+        """Reset the whole simulation state rows of ``env_ids`` (clears anything a
+        diverged simulation left behind), keeping the state of ``keep_uids``."""
+        from embodichain_core.sim.entities.base import env_index
+
+        ids = env_index(env_ids, self.num_envs)
+        idx = self.state_indices(keep_uids) if keep_uids else None
+        saved = {}
+        if idx:
+            sim = self.sim
+            saved = {name: getattr(sim, name)[ids][:, idx[key]].clone() for name, key in
+                     (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"),
+                      ("mocap_quat", "mocap"))}
+        self.sim.reset(ids)
+        for (name, key) in (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"),
+                            ("mocap_quat", "mocap")):
+            if saved and idx[key]:
+                getattr(self.sim, name)[ids[:, None], torch.as_tensor(idx[key])[None, :]] = saved[name]
+        if saved:
+            self.sim.mark_dirty(ids)
+
     def reset(self, env_ids: Any = None, excluded_uids: Any = ()) -> None:
         """Restore every entity (except ``excluded_uids``) of ``env_ids`` to its initial state."""
         for uid, ent in self.entities.items():

@@ -116,7 +116,8 @@ def apply_variant(scene: Any, uid: str, fpath: str, env_ids: Any) -> None:
             sim.set_model_field("geom_conaffinity", env_ids, g, ALL_BITS if on else 0)
         for g in ids(variant["visual"]):
             sim.set_model_field("geom_matid", env_ids, g, mat if on else hidden)
-            sim.set_model_field("geom_rgba", env_ids, g, [1, 1, 1, 1] if on else [0, 0, 0, 0])
+            # MuJoCo's default geom rgba lets the material's colour show
+            sim.set_model_field("geom_rgba", env_ids, g, [0.5, 0.5, 0.5, 1] if on else [0, 0, 0, 0])
     body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, uid)
     for field, value in zip(_INERTIAL, variants[fpath]["inertial"]):
         sim.set_model_field(field, env_ids, body, value)

@@ -47,23 +47,37 @@ def _is_data_member(name: str, value: Any) -> bool:
     return True
 
 
-def _field_names(cls: type) -> set[str]:
-    names: set[str] = set()
-    for base in cls.__mro__[1:]:
-        names.update(getattr(base, "__dataclass_fields__", {}).keys())
-    return names
+def _inherited_types(cls: type) -> dict[str, Any]:
+    """Field name -> declared type of the fields the bases define."""
+    import typing
+
+    types: dict[str, Any] = {}
+    for base in reversed(cls.__mro__[1:]):
+        fields = getattr(base, "__dataclass_fields__", {})
+        if not fields:
+            continue
+        try:  # resolve string annotations in the base's own module
+            hints = typing.get_type_hints(base)
+        except Exception:
+            hints = {}
+        for name, f in fields.items():
+            types[name] = hints.get(name, f.type)
+    return types
 
 
 def _annotate(cls: type) -> None:
     """Give unannotated data members an annotation so they become fields."""
     ann = dict(cls.__dict__.get("__annotations__", {}))
-    inherited = _field_names(cls)
+    inherited = _inherited_types(cls)
     for name, value in list(cls.__dict__.items()):
         if name in ann or not _is_data_member(name, value):
             continue
         if name.startswith("_") and name not in inherited:
             continue
-        ann[name] = type(value) if value is not MISSING else Any
+        if name in inherited:  # a redefined field keeps the type its base declared
+            ann[name] = inherited[name]
+        else:
+            ann[name] = type(value) if value is not MISSING else Any
     cls.__annotations__ = ann
 
 

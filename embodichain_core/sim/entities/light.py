@@ -8,7 +8,6 @@ import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.builder import light_diffuse
 from embodichain_core.sim.entities.base import Entity, as_values
 from embodichain_core.utils.math import init_pos_from_cfg
 
@@ -69,7 +68,8 @@ class Light(Entity):
 
     def _write_diffuse(self, ids: torch.Tensor) -> None:
         self._touched = True
-        diffuse = np.array([light_diffuse(c, i) for c, i in zip(self._color[ids].tolist(), self._intensity[ids].tolist())])
+        scale = (self._intensity[ids] / 30.0).clamp(0.0, 1.0)[:, None]
+        diffuse = (self._color[ids] * scale).clamp(0.0, 1.0).numpy()
         self.sim.set_model_field("light_diffuse", ids, self.light_id, diffuse)
         self.sim.set_model_field("light_intensity", ids, self.light_id, self._intensity[ids].numpy())
 

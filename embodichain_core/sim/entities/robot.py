@@ -1,4 +1,17 @@
-"""Robots: articulations with control parts and proprioception."""
+"""Robots: articulations with control parts, proprioception and kinematics.
+
+Kinematics of a control part go through ``robot.solvers[part]``, built by the
+robot config's optional ``build_solvers(robot) -> {part: solver}`` hook (robot
+plugins provide them, e.g. embodichain-robots). A solver offers:
+
+* ``joint_ids``: the robot joint ids it solves for (the part's joints, in order);
+* ``root_link_name``: the link its poses are expressed in;
+* ``get_fk(qpos (n, k)) -> (n, 4, 4)``: the part TCP in the root link frame;
+* ``get_ik(target (n, 4, 4), qpos_seed (n, k)) -> (success (n,), qpos (n, k))``.
+
+:meth:`Robot.compute_fk` (with ``name``) and :meth:`Robot.compute_ik` convert
+between the env frame and the root link frame.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +23,7 @@ import torch
 
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.base import find_names
-from embodichain_core.utils.math import pose_to_matrix
+from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix
 from embodichain_core.utils.suggest import did_you_mean
 
 
@@ -66,13 +79,20 @@ class Robot(Articulation):
         return [n for n, b in zip(self.link_names, self.body_ids.tolist()) if b in jnt_bodies]
 
     def compute_fk(self, qpos: Optional[torch.Tensor] = None, link_names: Any = None,
-                   env_ids: Any = None, to_matrix: bool = True) -> torch.Tensor:
-        """Forward kinematics in the env frame for ``link_names`` at ``qpos`` (N, dof).
+                   env_ids: Any = None, to_matrix: bool = True, name: Optional[str] = None) -> torch.Tensor:
+        """Forward kinematics in the env frame.
 
-        Returns (n, L, 4, 4) (or (n, 4, 4) for one link name); ``qpos=None`` uses the
-        current joint positions. Runs MuJoCo's kinematics on a scratch MjData per env,
-        so the simulation state is untouched.
+        With ``name`` (a control part with a solver) and no ``link_names``: the
+        part's TCP pose, (n, 4, 4) (or (n, 7) xyz + wxyz with ``to_matrix=False``).
+        ``qpos`` is then (n, k) part joint values or (n, dof) full joint values (the
+        root link then follows the full qpos too); None uses the current ones.
+
+        Otherwise: poses of ``link_names`` at ``qpos`` (n, dof), (n, L, 4, 4) (or
+        (n, 4, 4) for one link name). Runs MuJoCo's kinematics on a scratch MjData
+        per env, so the simulation state is untouched.
         """
+        if name is not None and link_names is None:
+            return self._compute_part_fk(qpos, name, env_ids, to_matrix)
         env = self._ids(env_ids)
         single = isinstance(link_names, str)
         links, _ = self.find_bodies(link_names if link_names is not None else self.link_names, preserve_order=True)
@@ -89,3 +109,82 @@ class Robot(Articulation):
         pose = torch.as_tensor(out, dtype=torch.float32)
         pose = pose_to_matrix(pose) if to_matrix else pose
         return pose[:, 0] if single else pose
+
+    # -- control part kinematics -------------------------------------------------------------
+    def get_solver(self, name: Optional[str] = None) -> Any:
+        """The kinematics solver of control part ``name`` (the only one when ``None``)."""
+        if name is None and len(self.solvers) == 1:
+            return next(iter(self.solvers.values()))
+        if name not in self.solvers:
+            have = list(self.solvers) or "none; the robot config builds no solvers"
+            raise KeyError(f"{self.uid}: no kinematics solver for control part {name!r} (solvers: {have})")
+        return self.solvers[name]
+
+    def get_control_part_base_pose(self, name: Optional[str] = None, env_ids: Any = None,
+                                   to_matrix: bool = True) -> torch.Tensor:
+        """Pose of the solver root link of part ``name`` in the env frame, (n, 4, 4) or (n, 7)."""
+        return self.get_link_pose(self.get_solver(name).root_link_name, env_ids, to_matrix)
+
+    def _part_qpos(self, solver: Any, qpos: Any, env: torch.Tensor) -> torch.Tensor:
+        """(n, k) float64 part joint values from ``qpos`` (None, (n, k) or (n, dof))."""
+        ids = list(solver.joint_ids)
+        if qpos is None:
+            return self.sim.qpos[env][:, self.qpos_adr[ids]].to(torch.float64)
+        q = torch.as_tensor(qpos).detach().to("cpu", torch.float64)
+        q = q.reshape(len(env), -1) if q.dim() != 1 or len(env) == 1 else q.expand(len(env), -1)
+        if q.shape[-1] == len(ids):
+            return q
+        if q.shape[-1] == self.dof:
+            return q[:, ids]
+        raise ValueError(f"{self.uid}: qpos has {q.shape[-1]} values per env; expected {len(ids)} "
+                         f"(the part's joints) or {self.dof} (all joints)")
+
+    def _base_matrix(self, solver: Any, qpos: Any, env: torch.Tensor) -> torch.Tensor:
+        """(n, 4, 4) float64 root link pose; follows ``qpos`` when it is a full joint vector."""
+        q = None if qpos is None else torch.as_tensor(qpos)
+        if q is not None and q.shape[-1] == self.dof and q.shape[-1] != len(solver.joint_ids):
+            base = self.compute_fk(q.reshape(len(env), -1), link_names=[solver.root_link_name], env_ids=env)[:, 0]
+            return base.to("cpu", torch.float64)
+        body = int(self.body_ids[self.find_bodies(solver.root_link_name)[0][0]])
+        return pose_to_matrix(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), -1).to(torch.float64))
+
+    def _compute_part_fk(self, qpos: Any, name: str, env_ids: Any, to_matrix: bool) -> torch.Tensor:
+        solver, env = self.get_solver(name), self._ids(env_ids)
+        pose = self._base_matrix(solver, qpos, env) @ solver.get_fk(self._part_qpos(solver, qpos, env))
+        pose = self._out(pose)
+        return pose if to_matrix else matrix_to_pose(pose)
+
+    def compute_ik(self, pose: Any, joint_seed: Optional[torch.Tensor] = None, name: Optional[str] = None,
+                   env_ids: Any = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Inverse kinematics of control part ``name``'s TCP for ``env_ids``.
+
+        Args:
+            pose: (n, 4, 4) or (n, 7) (xyz + wxyz) TCP targets in the env frame.
+            joint_seed: (n, k) part or (n, dof) full joint values to start from;
+                None starts from the current joint positions.
+            name: the control part (the only solver's part when None).
+            env_ids: the envs the targets are for (all when None).
+
+        Returns:
+            ``(success (n,) bool, qpos (n, k))``; ``qpos`` respects the joint limits
+            and is in the order of ``robot.get_solver(name).joint_ids``.
+        """
+        solver, env = self.get_solver(name), self._ids(env_ids)
+        target = torch.as_tensor(pose).detach().to("cpu", torch.float64)
+        if target.shape[-1] == 7:
+            target = pose_to_matrix(target)
+        target = target.reshape(len(env), 4, 4)
+        seed = self._part_qpos(solver, joint_seed, env)
+        local = _rigid_inverse(self._base_matrix(solver, None, env)) @ target
+        success, qpos = solver.get_ik(local, qpos_seed=seed)
+        return torch.as_tensor(success, dtype=torch.bool).to(self.device), self._out(torch.as_tensor(qpos))
+
+
+def _rigid_inverse(pose: torch.Tensor) -> torch.Tensor:
+    """Inverse of (..., 4, 4) rigid transforms (no LAPACK call: it is slow on busy threads)."""
+    out = torch.zeros_like(pose)
+    rot_t = pose[..., :3, :3].transpose(-1, -2)
+    out[..., :3, :3] = rot_t
+    out[..., :3, 3] = -(rot_t @ pose[..., :3, 3:4])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out

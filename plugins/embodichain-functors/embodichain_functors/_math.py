@@ -1,0 +1,37 @@
+"""Small batched rotation helpers in numpy (float64), for the hot paths of the functors.
+
+Quaternions are (w, x, y, z); Euler angles are extrinsic x-y-z (as the core's
+``euler_xyz_to_quat``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def euler_to_quat(euler: np.ndarray, degrees: bool = True) -> np.ndarray:
+    """(n, 3) extrinsic x-y-z Euler angles to (n, 4) quaternions (``qz * qy * qx``)."""
+    half = np.radians(euler) / 2.0 if degrees else np.asarray(euler) / 2.0
+    c, s = np.cos(half), np.sin(half)
+    cx, cy, cz, sx, sy, sz = c[:, 0], c[:, 1], c[:, 2], s[:, 0], s[:, 1], s[:, 2]
+    return np.stack((cz * cy * cx + sz * sy * sx, cz * cy * sx - sz * sy * cx,
+                     cz * sy * cx + sz * cy * sx, sz * cy * cx - cz * sy * sx), axis=-1)
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product of (..., 4) quaternions."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack((aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw), axis=-1)
+
+
+def pose_to_matrix(pose: np.ndarray) -> np.ndarray:
+    """(n, 7) xyz + wxyz poses to (n, 4, 4) homogeneous matrices."""
+    w, x, y, z = pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]
+    out = np.zeros((pose.shape[0], 4, 4))
+    out[:, 0] = np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), pose[:, 0]), -1)
+    out[:, 1] = np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), pose[:, 1]), -1)
+    out[:, 2] = np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pose[:, 2]), -1)
+    out[:, 3, 3] = 1.0
+    return out

@@ -1,0 +1,1 @@
+"""Implementation modules of :mod:`embodichain_functors.observations` (import from there)."""

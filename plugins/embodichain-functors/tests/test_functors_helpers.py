@@ -1,0 +1,64 @@
+"""Helpers of the functors: batched rotations agree with the core's, ranges are checked
+and cached, model writes run mj_setConst once and touch only the envs written."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from functors_testlib import field
+
+from embodichain_core.utils.math import euler_xyz_to_quat, matrix_to_quat, pose_to_matrix, quat_mul
+
+from embodichain_functors import _math
+from embodichain_functors._common import ParamError, as_range, uniform
+from embodichain_functors._sim import quat_from_matrix, write_model
+
+
+def test_rotations_match_the_core() -> None:
+    rng = np.random.default_rng(0)
+    euler = rng.uniform(-180, 180, (50, 3))
+    assert np.allclose(_math.euler_to_quat(euler), euler_xyz_to_quat(torch.tensor(euler)).numpy())
+    a, b = rng.normal(size=(5, 4)), rng.normal(size=(5, 4))
+    assert np.allclose(_math.quat_mul(a, b), quat_mul(torch.tensor(a), torch.tensor(b)).numpy())
+    pose = np.concatenate([rng.normal(size=(5, 3)), _math.euler_to_quat(euler[:5])], -1)
+    mats = pose_to_matrix(torch.tensor(pose))
+    assert np.allclose(_math.pose_to_matrix(pose), mats.numpy())
+    assert torch.allclose(quat_from_matrix(mats[:, :3, :3]), matrix_to_quat(mats[:, :3, :3]), atol=1e-9)
+
+
+def test_ranges_are_checked_and_cached() -> None:
+    rng = [[0.0, 1.0], [2.0, 3.0]]
+    low, high = as_range(rng, "f", "p", 2)
+    assert as_range(rng, "f", "p", 2)[0] is low  # converted once per param object
+    assert torch.equal(as_range([[1.0], [2.0]], "f", "p", 3)[1], torch.full((3,), 2.0, dtype=torch.float64))
+    for bad in ([1.0], [[0, 0], [1, 1, 1]], [2.0, 1.0], [0.0, float("nan")], "ab"):
+        with pytest.raises(ParamError) as err:
+            as_range(bad, "f", "p", 2 if isinstance(bad, list) and isinstance(bad[0], list) else None)
+        assert err.value.path == "f.params.p" and "functor 'f'" in err.value.reason
+
+
+def test_uniform_draws_per_env_from_the_env_generator() -> None:
+    class Env:
+        generator = torch.Generator().manual_seed(0)
+
+    draws = uniform(Env(), torch.zeros(3), torch.ones(3), 8)
+    assert draws.shape == (8, 3) and len(set(draws[:, 0].tolist())) == 8
+    Env.generator = torch.Generator().manual_seed(0)
+    assert torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
+
+
+def test_write_model_runs_set_const_once_for_the_written_envs(build) -> None:
+    env = build()
+    calls = []
+    original = env.sim.batch.set_const
+    env.sim.batch.set_const = lambda ids=None: (calls.append(ids), original(ids))[1]
+    body = env.scene["cube"].body_id
+    before = field(env, "body_mass")[:, body]
+    write_model(env.sim, torch.tensor([1, 2]), [("body_mass", body, [2.0, 3.0]), ("body_inertia", body, 1e-3),
+                                                ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9)])
+    after = field(env, "body_mass")[:, body]
+    assert after[1] == 2.0 and after[2] == 3.0 and after[0] == before[0] and after[3] == before[3]
+    assert len(calls) == 1 and list(calls[0]) == [1, 2]
+    write_model(env.sim, torch.tensor([0]), [("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.5)])
+    assert len(calls) == 1  # friction feeds no derived constant

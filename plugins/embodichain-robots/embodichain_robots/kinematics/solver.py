@@ -1,0 +1,260 @@
+"""Batched IK for a control part: damped least squares on a torch serial chain.
+
+Every env's target is solved at once: each iteration evaluates FK and the
+geometric Jacobian of the whole batch (:class:`SerialChain`), takes a damped
+Gauss-Newton step ``dq = J^T (J J^T + lambda^2 I)^-1 e`` (clamped to
+``max_step``), and clamps to the joint limits. Envs still off target after
+``max_iterations`` restart from ``num_samples`` random joint values each (the
+best of a larger random pool, ranked by FK error), solved as one batch, for up
+to ``num_restarts`` rounds. Poses are in the chain's root-link frame; the
+robot converts from the env frame (:meth:`Robot.compute_ik`).
+
+Example:
+    >>> solver = DLSSolver.from_model(IKSolverCfg(root_link_name="base", end_link_name="hand"), model)
+    >>> success, qpos = solver.get_ik(target, qpos_seed=seed)      # (N,), (N, n)
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from typing import Any, Callable, Iterator, List, Optional, Sequence, TypeVar
+
+import mujoco
+import torch
+
+from embodichain_core.utils.configclass import configclass
+from embodichain_robots.kinematics.chain import SerialChain
+
+_F64 = torch.float64
+_T = TypeVar("_T", bound=Callable[..., Any])
+
+
+@contextlib.contextmanager
+def single_threaded() -> Iterator[None]:
+    """Run torch ops on one thread: the solver's tensors are tiny, and intra-op
+    threads make them up to 10x slower on a busy 2-core machine (measured)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _one_thread(func: _T) -> _T:
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with single_threaded():
+            return func(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
+
+
+@configclass
+class IKSolverCfg:
+    """Settings of one part's solver (``solver_cfg[part]`` of a robot config).
+
+    Attributes:
+        class_type: ``"DLSSolver"`` (batched torch chain, default) or
+            ``"MjDLSSolver"`` (MuJoCo Jacobians per env; slower, for reference).
+        root_link_name: the link the targets are expressed in.
+        end_link_name: the flange link; the TCP is ``end_link @ tcp``.
+        tcp: 4x4 TCP in the end link frame.
+        joint_names: chain joints; None takes the joints on the path.
+        max_iterations: DLS iterations per attempt.
+        num_restarts: rounds of random restarts for envs that did not converge.
+        num_samples: random seeds per unsolved env and round (solved together).
+        pool_factor: each round's seeds are the ``num_samples`` best (by TCP pose
+            error) of ``pool_factor * num_samples`` random joint samples.
+        rot_weight: metres per radian when ranking pose errors.
+        pos_tol: success threshold on the position error (m).
+        rot_tol: success threshold on the rotation error (rad).
+        damping: the DLS damping ``lambda``.
+        max_step: largest joint step per iteration (rad or m).
+        seed: seed of the restart sampler.
+    """
+
+    class_type: str = "DLSSolver"
+    root_link_name: str = ""
+    end_link_name: str = ""
+    tcp: List[List[float]] = [[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]
+    joint_names: Optional[List[str]] = None
+    max_iterations: int = 20
+    num_restarts: int = 4
+    num_samples: int = 8
+    pool_factor: int = 4
+    rot_weight: float = 0.2
+    pos_tol: float = 1e-4
+    rot_tol: float = 1e-3
+    damping: float = 1e-3
+    max_step: float = 1.0
+    seed: int = 0
+
+
+def sample_joint_values(limits: torch.Tensor, n: int, generator: Optional[torch.Generator] = None) -> torch.Tensor:
+    """(n, k) float64 joint values drawn uniformly inside (k, 2) ``limits`` (clipped to +-pi)."""
+    lo = limits[:, 0].to(_F64).clamp(min=-torch.pi)
+    hi = limits[:, 1].to(_F64).clamp(max=torch.pi)
+    return lo + (hi - lo) * torch.rand(n, len(lo), generator=generator, dtype=_F64)
+
+
+def rotation_error(target: torch.Tensor, rot: torch.Tensor) -> torch.Tensor:
+    """(N, 3) orientation error vector ``0.5 * sum_k rot_k x target_k`` (root frame)."""
+    return 0.5 * torch.linalg.cross(rot, target, dim=-2).sum(-1)
+
+
+def rotation_angle(target: torch.Tensor, rot: torch.Tensor) -> torch.Tensor:
+    """(N,) angle of ``target @ rot^T`` in radians (exact, for success checks)."""
+    cos = ((target * rot).sum((-1, -2)) - 1.0) / 2.0
+    return torch.arccos(cos.clamp(-1.0, 1.0))
+
+
+class DLSSolver:
+    """Batched damped-least-squares IK of one serial chain (see module docstring)."""
+
+    def __init__(self, cfg: IKSolverCfg, chain: SerialChain, joint_ids: Optional[Sequence[int]] = None):
+        self.cfg = cfg
+        self.chain = chain
+        self.joint_names = list(chain.joint_names)
+        self.joint_ids = list(joint_ids) if joint_ids is not None else list(range(chain.n))
+        self.root_link_name, self.end_link_name = cfg.root_link_name, cfg.end_link_name
+        self.tcp = torch.as_tensor(cfg.tcp, dtype=_F64).reshape(4, 4)
+        self._rng = torch.Generator().manual_seed(int(cfg.seed))
+
+    @classmethod
+    def from_model(cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "",
+                   joint_ids: Optional[Sequence[int]] = None) -> "DLSSolver":
+        """Build from a compiled model whose names carry ``prefix``."""
+        chain = SerialChain.from_model(model, cfg.root_link_name, cfg.end_link_name, prefix)
+        if cfg.joint_names is not None and list(cfg.joint_names) != chain.joint_names:
+            raise ValueError(f"solver joints {cfg.joint_names} differ from the chain's {chain.joint_names}")
+        return cls(cfg, chain, joint_ids)
+
+    # -- properties ----------------------------------------------------------------------
+    @property
+    def dof(self) -> int:
+        """Number of chain joints."""
+        return self.chain.n
+
+    @property
+    def qpos_limits(self) -> torch.Tensor:
+        """(n, 2) joint limits."""
+        return self.chain.limits.clone()
+
+    def set_tcp(self, tcp: Any) -> None:
+        """Replace the 4x4 TCP (in the end link frame)."""
+        self.tcp = torch.as_tensor(tcp, dtype=_F64).reshape(4, 4).clone()
+
+    def get_tcp(self) -> torch.Tensor:
+        """The 4x4 TCP in the end link frame."""
+        return self.tcp.clone()
+
+    # -- kinematics ----------------------------------------------------------------------
+    @_one_thread
+    def get_fk(self, qpos: torch.Tensor) -> torch.Tensor:
+        """(N, 4, 4) TCP pose in the root link frame at ``qpos`` (N, n)."""
+        return self.chain.fk(torch.as_tensor(qpos, dtype=_F64).reshape(-1, self.dof), self.tcp)
+
+    @_one_thread
+    def get_jacobian(self, qpos: torch.Tensor) -> torch.Tensor:
+        """(N, 6, n) geometric TCP Jacobian (linear rows first) in the root frame."""
+        return self.fk_jacobian(torch.as_tensor(qpos, dtype=_F64).reshape(-1, self.dof))[1]
+
+    def fk_jacobian(self, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """``(TCP pose (N, 4, 4), Jacobian (N, 6, n))`` in the root frame (float64 input)."""
+        return self.chain.jacobian(qpos, self.tcp)
+
+    @_one_thread
+    def pose_error(self, target: torch.Tensor, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """(position error (N,) in m, rotation error (N,) in rad) of ``qpos`` w.r.t. ``target``."""
+        pose = self.get_fk(qpos)
+        target = torch.as_tensor(target, dtype=_F64)
+        pos = torch.linalg.norm(target[:, :3, 3] - pose[:, :3, 3], dim=-1)
+        return pos, rotation_angle(target[:, :3, :3], pose[:, :3, :3])
+
+    @_one_thread
+    def get_ik(self, target: torch.Tensor, qpos_seed: Optional[torch.Tensor] = None,
+               num_restarts: Optional[int] = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Solve every target of the batch.
+
+        Args:
+            target: (N, 4, 4) TCP targets in the root link frame.
+            qpos_seed: (N, n) start joint values (clamped to the limits); None
+                starts from the middle of the limits.
+            num_restarts: overrides ``cfg.num_restarts``.
+
+        Returns:
+            ``(success (N,) bool, qpos (N, n) float64)``; where ``success`` is
+            False, ``qpos`` is the best attempt found.
+        """
+        target = torch.as_tensor(target, dtype=_F64).reshape(-1, 4, 4)
+        n = target.shape[0]
+        if qpos_seed is None:
+            seed = self._middle().expand(n, -1)
+        else:
+            seed = torch.as_tensor(qpos_seed, dtype=_F64).reshape(n, self.dof)
+        seed = torch.minimum(torch.maximum(seed, self.chain.limits[:, 0]), self.chain.limits[:, 1])
+        q, ok, err = self._solve(target, seed)
+        restarts = self.cfg.num_restarts if num_restarts is None else int(num_restarts)
+        todo = torch.nonzero(~ok).flatten()
+        for _ in range(restarts):
+            if len(todo) == 0:
+                break
+            k = max(int(self.cfg.num_samples), 1)
+            owners = todo.repeat_interleave(k)
+            q_try, ok_try, err_try = self._solve(target[owners], self._restart_seeds(target[todo], k))
+            best = err_try.reshape(-1, k).argmin(-1) + torch.arange(len(todo)) * k
+            better = err_try[best] < err[todo]
+            q[todo[better]], err[todo[better]] = q_try[best][better], err_try[best][better]
+            ok[todo] |= ok_try.reshape(-1, k).any(-1)
+            todo = todo[~ok[todo]]
+        return ok, q
+
+    def _restart_seeds(self, target: torch.Tensor, k: int) -> torch.Tensor:
+        """(len(target) * k, n) seeds: the ``k`` best of ``pool_factor * k`` random samples
+        per target, ranked by their TCP pose error (one cheap batched FK)."""
+        pool = max(int(self.cfg.pool_factor), 1) * k
+        cand = sample_joint_values(self.chain.limits, len(target) * pool, self._rng)
+        pose = self.chain.fk(cand, self.tcp).reshape(len(target), pool, 4, 4)
+        pos = torch.linalg.norm(pose[..., :3, 3] - target[:, None, :3, 3], dim=-1)
+        rot = rotation_angle(target[:, None, :3, :3], pose[..., :3, :3])
+        best = (pos + self.cfg.rot_weight * rot).topk(k, dim=-1, largest=False).indices
+        picked = cand.reshape(len(target), pool, -1).gather(1, best[..., None].expand(-1, -1, self.dof))
+        return picked.reshape(-1, self.dof)
+
+    def _middle(self) -> torch.Tensor:
+        """(n,) middle of the (finite, +-pi clipped) joint ranges."""
+        lim = self.chain.limits
+        return (lim[:, 0].clamp(min=-torch.pi) + lim[:, 1].clamp(max=torch.pi)) / 2
+
+    @staticmethod
+    def _step(jac: torch.Tensor, err: torch.Tensor, q: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor,
+              eye: torch.Tensor) -> torch.Tensor:
+        """A DLS step with the joints pushed against a limit frozen (active set)."""
+        grad = (jac.transpose(1, 2) @ err[..., None])[..., 0]
+        blocked = ((q <= lo + 1e-9) & (grad < 0)) | ((q >= hi - 1e-9) & (grad > 0))
+        jac = jac * (~blocked)[:, None, :]
+        return (jac.transpose(1, 2) @ torch.linalg.solve(jac @ jac.transpose(1, 2) + eye, err[..., None]))[..., 0]
+
+    def _solve(self, target: torch.Tensor, q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """DLS iterations from ``q``: (qpos, converged, combined error)."""
+        lo, hi = self.chain.limits[:, 0], self.chain.limits[:, 1]
+        eye = torch.eye(6, dtype=_F64) * self.cfg.damping ** 2
+        t_rot, t_pos = target[:, :3, :3], target[:, :3, 3]
+        pose = None
+        for _ in range(self.cfg.max_iterations):
+            pose, jac = self.fk_jacobian(q)
+            err = torch.cat((t_pos - pose[:, :3, 3], rotation_error(t_rot, pose[:, :3, :3])), -1)
+            ok = (err[:, :3].norm(dim=-1) < self.cfg.pos_tol) & (err[:, 3:].norm(dim=-1) < self.cfg.rot_tol)
+            if bool(ok.all()):
+                break
+            step = self._step(jac, err, q, lo, hi, eye) * (~ok)[:, None]
+            scale = (self.cfg.max_step / step.abs().amax(-1).clamp(min=1e-12)).clamp(max=1.0)
+            q = torch.minimum(torch.maximum(q + step * scale[:, None], lo), hi)
+            pose = None
+        pose = self.get_fk(q) if pose is None else pose
+        pos_err = torch.linalg.norm(t_pos - pose[:, :3, 3], dim=-1)
+        rot_err = rotation_angle(t_rot, pose[:, :3, :3])
+        ok = (pos_err < self.cfg.pos_tol) & (rot_err < self.cfg.rot_tol)
+        return q, ok, pos_err + self.cfg.rot_weight * rot_err

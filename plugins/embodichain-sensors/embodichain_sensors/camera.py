@@ -1,0 +1,288 @@
+"""``Camera``: a batched pinhole camera sensor rendered with MuJoCo.
+
+One :class:`~embodichain_sensors.renderer.SensorRenderer` per sensor, created on
+the first update and reused: N envs cost N renders (each from env ``i``'s model
+and data, so per-env light and material changes show). Outputs (``N`` envs):
+
+=============  ===========================  ==========================================
+key            dtype / shape                meaning
+=============  ===========================  ==========================================
+``color``      uint8 ``(N, H, W, 4)``       RGBA, alpha 255
+``depth``      float32 ``(N, H, W)``        z-depth in metres (``far`` where empty)
+``mask``       int32 ``(N, H, W)``          entity id (:meth:`uid_of_mask_id`), -1 none
+``normal``     float32 ``(N, H, W, 3)``     unit normals, camera frame (from depth)
+``position``   float32 ``(N, H, W, 3)``     points, camera frame (OpenGL: -Z forward)
+=============  ===========================  ==========================================
+
+Example:
+    >>> cam = env.sensors["cam"]  # doctest: +SKIP
+    >>> rgb = obs["sensor"]["cam"]["color"][..., :3]
+    >>> K = cam.get_intrinsics()          # (N, 3, 3)
+    >>> pose = cam.get_arena_pose()       # (N, 7) in the env frame
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import mujoco
+import numpy as np
+import torch
+
+from embodichain_core.sim.entities.base import env_index
+from embodichain_core.sim.sensor_base import BaseSensor
+from embodichain_sensors import geometry as geo
+from embodichain_sensors.envs import EnvReader
+from embodichain_sensors.ids import EntityIds
+from embodichain_sensors.mount import Mount, resolve_mount
+from embodichain_sensors.renderer import SensorRenderer
+
+
+@dataclass
+class View:
+    """One rendered viewpoint of a sensor: output key ``suffix``, per-env
+    ``intrinsics (N, 4)``, its pose in the sensor (rig) frame, its spec camera."""
+
+    suffix: str
+    intrinsics: np.ndarray
+    pos: np.ndarray
+    rot: np.ndarray
+    camera: str = ""
+    camera_id: int = -1
+
+    @property
+    def is_identity(self) -> bool:
+        """The view is the sensor frame itself (a mono camera)."""
+        return not self.pos.any() and np.array_equal(self.rot, np.eye(3))
+
+
+class Camera(BaseSensor):
+    """A camera of the scene (see the module docstring for its outputs)."""
+
+    image_dims: dict[str, int] = {"depth": 0, "mask": 0}  # extra trailing dims of HxW outputs
+
+    def __init__(self, cfg: Any, scene: Any):
+        super().__init__(cfg, scene)
+        self.num_envs = int(scene.num_envs)
+        self.mount = Mount()
+        self._local_pos, self._local_rot = self._initial_local_pose()
+        self.views = self._make_views()
+        self._renderer: Optional[SensorRenderer] = None
+        self._ids: Optional[EntityIds] = None
+        self._data: dict[str, torch.Tensor] = {}
+        self._envs = EnvReader(scene)
+
+    # -- construction ---------------------------------------------------------------------
+    def _initial_local_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        ext = self.cfg.extrinsics
+        if ext.eye is not None:
+            pos, rot = geo.look_at(np.asarray(ext.eye), np.asarray(ext.target), None if ext.up is None else np.asarray(ext.up))
+        else:
+            pos, rot = np.asarray(ext.pos, dtype=np.float64), geo.quat_to_mat(np.asarray(ext.quat))
+        n = self.num_envs
+        return np.repeat(pos[None], n, 0), np.repeat(rot[None], n, 0)
+
+    def _make_views(self) -> list[View]:
+        intr = np.tile(np.asarray(self.cfg.intrinsics, dtype=np.float64), (self.num_envs, 1))
+        return [View("", intr, np.zeros(3), np.eye(3))]
+
+    def build(self, builder: Any) -> None:
+        """Resolve the parent and add one MuJoCo camera per view to the spec."""
+        cfg, spec = self.cfg, builder.spec
+        where = f"sensor {self.uid!r}: extrinsics.parent"
+        self.mount = resolve_mount(spec, cfg.extrinsics.parent, builder.records, where)
+        body = spec.worldbody if self.mount.body is None else spec.body(self.mount.body)
+        for k, view in enumerate(self.views):
+            view.camera = self.uid if len(self.views) == 1 else f"{self.uid}/{('left', 'right')[k]}"
+            pos, rot = geo.compose(*geo.compose(self.mount.pos, self.mount.rot, self._local_pos[0], self._local_rot[0]),
+                                   view.pos, view.rot)
+            _add_spec_camera(body, view.camera, pos, rot, view.intrinsics[0], cfg.width, cfg.height)
+        glob = spec.visual.global_
+        glob.offwidth, glob.offheight = max(glob.offwidth, cfg.width), max(glob.offheight, cfg.height)
+
+    def bind(self) -> None:
+        """Find the mount body and cameras in the compiled model; build the id table."""
+        model = self.scene.model
+        self.mount.bind(model)
+        for view in self.views:
+            view.camera_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, view.camera)
+        self._ids = EntityIds.from_scene(self.scene)
+
+    # -- rendering -------------------------------------------------------------------------
+    @property
+    def renderer(self) -> SensorRenderer:
+        """The sensor's renderer (created on first use; raises when no GL backend works)."""
+        if self._renderer is None:
+            quality = getattr(getattr(self.scene.sim_cfg, "render_cfg", None), "quality", "fast")
+            self._renderer = SensorRenderer(self.scene.model, self.cfg.width, self.cfg.height, quality=quality)
+        return self._renderer
+
+    def _wants(self) -> dict[str, bool]:
+        cfg = self.cfg
+        geometric = cfg.enable_normal or cfg.enable_position
+        return {"color": cfg.enable_color, "depth": cfg.enable_depth or geometric or getattr(cfg, "enable_disparity", False),
+                "mask": cfg.enable_mask}
+
+    def update(self) -> None:
+        """Render every env and every view; results go to :meth:`get_data`."""
+        wants, (n, h, w) = self._wants(), (self.num_envs, self.cfg.height, self.cfg.width)
+        raw = {f"{key}{v.suffix}": _alloc(key, n, h, w) for v in self.views for key, on in wants.items() if on}
+        poses = self.get_view_poses()
+        renderer, envs = self.renderer, self._envs
+        renderer.make_current()
+        near, far = self.cfg.near, self.cfg.far
+        for i in range(n):
+            for k, (view, (pos, rot)) in enumerate(zip(self.views, poses)):
+                renderer.set_camera(pos[i], rot[i], view.intrinsics[i], near, far)
+                if k == 0:  # after the camera: MuJoCo places the ground patch from it
+                    renderer.update_scene(envs.model(i), envs.data(i), view.camera_id)
+                self._render_view(renderer, view.suffix, i, wants, raw)
+        self._data = self._outputs(raw)
+
+    def _render_view(self, renderer: SensorRenderer, sfx: str, i: int, wants: dict, raw: dict) -> None:
+        rgb, depth = renderer.render(color=wants["color"], depth=wants["depth"])
+        if rgb is not None:  # rows flipped (OpenGL is bottom-up); one channel at a time is
+            dst, src = raw["color" + sfx][i], rgb[::-1]  # ~10x faster than a (..., :3) copy
+            for c in range(3):
+                dst[:, :, c] = src[:, :, c]
+        if depth is not None:
+            raw["depth" + sfx][i] = depth[::-1]
+        if wants["mask"]:
+            raw["mask" + sfx][i] = renderer.render_segmentation(self._ids.geom_to_id)[::-1]
+
+    def _outputs(self, raw: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
+        """Requested outputs (with the derived ones) as tensors."""
+        cfg, out = self.cfg, {}
+        for view in self.views:
+            sfx = view.suffix
+            if cfg.enable_color:
+                out["color" + sfx] = raw["color" + sfx]
+            depth = raw.get("depth" + sfx)
+            if cfg.enable_depth:
+                out["depth" + sfx] = _trailing(depth, self.image_dims["depth"])
+            if cfg.enable_mask:
+                out["mask" + sfx] = _trailing(raw["mask" + sfx], self.image_dims["mask"])
+            if cfg.enable_position or cfg.enable_normal:
+                self._geometric(out, sfx, depth, view.intrinsics)
+        return {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in out.items()}
+
+    def _geometric(self, out: dict, sfx: str, depth: np.ndarray, intrinsics: np.ndarray) -> None:
+        points = np.stack([geo.depth_to_points(depth[i], intrinsics[i]) for i in range(self.num_envs)])
+        empty = (depth >= np.float32(self.cfg.far) * np.float32(0.9999))[..., None]
+        if self.cfg.enable_position:
+            out["position" + sfx] = np.where(empty, np.float32(0), points)
+        if self.cfg.enable_normal:
+            out["normal" + sfx] = np.where(empty, np.float32(0), geo.points_to_normals(points))
+
+    def get_data(self) -> dict[str, torch.Tensor]:
+        """``{name: tensor (N, ...)}`` of the last :meth:`update` (rendering now if none)."""
+        if not self._data:
+            self.update()
+        return self._data
+
+    # -- poses and intrinsics ------------------------------------------------------------------
+    def get_view_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per view, ``(pos (N, 3), rot (N, 3, 3))`` in the env frame (current state)."""
+        mpos, mrot = self.mount.body_poses(self.scene.sim)
+        rig = geo.compose(mpos, mrot, self._local_pos, self._local_rot)
+        return [rig if v.is_identity else geo.compose(*rig, v.pos, v.rot) for v in self.views]
+
+    def get_arena_pose(self, to_matrix: bool = False) -> torch.Tensor:
+        """The camera (rig) pose in the env frame: ``(N, 7)`` (xyz, wxyz) or ``(N, 4, 4)``."""
+        mpos, mrot = self.mount.body_poses(self.scene.sim)
+        return _pose_out(*geo.compose(mpos, mrot, self._local_pos, self._local_rot), to_matrix)
+
+    def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
+        """The camera pose in its parent frame (the env frame without a parent)."""
+        return _pose_out(self._local_pos, self._local_rot, to_matrix)
+
+    def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
+        """Set the pose in the parent frame: ``(n, 7)`` (xyz, wxyz) or ``(n, 4, 4)``."""
+        ids = env_index(env_ids, self.num_envs).numpy()
+        p = np.asarray(pose.detach().cpu() if isinstance(pose, torch.Tensor) else pose, dtype=np.float64)
+        if p.shape[-2:] == (4, 4):
+            pos, rot = p[..., :3, 3], p[..., :3, :3]
+        else:
+            pos, rot = p[..., :3], geo.quat_to_mat(p[..., 3:7])
+        self._local_pos[ids], self._local_rot[ids] = pos, rot
+
+    def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
+        """Point the camera from ``eye`` at ``target`` (parent frame), for ``env_ids``."""
+        ids = env_index(env_ids, self.num_envs).numpy()
+        eye, target = np.broadcast_to(np.asarray(eye, float), (len(ids), 3)), np.broadcast_to(np.asarray(target, float), (len(ids), 3))
+        self._local_pos[ids], self._local_rot[ids] = geo.look_at(eye, target, None if up is None else np.asarray(up, float))
+
+    def get_intrinsics(self) -> torch.Tensor:
+        """``(N, 3, 3)`` intrinsic matrices (float32)."""
+        return torch.from_numpy(geo.intrinsic_matrix(self.views[0].intrinsics).astype(np.float32))
+
+    def set_intrinsics(self, intrinsics: Any, env_ids: Any = None) -> None:
+        """Set ``(fx, fy, cx, cy)`` (or ``(n, 3, 3)`` matrices) for ``env_ids``."""
+        _set_intrinsics(self.views[0], intrinsics, env_index(env_ids, self.num_envs).numpy())
+
+    # -- ids and lifecycle ------------------------------------------------------------------------
+    @property
+    def mask_id_table(self) -> dict[int, str]:
+        """``{mask id: entity uid}`` (``-1`` in a mask means no entity)."""
+        return self._ids.as_dict()
+
+    def uid_of_mask_id(self, mask_id: int) -> Optional[str]:
+        """The entity uid of a mask value (``None`` for ``-1``)."""
+        return self._ids.uid_of_id(mask_id)
+
+    def mask_id_of(self, uid: str) -> int:
+        """The mask value of entity ``uid``."""
+        return self._ids.id_of_uid(uid)
+
+    def reset(self, env_ids: Any = None) -> None:
+        """Nothing per env to clear (poses persist across resets, as in EmbodiChain)."""
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+def _alloc(key: str, n: int, h: int, w: int) -> np.ndarray:
+    if key == "color":
+        out = np.empty((n, h, w, 4), dtype=np.uint8)
+        out[..., 3] = 255
+        return out
+    return np.empty((n, h, w), dtype=np.int32 if key == "mask" else np.float32)
+
+
+def _trailing(arr: np.ndarray, dims: int) -> np.ndarray:
+    return arr[..., None] if dims else arr
+
+
+def _set_intrinsics(view: View, intrinsics: Any, ids: np.ndarray) -> None:
+    k = np.asarray(intrinsics.detach().cpu() if isinstance(intrinsics, torch.Tensor) else intrinsics, dtype=np.float64)
+    if k.shape[-2:] == (3, 3):
+        k = np.stack([k[..., 0, 0], k[..., 1, 1], k[..., 0, 2], k[..., 1, 2]], axis=-1)
+    if np.any(k[..., :2] <= 0):
+        raise ValueError(f"fx and fy must be > 0, got {k.tolist()}")
+    view.intrinsics[ids] = k
+
+
+def _pose_out(pos: np.ndarray, rot: np.ndarray, to_matrix: bool) -> torch.Tensor:
+    if to_matrix:
+        mat = np.zeros(pos.shape[:-1] + (4, 4))
+        mat[..., :3, :3], mat[..., :3, 3], mat[..., 3, 3] = rot, pos, 1.0
+        return torch.from_numpy(mat.astype(np.float32))
+    return torch.from_numpy(np.concatenate([pos, geo.mat_to_quat(rot)], axis=-1).astype(np.float32))
+
+
+def _add_spec_camera(body: Any, name: str, pos: np.ndarray, rot: np.ndarray, intr: np.ndarray,
+                     width: int, height: int) -> None:
+    """A MuJoCo camera matching the sensor (for viewers and ``mujoco.Renderer``).
+
+    MuJoCo's ``principal_pixel`` is the offset of the image centre from the
+    principal point, measured with y up (checked on MuJoCo 4.0).
+    """
+    fx, fy, cx, cy = (float(v) for v in intr)
+    cam = body.add_camera(name=name, pos=pos, quat=geo.mat_to_quat(rot))
+    cam.resolution = [width, height]
+    cam.sensor_size = [width * 1e-5, height * 1e-5]
+    cam.focal_pixel = [fx, fy]
+    cam.principal_pixel = [width / 2.0 - (cx + 0.5), height / 2.0 - (cy + 0.5)]
