@@ -6,7 +6,7 @@ import inspect
 from typing import Any
 
 from embodichain_core.config.errors import ConfigError, join_path
-from embodichain_core.managers.cfg import DatasetFunctorCfg, EventCfg
+from embodichain_core.managers.cfg import EventCfg
 from embodichain_core.managers.manager_base import iter_section, resolve_func
 from embodichain_core.sim.scene import Scene
 

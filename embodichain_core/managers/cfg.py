@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List, Optional, Union
+from typing import Any, Dict, List, Optional, Union
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.configclass import MISSING, configclass

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import torch
 
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ObservationCfg

@@ -23,7 +23,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from embodichain_core.sim.builder import COLLISION_GROUP, VISUAL_GROUP
+from embodichain_core.sim.builder import VISUAL_GROUP
 
 ALL_BITS = (1 << 30) - 1
 PARKED = 1 << 30  # collides with nothing, but compiled as a colliding geom

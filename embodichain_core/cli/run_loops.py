@@ -1,0 +1,185 @@
+"""The loops and reports of ``embodichain run-env``: random-action episodes, scripted
+demo rounds (data generation with retries), the preview and the end-of-run summary."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+@dataclass
+class RunPlan:
+    """What to build: the task id, its cfg (``None``: the task's own default), the
+    run-level extras and further ``gym.make`` kwargs (cfg fields, for a bare task id)."""
+
+    task_id: str
+    cfg: Any = None
+    extras: dict = field(default_factory=dict)
+    make_kwargs: dict = field(default_factory=dict)
+
+
+@dataclass
+class RunStats:
+    """Counters of a run."""
+
+    episodes: int = 0
+    successes: int = 0
+    env_steps: int = 0
+    discarded: int = 0
+    build_s: float = 0.0
+    run_s: float = 0.0
+    data_paths: Optional[list] = None
+
+
+def make_env(plan: RunPlan) -> Any:
+    """``gymnasium.make(id, cfg=cfg)``, or ``gymnasium.make(id, **cli_values)`` without a cfg."""
+    import gymnasium as gym
+
+    if plan.cfg is None:
+        return gym.make(plan.task_id, **plan.make_kwargs)
+    return gym.make(plan.task_id, cfg=plan.cfg)
+
+
+# -- running -----------------------------------------------------------------------------------------
+def _as_torch(value: Any) -> Any:
+    import torch
+
+    if isinstance(value, dict):
+        return {k: _as_torch(v) for k, v in value.items()}
+    return torch.as_tensor(value)
+
+
+def _flags(value: Any, n: int) -> Any:
+    import torch
+
+    return torch.as_tensor(value, dtype=torch.bool).reshape(-1).expand(n)
+
+
+def run_episodes(env: Any, extras: dict, stats: RunStats, show_bar: bool = False) -> None:
+    """Run ``extras["max_episodes"]`` episodes (demo replay when the env offers one)."""
+    from tqdm import tqdm
+
+    base = env.unwrapped
+    target = int(extras.get("max_episodes") or 1)
+    started = time.perf_counter()
+    with tqdm(total=target, unit="ep", disable=not show_bar, desc=extras.get("id") or "run-env") as bar:
+        env.reset(options={"save_data": False})
+        while stats.episodes < target:
+            before = stats.episodes
+            if hasattr(base, "create_demo_action_list"):
+                _demo_round(env, int(extras.get("demo_max_attempts") or 1), stats)
+            else:
+                _random_step(env, stats)
+            bar.update(min(stats.episodes, target) - min(before, target))
+            bar.set_postfix(success=stats.successes, refresh=False)
+    stats.run_s = time.perf_counter() - started
+
+
+def _random_step(env: Any, stats: RunStats) -> None:
+    """One step with a random action; count the episodes it finished."""
+    n = env.unwrapped.num_envs
+    _, _, terminated, truncated, info = env.step(_as_torch(env.action_space.sample()))
+    stats.env_steps += n
+    done = _flags(terminated, n) | _flags(truncated, n)
+    if done.any():
+        stats.episodes += int(done.sum())
+        stats.successes += int((_flags(info["success"], n) & done).sum())
+
+
+def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
+    """One episode per env from the demo action list, retried up to ``max_attempts`` times.
+
+    An attempt where no env succeeds is discarded (``reset(save_data=False)``) unless
+    the dataset keeps failed episodes; the last failed attempt is counted as failed.
+    """
+    import torch
+
+    base = env.unwrapped
+    n = base.num_envs
+    manager = getattr(base, "dataset_manager", None)
+    keep_failed = manager is not None and manager.save_failed_episodes
+    for attempt in range(1, max_attempts + 1):
+        success, ended = _replay_demo(env, stats)
+        if success.any() or keep_failed or attempt == max_attempts:
+            open_ids = torch.nonzero(~ended).flatten()
+            if len(open_ids):
+                env.reset(options={"reset_ids": open_ids})  # commit boundary of the unfinished rows
+            if ended.any():
+                env.reset(options={"reset_ids": torch.nonzero(ended).flatten(), "save_data": False})
+            stats.episodes += n
+            stats.successes += int(success.sum())
+            if not success.any() and not keep_failed:
+                warnings.warn(f"demo failed in all {max_attempts} attempt(s)", RuntimeWarning, stacklevel=2)
+            return
+        env.reset(options={"save_data": False})
+        stats.discarded += n
+
+
+def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
+    """Step the demo action list; return per-env success and whether the episode ended early."""
+    import torch
+
+    base = env.unwrapped
+    n = base.num_envs
+    success = torch.zeros(n, dtype=torch.bool)
+    ended = torch.zeros(n, dtype=torch.bool)
+    for action in base.create_demo_action_list() or []:
+        _, _, terminated, truncated, info = env.step(_as_torch(action))
+        stats.env_steps += n
+        done = (_flags(terminated, n) | _flags(truncated, n)) & ~ended
+        success |= done & _flags(info["success"], n)
+        ended |= done
+        if ended.all():
+            return success, ended
+    success |= ~ended & _flags(base.is_task_success(), n)
+    return success, ended
+
+
+# -- output ------------------------------------------------------------------------------------------
+def describe_space(space: Any, indent: str = "  ") -> list[str]:
+    """Indented lines describing a (nested) gymnasium space."""
+    spaces = getattr(space, "spaces", None)
+    if isinstance(spaces, dict):
+        lines = []
+        for key, sub in spaces.items():
+            inner = describe_space(sub, indent + "  ")
+            if len(inner) == 1 and not isinstance(getattr(sub, "spaces", None), dict):
+                lines.append(f"{indent}{key}: {inner[0].strip()}")
+            else:
+                lines += [f"{indent}{key}:", *inner]
+        return lines
+    shape, dtype = getattr(space, "shape", None), getattr(space, "dtype", None)
+    return [f"{indent}{type(space).__name__} shape={tuple(shape) if shape is not None else None} dtype={dtype}"]
+
+
+def preview(env: Any) -> None:
+    """Reset, step once with a random action and print the spaces and the info keys."""
+    base = env.unwrapped
+    env.reset()
+    _, _, _, _, info = env.step(_as_torch(env.action_space.sample()))
+    print(f"Preview of {type(base).__name__} ({base.num_envs} env(s))")
+    print("observation space (per env):", *describe_space(base.single_observation_space), sep="\n")
+    print("action space (per env):", *describe_space(base.single_action_space), sep="\n")
+    print("info keys after one step:", ", ".join(sorted(map(str, info))))
+
+
+def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
+    """The end-of-run summary: episodes, success rate, throughput, time, data."""
+    rate = 100.0 * stats.successes / stats.episodes if stats.episodes else 0.0
+    speed = stats.env_steps / stats.run_s if stats.run_s > 0 else 0.0
+    paths = [str(p) for p in stats.data_paths or [] if p]
+    lines = [
+        f"run-env summary: {task_id}",
+        f"  episodes     {stats.episodes} ({env.unwrapped.num_envs} env(s))",
+        f"  successes    {stats.successes}/{stats.episodes} ({rate:.1f}%)",
+        f"  env steps    {stats.env_steps} ({speed:.1f} env-steps/s)",
+        f"  wall time    {stats.build_s + stats.run_s:.2f} s (build {stats.build_s:.2f} s, run {stats.run_s:.2f} s)",
+    ]
+    if stats.discarded:
+        lines.append(f"  discarded    {stats.discarded} failed demo episode(s)")
+    if paths:
+        lines += ["  data         " + paths[0], *("               " + p for p in paths[1:])]
+    else:
+        lines.append("  data         " + ("none (no dataset recorder)" if stats.data_paths is None else "nothing saved"))
+    print("\n".join(lines))
