@@ -87,13 +87,21 @@ def _main(args: argparse.Namespace) -> int:
             preview(env)
             return 0
         run_episodes(env, plan.extras, stats, show_bar=not args.quiet and sys.stderr.isatty())
+        code = 0
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; closing (committed episodes are kept)", file=sys.stderr)
+        code = 130
+    except RuntimeError as err:
+        print(f"{PROG}: {err}", file=sys.stderr)
+        code = 1
     finally:
         if env is not None:
             env.close()
-    manager = getattr(env.unwrapped, "dataset_manager", None)
-    stats.data_paths = list(manager.finalize()) if manager is not None else None
-    print_summary(plan.task_id, env, stats)
-    return 0
+    manager = getattr(env.unwrapped, "dataset_manager", None) if env is not None else None
+    stats.data_paths = [p for p in manager.finalize()] if manager is not None else None
+    if env is not None:
+        print_summary(plan.task_id, env, stats)
+    return code
 
 
 # -- what to run -------------------------------------------------------------------------------------

@@ -25,6 +25,9 @@ class RunStats:
 
     episodes: int = 0
     successes: int = 0
+    failed: int = 0
+    saved: Optional[int] = None
+    recording: bool = False
     env_steps: int = 0
     discarded: int = 0
     build_s: float = 0.0
@@ -57,23 +60,40 @@ def _flags(value: Any, n: int) -> Any:
 
 
 def run_episodes(env: Any, extras: dict, stats: RunStats, show_bar: bool = False) -> None:
-    """Run ``extras["max_episodes"]`` episodes (demo replay when the env offers one)."""
+    """Run until ``extras["max_episodes"]`` episodes are done (saved, when a dataset
+    recorder is configured); scripted demos replace random actions when the env has
+    ``create_demo_action_list``."""
     from tqdm import tqdm
 
     base = env.unwrapped
     target = int(extras.get("max_episodes") or 1)
     started = time.perf_counter()
-    with tqdm(total=target, unit="ep", disable=not show_bar, desc=extras.get("id") or "run-env") as bar:
-        env.reset(options={"save_data": False})
-        while stats.episodes < target:
-            before = stats.episodes
-            if hasattr(base, "create_demo_action_list"):
-                _demo_round(env, int(extras.get("demo_max_attempts") or 1), stats)
-            else:
-                _random_step(env, stats)
-            bar.update(min(stats.episodes, target) - min(before, target))
-            bar.set_postfix(success=stats.successes, refresh=False)
-    stats.run_s = time.perf_counter() - started
+    stats.recording = getattr(base, "dataset_manager", None) is not None
+    try:
+        with tqdm(total=target, unit="ep", disable=not show_bar, desc=extras.get("id") or "run-env") as bar:
+            env.reset(options={"save_data": False})
+            while _progress(base, stats) < target:
+                before = _progress(base, stats)
+                if hasattr(base, "create_demo_action_list"):
+                    _demo_round(env, int(extras.get("demo_max_attempts") or 1), stats)
+                else:
+                    _random_step(env, stats)
+                bar.update(min(_progress(base, stats), target) - min(before, target))
+                bar.set_postfix(success=stats.successes, refresh=False)
+    finally:
+        stats.run_s = time.perf_counter() - started
+        stats.saved = _saved(base)
+
+
+def _saved(base: Any) -> Optional[int]:
+    manager = getattr(base, "dataset_manager", None)
+    return None if manager is None else int(manager.committed_episodes)
+
+
+def _progress(base: Any, stats: RunStats) -> int:
+    """Saved episodes when recording, else finished episodes."""
+    saved = _saved(base)
+    return stats.episodes if saved is None else saved
 
 
 def _random_step(env: Any, stats: RunStats) -> None:
@@ -90,8 +110,9 @@ def _random_step(env: Any, stats: RunStats) -> None:
 def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
     """One episode per env from the demo action list, retried up to ``max_attempts`` times.
 
-    An attempt where no env succeeds is discarded (``reset(save_data=False)``) unless
-    the dataset keeps failed episodes; the last failed attempt is counted as failed.
+    Successful rows are committed (all rows when the dataset keeps failed episodes);
+    an attempt where no row succeeds is discarded with ``reset(save_data=False)`` and
+    retried. After ``max_attempts`` failed attempts the run stops with an error.
     """
     import torch
 
@@ -101,19 +122,20 @@ def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
     keep_failed = manager is not None and manager.save_failed_episodes
     for attempt in range(1, max_attempts + 1):
         success, ended = _replay_demo(env, stats)
-        if success.any() or keep_failed or attempt == max_attempts:
+        stats.episodes += n
+        stats.successes += int(success.sum())
+        if success.any() or keep_failed:
             open_ids = torch.nonzero(~ended).flatten()
             if len(open_ids):
                 env.reset(options={"reset_ids": open_ids})  # commit boundary of the unfinished rows
-            if ended.any():
+            if ended.any():  # rows that ended early were committed by the auto-reset
                 env.reset(options={"reset_ids": torch.nonzero(ended).flatten(), "save_data": False})
-            stats.episodes += n
-            stats.successes += int(success.sum())
-            if not success.any() and not keep_failed:
-                warnings.warn(f"demo failed in all {max_attempts} attempt(s)", RuntimeWarning, stacklevel=2)
+            stats.failed += int((~success).sum())
             return
         env.reset(options={"save_data": False})
         stats.discarded += n
+        stats.failed += n
+    raise RuntimeError(f"the scripted demo failed in every env in {max_attempts} attempt(s) in a row")
 
 
 def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
@@ -165,7 +187,7 @@ def preview(env: Any) -> None:
 
 
 def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
-    """The end-of-run summary: episodes, success rate, throughput, time, data."""
+    """The end-of-run summary: episodes, saved, success rate, throughput, time, data."""
     rate = 100.0 * stats.successes / stats.episodes if stats.episodes else 0.0
     speed = stats.env_steps / stats.run_s if stats.run_s > 0 else 0.0
     paths = [str(p) for p in stats.data_paths or [] if p]
@@ -176,6 +198,8 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
         f"  env steps    {stats.env_steps} ({speed:.1f} env-steps/s)",
         f"  wall time    {stats.build_s + stats.run_s:.2f} s (build {stats.build_s:.2f} s, run {stats.run_s:.2f} s)",
     ]
+    if stats.saved is not None:
+        lines.append(f"  saved        {stats.saved} episode(s); failed {stats.failed}")
     if stats.discarded:
         lines.append(f"  discarded    {stats.discarded} failed demo episode(s)")
     if paths:

@@ -48,7 +48,7 @@ class EmbodiedEnv(BaseEnv):
         self._detached_uids_for_reset: list[str] = []
         self.rollout_buffer: Optional[RolloutBuffer] = None
         super().__init__(cfg, num_envs, **kwargs)
-        if self.cfg.init_rollout_buffer or self.dataset_manager is not None:
+        if self.cfg.init_rollout_buffer or self._recorders_need_buffer():
             self.cfg.init_rollout_buffer = True
             self.rollout_buffer = RolloutBuffer(self._init_obs, self.single_action_space.shape, self.num_envs,
                                                 self.max_episode_steps)
@@ -79,6 +79,12 @@ class EmbodiedEnv(BaseEnv):
         limits = self.robot.get_qpos_limits()[0, aid].numpy()
         self.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
         self._events_cfg = events
+
+    def _recorders_need_buffer(self) -> bool:
+        """A recorder that reads ``env.rollout_buffer`` sets ``uses_rollout_buffer = True``."""
+        manager = self.dataset_manager
+        return manager is not None and any(getattr(e.func, "uses_rollout_buffer", False)
+                                           for e in manager.entries.values())
 
     @property
     def sim(self):

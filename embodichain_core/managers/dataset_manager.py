@@ -27,6 +27,7 @@ class DatasetManager(ManagerBase):
     def __init__(self, cfg: Any, env: Any, path: str | None = None):
         super().__init__(cfg, env, path)
         self._finalized: Optional[list] = None
+        self.committed_episodes = 0  # env episodes handed to the recorders for saving
 
     @property
     def save_failed_episodes(self) -> bool:
@@ -49,6 +50,7 @@ class DatasetManager(ManagerBase):
             return
         for e in self.entries.values():
             e(self._env, env_ids)
+        self.committed_episodes += len(env_ids)
 
     def discard(self, env_ids: torch.Tensor) -> None:
         if len(env_ids) == 0:

@@ -75,8 +75,12 @@ class DatasetFunctor(Functor):
     ``record_step`` runs after every env step; ``__call__(env, env_ids, **params)``
     commits the finished episodes of ``env_ids``; ``discard(env_ids)`` drops their
     buffered frames; ``finalize()`` closes the dataset (never committing partial
-    episodes) and returns where the data went.
+    episodes) and returns where the data went. A recorder that reads
+    ``env.rollout_buffer`` instead of buffering frames itself sets
+    ``uses_rollout_buffer = True``.
     """
+
+    uses_rollout_buffer: bool = False
 
     def record_step(self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
                     truncated: torch.Tensor, info: dict) -> None:
