@@ -29,9 +29,12 @@ if [ ! -x .venv/bin/python ]; then
 fi
 PIP=".venv/bin/python -m pip"
 $PIP install -q --upgrade pip >/dev/null 2>&1 || true
-# A CPU build of torch: pin the version so a bare 'torch' requirement does not
-# pull the newest CUDA build with several GB of dependencies.
-$PIP install -q "torch==${TORCH_VERSION:-2.13.0}"
+# torch: the version lerobot 0.4.x allows (plugins/embodichain-lerobot needs torch<2.11,
+# torchvision<0.26). Pinned first so no later requirement pulls another build. The
+# registry's Linux build bundles CUDA libraries (about 4 GB of wheels); it runs on the CPU.
+TORCH_VERSION=${TORCH_VERSION:-2.10.0}
+TORCHVISION_VERSION=${TORCHVISION_VERSION:-0.25.0}
+$PIP install -q "torch==$TORCH_VERSION" "torchvision==$TORCHVISION_VERSION"
 args=(-e ".[test]")
 for p in plugins/*/ tests/fixture_plugins/*/; do
   [ -f "$p/pyproject.toml" ] && args+=(-e "$p")

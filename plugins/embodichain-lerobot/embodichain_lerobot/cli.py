@@ -1,0 +1,91 @@
+"""``embodichain dataset``: inspect recorded LeRobot datasets (offline).
+
+Commands:
+    info PATH [--json]
+        episodes, frames, fps, tasks and features of a dataset folder.
+    preview PATH --episode N [--out DIR] [--format png|mp4] [--frames K]
+        a contact sheet PNG (or an mp4) of the episode's camera streams and a
+        plot of its state and action over time.
+
+Exit codes: 0 success, 1 the command failed, 2 usage error or not a dataset.
+
+Example:
+    $ embodichain dataset info outputs/datasets/arm7_table_push_the_cube_000
+    $ embodichain dataset preview outputs/datasets/arm7_table_push_the_cube_000 --episode 0
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Optional, Sequence
+
+PROG = "embodichain dataset"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``dataset`` parser with its ``info`` and ``preview`` subcommands."""
+    parser = argparse.ArgumentParser(prog=PROG, description="Inspect LeRobot datasets recorded by embodichain.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    info = sub.add_parser("info", help="episodes, frames, features, fps and tasks of a dataset")
+    info.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
+    info.add_argument("--json", action="store_true", help="print the summary as JSON")
+    prev = sub.add_parser("preview", help="camera contact sheet (or mp4) and state/action plot of an episode")
+    prev.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
+    prev.add_argument("--episode", type=int, required=True, metavar="N", help="episode index")
+    prev.add_argument("--out", default="dataset_previews", metavar="DIR",
+                      help="output folder (default: ./dataset_previews)")
+    prev.add_argument("--format", choices=("png", "mp4"), default="png",
+                      help="camera preview: a contact-sheet PNG (default) or an mp4 of every frame")
+    prev.add_argument("--frames", type=int, default=8, metavar="K", help="frames in the contact sheet (default 8)")
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run ``embodichain dataset`` with ``argv``; return the exit code."""
+    args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    from embodichain_lerobot.reading import go_offline
+
+    go_offline()
+    try:
+        if args.command == "info":
+            return _info(args)
+        return _preview(args)
+    except BrokenPipeError:  # the output was piped into `head` or similar
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except FileNotFoundError as err:
+        print(f"{PROG}: {err}", file=sys.stderr)
+        return 2
+    except (IndexError, ValueError) as err:
+        print(f"{PROG} {args.command}: {err}", file=sys.stderr)
+        return 2
+    except Exception as err:  # a broken dataset: say what failed, no traceback
+        print(f"{PROG} {args.command}: failed: {err!r}", file=sys.stderr)
+        return 1
+
+
+def _info(args: argparse.Namespace) -> int:
+    from embodichain_lerobot.reading import dataset_summary, format_summary
+
+    summary = dataset_summary(args.path)
+    print(json.dumps(summary, indent=2) if args.json else format_summary(summary))
+    return 0
+
+
+def _preview(args: argparse.Namespace) -> int:
+    from embodichain_lerobot.preview import preview_episode
+    from embodichain_lerobot.reading import check_dataset_dir
+
+    check_dataset_dir(args.path)
+    if args.frames < 1:
+        raise ValueError(f"--frames must be >= 1, got {args.frames}")
+    for path in preview_episode(args.path, args.episode, args.out, args.format, args.frames):
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,154 @@
+"""Recorder parameters, the dataset fps and the dataset folder naming.
+
+A dataset goes to ``<save_path>/<robot_type>_<scene_type>_<task_description>_<NNN>``:
+the parts are lower-cased, spaces become ``_`` (other characters unsafe in a
+folder name too), and ``NNN`` is one more than the highest existing number for
+that prefix. The folder is created atomically (``mkdir`` without ``exist_ok``),
+so two runs never write into the same dataset and nothing is overwritten.
+
+Example:
+    >>> dataset_prefix("Arm7", "Table Top", "Push the cube")
+    'arm7_table_top_push_the_cube'
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Optional
+
+from embodichain_core.config.errors import ConfigError
+
+#: Environment variable naming the default dataset root (``save_path`` not given).
+ENV_DATASET_ROOT = "EMBODICHAIN_DEFAULT_DATASET_ROOT"
+#: Default dataset root when neither ``save_path`` nor the variable is set.
+DEFAULT_DATASET_ROOT = "./outputs/datasets"
+#: The task string of frames when ``instruction["lang"]`` is not given.
+UNKNOWN_TASK = "unknown_task"
+VIDEO_CODECS = ("libsvtav1", "h264", "hevc", "auto")
+
+_UNSAFE = re.compile(r"[^a-z0-9_.\-]+")
+
+
+@dataclass
+class RecorderParams:
+    """The validated ``params`` of a LeRobot recorder.
+
+    Attributes:
+        save_path: dataset root directory.
+        robot_meta: robot metadata; ``robot_type`` names the robot in the dataset.
+        instruction: task instruction; ``lang`` becomes every frame's task.
+        extra: free metadata (``scene_type``, ``task_description`` name the folder)
+            stored with every episode in ``meta/embodichain_episodes.jsonl``.
+        use_videos: store camera colour as AV1/H.264 video instead of PNG images.
+        vcodec: lerobot video codec (``libsvtav1``, ``h264``, ``hevc``, ``auto``).
+        image_writer_threads, image_writer_processes: lerobot's async PNG writer.
+        max_pending_episodes: async recorder queue bound (0: unbounded).
+    """
+
+    save_path: str = ""
+    robot_meta: dict = field(default_factory=dict)
+    instruction: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+    use_videos: bool = False
+    vcodec: str = "libsvtav1"
+    image_writer_threads: int = 0
+    image_writer_processes: int = 0
+    max_pending_episodes: int = 64
+
+    @property
+    def task(self) -> str:
+        """The task string of every frame."""
+        return str(self.instruction.get("lang") or UNKNOWN_TASK)
+
+
+def _as_dict(value: Any, name: str) -> dict:
+    if value is None:
+        return {}
+    if isinstance(value, str) and name == "instruction":
+        return {"lang": value}
+    if not isinstance(value, Mapping):
+        raise ConfigError(name, f"must be a mapping, got {type(value).__name__}")
+    return dict(value)
+
+
+def _non_negative_int(value: Any, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ConfigError(name, f"must be an int >= 0, got {value!r}")
+    return value
+
+
+def parse_params(params: Mapping[str, Any]) -> RecorderParams:
+    """Validate a recorder's ``params`` (unknown keys are rejected by the manager)."""
+    p = RecorderParams()
+    p.save_path = str(params.get("save_path") or os.environ.get(ENV_DATASET_ROOT) or DEFAULT_DATASET_ROOT)
+    p.robot_meta = _as_dict(params.get("robot_meta"), "robot_meta")
+    p.instruction = _as_dict(params.get("instruction"), "instruction")
+    p.extra = _as_dict(params.get("extra"), "extra")
+    p.use_videos = bool(params.get("use_videos", False))
+    p.vcodec = str(params.get("vcodec", p.vcodec))
+    if p.vcodec not in VIDEO_CODECS:
+        raise ConfigError("vcodec", f"must be one of {VIDEO_CODECS}, got {p.vcodec!r}")
+    for name in ("image_writer_threads", "image_writer_processes", "max_pending_episodes"):
+        setattr(p, name, _non_negative_int(params.get(name, getattr(p, name)), name))
+    return p
+
+
+def dataset_fps(control_frequency: float) -> int:
+    """The dataset fps: the env control frequency, which must be a whole number of Hz.
+
+    Raises:
+        ValueError: for a non-integer frequency (LeRobot timestamps are ``frame / fps``).
+    """
+    freq = float(control_frequency)
+    fps = round(freq)
+    if not math.isfinite(freq) or fps < 1 or abs(freq - fps) > 1e-6 * max(1.0, freq):
+        raise ValueError(
+            f"LeRobot datasets need an integer fps, but the env control frequency is {freq:.6g} Hz "
+            "(1 / (physics_dt * sim_steps_per_control)); choose sim_steps_per_control or "
+            "target_control_frequency so that it is a whole number of Hz")
+    return int(fps)
+
+
+def slug(text: Any) -> str:
+    """``text`` lower-cased with spaces (and unsafe characters) replaced by ``_``."""
+    out = _UNSAFE.sub("_", str(text).strip().lower().replace(" ", "_")).strip("_.")
+    return out or "unnamed"
+
+
+def dataset_prefix(robot_type: Any, scene_type: Any, task_description: Any) -> str:
+    """``<robot_type>_<scene_type>_<task_description>`` as a folder name prefix."""
+    return "_".join(slug(part) for part in (robot_type, scene_type, task_description))
+
+
+def naming_parts(params: RecorderParams, robot_uid: str) -> tuple[str, str, str]:
+    """(robot_type, scene_type, task_description) with defaults for missing parts."""
+    robot_type = params.robot_meta.get("robot_type") or robot_uid or "robot"
+    scene_type = params.extra.get("scene_type") or "scene"
+    task = params.extra.get("task_description") or params.instruction.get("lang") or "task"
+    return str(robot_type), str(scene_type), str(task)
+
+
+def reserve_dataset_dir(save_path: str | os.PathLike, prefix: str, max_tries: int = 1000) -> Path:
+    """Create and return ``<save_path>/<prefix>_<NNN>`` with the next free number."""
+    root = Path(save_path).expanduser()
+    root.mkdir(parents=True, exist_ok=True)
+    pattern = re.compile(re.escape(prefix) + r"_(\d{3,})$")
+    taken = [int(m.group(1)) for p in root.iterdir() if (m := pattern.match(p.name))]
+    number = max(taken) + 1 if taken else 0
+    for _ in range(max_tries):
+        path = root / f"{prefix}_{number:03d}"
+        try:
+            path.mkdir()
+            return path
+        except FileExistsError:  # another run took it meanwhile
+            number += 1
+    raise RuntimeError(f"could not reserve a dataset folder for {prefix!r} under {root}")
+
+
+def robot_type_of(params: RecorderParams, robot_uid: str) -> Optional[str]:
+    """The ``robot_type`` written into the dataset info."""
+    return str(params.robot_meta.get("robot_type") or robot_uid or "") or None

@@ -1,0 +1,182 @@
+"""Previews of a recorded episode: its camera streams and its state/action curves.
+
+* cameras: a contact sheet PNG (rows: camera streams and depth maps; columns:
+  frames sampled evenly over the episode) or an mp4 of all streams side by side;
+* ``state_action.png``: ``observation.state`` and ``action`` over time, with
+  matplotlib when it is installed, else a plain line drawing with Pillow.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from embodichain_lerobot.reading import load_dataset
+
+_MIN_TILE = 96
+
+
+def _to_hwc_uint8(value: Any) -> np.ndarray:
+    """A camera item (``(C, H, W)`` float in [0, 1]) or a depth map as ``(H, W, 3)`` uint8."""
+    arr = np.asarray(value.numpy() if hasattr(value, "numpy") else value)
+    if arr.ndim == 3 and arr.shape[0] in (1, 3) and arr.shape[-1] not in (1, 3):
+        arr = arr.transpose(1, 2, 0)
+    if arr.ndim == 2:
+        arr = arr[..., None]
+    if arr.dtype != np.uint8:
+        arr = (np.clip(arr, 0.0, 1.0) * 255 + 0.5).astype(np.uint8)
+    return np.repeat(arr, 3, axis=-1) if arr.shape[-1] == 1 else arr[..., :3]
+
+
+def _depth_streams(ds: Any) -> list[str]:
+    def is_map(shape: Sequence[int]) -> bool:
+        return len(shape) == 2 or (len(shape) == 3 and shape[-1] == 1)
+
+    return [n for n, f in ds.features.items() if n.startswith("observation.depth.") and is_map(f["shape"])]
+
+
+def collect_streams(ds: Any, indices: Sequence[int]) -> dict[str, list[np.ndarray]]:
+    """``{stream: [(H, W, 3) uint8 per index]}`` for cameras, and depth maps (normalised)."""
+    cameras, depths = list(ds.meta.camera_keys), _depth_streams(ds)
+    out: dict[str, list[np.ndarray]] = {k: [] for k in cameras + depths}
+    raw_depth: dict[str, list[np.ndarray]] = {k: [] for k in depths}
+    for i in indices:
+        item = ds[int(i)]
+        for key in cameras:
+            out[key].append(_to_hwc_uint8(item[key]))
+        for key in depths:
+            raw_depth[key].append(np.asarray(item[key], dtype=np.float32).reshape(item[key].shape[:2]))
+    for key, maps in raw_depth.items():
+        stack = np.stack(maps) if maps else np.zeros((0, 1, 1), np.float32)
+        lo, hi = (float(stack.min()), float(stack.max())) if stack.size else (0.0, 1.0)
+        out[key] = [_to_hwc_uint8((m - lo) / (hi - lo if hi > lo else 1.0)) for m in maps]
+    return out
+
+
+def _tile(img: np.ndarray) -> Image.Image:
+    pil = Image.fromarray(img)
+    scale = max(1, -(-_MIN_TILE // max(1, img.shape[0])))
+    return pil.resize((pil.width * scale, pil.height * scale), Image.NEAREST) if scale > 1 else pil
+
+
+def contact_sheet(streams: dict[str, list[np.ndarray]], labels: Sequence[str], path: Path) -> Path:
+    """Rows = streams, columns = sampled frames, with a text header; saved as PNG."""
+    rows = [[_tile(img) for img in imgs] for imgs in streams.values()]
+    tw = max((t.width for r in rows for t in r), default=_MIN_TILE)
+    th = max((t.height for r in rows for t in r), default=_MIN_TILE)
+    pad, head, left = 4, 16, 200
+    sheet = Image.new("RGB", (left + len(labels) * (tw + pad), head + len(rows) * (th + head)), "white")
+    draw = ImageDraw.Draw(sheet)
+    for c, label in enumerate(labels):
+        draw.text((left + c * (tw + pad), 2), label, fill="black")
+    for r, (name, tiles) in enumerate(zip(streams, rows)):
+        y = head + r * (th + head)
+        draw.text((4, y + th // 2), name, fill="black")
+        for c, tile in enumerate(tiles):
+            sheet.paste(tile, (left + c * (tw + pad), y))
+    sheet.save(path)
+    return path
+
+
+def write_mp4(streams: dict[str, list[np.ndarray]], fps: int, path: Path) -> Path:
+    """All streams side by side per frame, encoded with PyAV (H.264, else MPEG-4)."""
+    import av
+
+    frames = [np.concatenate([np.asarray(_tile(s[t])) for s in streams.values()], axis=1)
+              for t in range(len(next(iter(streams.values()))))]
+    h, w = frames[0].shape[:2]
+    with av.open(str(path), mode="w") as container:
+        codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
+        stream = container.add_stream(codec, rate=int(fps))
+        stream.width, stream.height, stream.pix_fmt = w + w % 2, h + h % 2, "yuv420p"
+        for img in frames:
+            img = np.pad(img, ((0, h % 2), (0, w % 2), (0, 0)))
+            container.mux(stream.encode(av.VideoFrame.from_ndarray(img, format="rgb24")))
+        container.mux(stream.encode())
+    return path
+
+
+def _series(ds: Any, key: str) -> Optional[np.ndarray]:
+    if key not in ds.features:
+        return None
+    import torch
+
+    return torch.stack(list(ds.hf_dataset[key])).numpy().reshape(len(ds), -1)
+
+
+def plot_state_action(ds: Any, path: Path, title: str) -> Path:
+    """``observation.state`` and ``action`` over time (matplotlib, else Pillow)."""
+    t = np.arange(len(ds)) / float(ds.fps)
+    series = {k: v for k in ("observation.state", "action") if (v := _series(ds, k)) is not None}
+    names = {k: ds.features[k].get("names") for k in series}
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return _plot_with_pillow(t, series, path)
+    fig, axes = plt.subplots(len(series), 1, figsize=(9, 3 * len(series)), sharex=True, squeeze=False)
+    for ax, (key, values) in zip(axes[:, 0], series.items()):
+        labels = names[key] if isinstance(names[key], list) else [f"{key}[{i}]" for i in range(values.shape[1])]
+        for i in range(values.shape[1]):
+            ax.plot(t, values[:, i], label=str(labels[i]) if i < len(labels) else str(i))
+        ax.set_ylabel(key)
+        ax.legend(fontsize=7, ncol=4, loc="upper right")
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def _plot_with_pillow(t: np.ndarray, series: dict[str, np.ndarray], path: Path) -> Path:
+    width, height = 900, 260
+    img = Image.new("RGB", (width, height * max(1, len(series))), "white")
+    draw = ImageDraw.Draw(img)
+    palette = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75)]
+    for r, (key, values) in enumerate(series.items()):
+        y0, lo, hi = r * height, float(values.min()), float(values.max())
+        draw.text((5, y0 + 5), key, fill="black")
+        span, tmax = (hi - lo) or 1.0, float(t[-1]) if len(t) > 1 else 1.0
+        for i in range(values.shape[1]):
+            pts = [(40 + (width - 60) * float(x) / tmax, y0 + height - 20 - (height - 40) * (float(v) - lo) / span)
+                   for x, v in zip(t, values[:, i])]
+            if len(pts) > 1:
+                draw.line(pts, fill=palette[i % len(palette)], width=2)
+    img.save(path)
+    return path
+
+
+def preview_episode(path: str | Path, episode: int, out_dir: str | Path, fmt: str = "png",
+                    num_frames: int = 8) -> list[Path]:
+    """Write the camera preview (``fmt``: ``png`` or ``mp4``) and the state/action plot.
+
+    Raises:
+        IndexError: no such episode.
+    """
+    root = Path(path)
+    total = load_dataset(root).num_episodes
+    if not 0 <= episode < total:
+        raise IndexError(f"episode {episode} is out of range: the dataset has {total} episode(s)")
+    ds = load_dataset(root, episodes=[episode])
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{root.name}_ep{episode:03d}"
+    written = [plot_state_action(ds, out / f"{stem}_state_action.png", f"{root.name} episode {episode}")]
+    n = len(ds)
+    if fmt == "mp4":
+        streams = collect_streams(ds, range(n))
+        if streams:
+            written.insert(0, write_mp4(streams, int(ds.fps), out / f"{stem}_cameras.mp4"))
+        return written
+    idx = sorted({int(round(x)) for x in np.linspace(0, n - 1, min(num_frames, n))})
+    streams = collect_streams(ds, idx)
+    if streams:
+        labels = [f"t={i / float(ds.fps):.2f}s (frame {i})" for i in idx]
+        written.insert(0, contact_sheet(streams, labels, out / f"{stem}_cameras.png"))
+    return written

@@ -1,0 +1,204 @@
+"""``LeRobotRecorder``: a dataset functor that saves committed episodes with lerobot.
+
+Each step's observation is copied once (numpy, CPU) into per-env buffers; the
+env's dataset manager commits an env's episode when it ends successfully (every
+finished episode with ``save_failed_episodes``) and discards it otherwise or on
+``reset(options={"save_data": False})``. A committed episode is written with
+``LeRobotDataset.add_frame`` / ``save_episode`` and published crash-safely (see
+:mod:`embodichain_lerobot.writer`). ``finalize()`` (from ``env.close()``) drops
+live partial episodes and returns the dataset folder.
+
+Config (a gym config's ``dataset`` section)::
+
+    "dataset": {"lerobot": {"func": "LeRobotRecorder", "params": {
+        "save_path": "outputs/datasets", "robot_meta": {"robot_type": "arm7"},
+        "instruction": {"lang": "push the cube"}, "extra": {"scene_type": "table"},
+        "use_videos": false}}}
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+
+from embodichain_core.managers.functor import DatasetFunctor
+from embodichain_lerobot.config import (
+    dataset_fps,
+    dataset_prefix,
+    naming_parts,
+    parse_params,
+    reserve_dataset_dir,
+    robot_type_of,
+)
+from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
+from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
+from embodichain_lerobot.writer import DatasetWriter
+
+log = logging.getLogger("embodichain_lerobot")
+
+
+def env_id_list(env_ids: Any, num_envs: int) -> list[int]:
+    """``env_ids`` (tensor, list, ``None`` = all) as a list of ints."""
+    if env_ids is None:
+        return list(range(num_envs))
+    return [int(i) for i in np.asarray(to_numpy(env_ids)).reshape(-1)]
+
+
+def _per_env(value: Any, num_envs: int, dtype: Any) -> np.ndarray:
+    if value is None:
+        return np.zeros(num_envs, dtype=dtype)
+    arr = np.asarray(to_numpy(value), dtype=dtype).reshape(-1)
+    return np.broadcast_to(arr, (num_envs,)).copy() if arr.size == 1 else arr.copy()
+
+
+class LeRobotRecorder(DatasetFunctor):
+    """Records the env's committed episodes as a LeRobot dataset.
+
+    Params (read at construction; see :class:`~embodichain_lerobot.config.RecorderParams`):
+    ``save_path``, ``robot_meta``, ``instruction``, ``extra``, ``use_videos``,
+    ``vcodec``, ``image_writer_threads``, ``image_writer_processes``,
+    ``max_pending_episodes`` (async variant only).
+
+    Raises:
+        ValueError: the env control frequency is not a whole number of Hz.
+    """
+
+    def __init__(self, cfg: Any, env: Any):
+        super().__init__(cfg, env)
+        self.params = parse_params(cfg.params or {})
+        self.fps = dataset_fps(env.control_frequency)
+        import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: import now, not at the first commit)
+
+        if self.params.use_videos:
+            os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its banner at every encoder start otherwise
+        self.step_dt = float(env.step_dt)
+        self._robot_uid = str(getattr(env.robot, "uid", "") or "")
+        self._spec: Optional[FeatureSpec] = None
+        self._buffers = EpisodeBuffers(env.num_envs)
+        self._writer: Optional[DatasetWriter] = None
+        self._finalized = False
+        self._path: Optional[str] = None
+        self.discarded_episodes = 0
+
+    # -- status ----------------------------------------------------------------------------------
+    @property
+    def dataset_path(self) -> Optional[Path]:
+        """The dataset folder (``None`` until the first episode is committed)."""
+        return self._writer.root if self._writer is not None else None
+
+    @property
+    def saved_episodes(self) -> int:
+        """Episodes written so far."""
+        return self._writer.num_episodes if self._writer is not None else 0
+
+    @property
+    def saved_frames(self) -> int:
+        return self._writer.num_frames if self._writer is not None else 0
+
+    def live_length(self, env_id: int) -> int:
+        """Frames buffered for env ``env_id``'s live episode."""
+        return self._buffers.length(env_id)
+
+    # -- recording -------------------------------------------------------------------------------
+    def _ensure_spec(self, obs: Any) -> FeatureSpec:
+        if self._spec is None:
+            self._spec = FeatureSpec(obs, self._env)
+        return self._spec
+
+    def record_reset(self, obs: Any, env_ids: Any) -> None:
+        """New episodes of ``env_ids`` start from ``obs``."""
+        if self._finalized:
+            return
+        spec = self._ensure_spec(obs)
+        self._buffers.start(spec.snapshot(obs), env_id_list(env_ids, self.num_envs))
+
+    def record_step(self, obs: Any, action: Any, reward: Any, terminated: Any, truncated: Any,
+                    info: dict) -> None:
+        """Buffer one frame per env (the observation it acted on, the action, reward, flags)."""
+        if self._finalized:
+            return
+        spec, n = self._ensure_spec(obs), self.num_envs
+        act = action_array(action, n)
+        spec.set_action(act)
+        step = StepData(act, _per_env(reward, n, np.float32), _per_env(terminated, n, bool),
+                        _per_env(truncated, n, bool), _per_env((info or {}).get("success"), n, bool))
+        self._buffers.add(spec.snapshot(obs), step)
+
+    def __call__(self, env: Any, env_ids: Any, save_path: Any = None, robot_meta: Any = None,
+                 instruction: Any = None, extra: Any = None, use_videos: bool = False,
+                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0,
+                 max_pending_episodes: int = 64) -> None:
+        """Commit the finished episodes of ``env_ids`` (the params were read at construction)."""
+        if self._finalized:
+            raise RuntimeError(f"{type(self).__name__} is finalized; it accepts no more episodes")
+        for i in env_id_list(env_ids, self.num_envs):
+            episode = self._buffers.take(i)
+            if len(episode):  # zero-length episodes (the first reset) are skipped
+                self._write(episode)
+
+    def discard(self, env_ids: Any) -> None:
+        """Drop the live episodes of ``env_ids``."""
+        for i in env_id_list(env_ids, self.num_envs):
+            self.discarded_episodes += int(self._buffers.drop([i]) > 0)
+
+    def reset(self, env_ids: Any = None) -> None:
+        """After a reset nothing is left of the old episodes of ``env_ids``."""
+        self._buffers.drop(env_id_list(env_ids, self.num_envs))
+
+    # -- writing ---------------------------------------------------------------------------------
+    def _write(self, episode: Episode) -> None:
+        """Write a committed episode (the async recorder queues it instead)."""
+        self._write_now(episode)
+
+    def _write_now(self, episode: Episode) -> None:
+        writer = self._ensure_writer()
+        task = self.params.task
+        subtask = writer.subtask_index(task)
+        index = writer.write_episode(episode.frames(task, subtask), self._episode_record(episode, subtask))
+        log.info("saved episode %d of env %d (%d frames) to %s", index, episode.env_id, len(episode), writer.root)
+
+    def _ensure_writer(self) -> DatasetWriter:
+        if self._writer is not None:
+            return self._writer
+        if self._spec is None or self._spec.action_dim is None:
+            raise RuntimeError("no frame was recorded before the first commit")
+        p = self.params
+        root = reserve_dataset_dir(p.save_path, dataset_prefix(*naming_parts(p, self._robot_uid)))
+        try:
+            self._writer = DatasetWriter(
+                root, self.fps, self._spec.features(p.use_videos), robot_type_of(p, self._robot_uid),
+                p.use_videos, p.vcodec, p.image_writer_threads, p.image_writer_processes)
+        except BaseException:
+            shutil.rmtree(root, ignore_errors=True)
+            raise
+        return self._writer
+
+    def _episode_record(self, episode: Episode, subtask: int) -> dict:
+        task, n = self.params.task, len(episode)
+        return {
+            "env_id": episode.env_id, "success": episode.success, "total_time": n * self.step_dt,
+            "instruction": self.params.instruction, "robot_meta": self.params.robot_meta, "extra": self.params.extra,
+            "segments": [{"name": "legacy", "start": 0, "end": n, "instruction": task, "subtask_index": subtask}],
+        }
+
+    # -- closing ---------------------------------------------------------------------------------
+    def finalize(self) -> Optional[str]:
+        """Close the dataset (live partial episodes are dropped); idempotent.
+
+        Returns:
+            The dataset folder, or ``None`` when no episode was saved.
+        """
+        if self._finalized:
+            return self._path
+        self._finalized = True
+        dropped = self._buffers.drop(range(self.num_envs))
+        path = self._writer.finalize() if self._writer is not None else None
+        self._path = str(path) if path is not None else None
+        log.info("%s: saved %d episode(s), %d frame(s) to %s (dropped %d live frame(s))", type(self).__name__,
+                 self.saved_episodes, self.saved_frames, self._path, dropped)
+        return self._path

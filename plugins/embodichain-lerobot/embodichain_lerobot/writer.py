@@ -1,0 +1,239 @@
+"""Crash-safe writing of a LeRobot dataset, one committed episode at a time.
+
+lerobot keeps a parquet writer open across episodes (its files get their footer
+only at ``finalize()``) and buffers episode metadata, so a killed recording
+normally leaves nothing loadable. Here lerobot writes into a staging folder
+inside the dataset (``<root>/.embodichain_staging``, invisible to loaders), and
+after every ``save_episode``:
+
+1. the writers are closed and lerobot is told to continue in new files (its own
+   "resume recording" path), so each episode's parquet/mp4 files are complete;
+2. the new files are *moved* into the dataset (``data/``, ``videos/``,
+   ``meta/episodes/``), then ``tasks.parquet``, ``subtasks.parquet`` and
+   ``stats.json`` are replaced atomically, and ``meta/info.json`` last: its
+   ``total_episodes`` is the commit point.
+
+A ``SIGKILL`` at any moment leaves a dataset that ``LeRobotDataset(repo_id, root)``
+loads with every episode whose ``info.json`` was published (an episode caught
+mid-publish leaves complete, unreferenced files that loaders ignore). The price
+is one data file (and one video file per camera) per episode.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import shutil
+import signal
+import threading
+import warnings
+from pathlib import Path
+from typing import Any, Iterable, Iterator, Optional
+
+import numpy as np
+
+STAGING = ".embodichain_staging"
+SIDECAR = "meta/embodichain_episodes.jsonl"
+SUBTASKS = "meta/subtasks.parquet"
+SCHEMA_VERSION = 2
+_MOVED_DIRS = ("data", "videos", "meta/episodes")
+_REPLACED_FILES = ("meta/tasks.parquet", "meta/stats.json")  # then subtasks, then meta/info.json
+
+# lerobot's histogram of boolean features (next.done, next.success) warns on every episode
+warnings.filterwarnings("ignore", message="Converting input from bool", category=RuntimeWarning)
+
+
+def atomic_copy(src: Path, dest: Path) -> None:
+    """Copy ``src`` over ``dest`` so that readers see the old or the new file, never half."""
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest.with_name(f".{dest.name}.tmp")
+    shutil.copyfile(src, tmp)
+    os.replace(tmp, dest)
+
+
+@contextlib.contextmanager
+def deferred_sigint() -> Iterator[None]:
+    """Hold a Ctrl-C back until the block is done (a second Ctrl-C interrupts at once).
+
+    Only in the main thread with Python's default handler installed; elsewhere a no-op.
+    """
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    pending: list[int] = []
+
+    def hold(signum: int, frame: Any) -> None:
+        if pending:
+            raise KeyboardInterrupt
+        pending.append(signum)
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if pending:
+        raise KeyboardInterrupt
+
+
+def _json_default(value: Any) -> Any:
+    """numpy scalars/arrays and tensors as JSON values; anything else as its string."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    return str(value)
+
+
+class DatasetWriter:
+    """Writes episodes into the (already reserved, empty) dataset folder ``root``.
+
+    Args:
+        root: the dataset folder (created by :func:`~embodichain_lerobot.config.reserve_dataset_dir`).
+        fps: frames per second.
+        features: lerobot features (without its default ones).
+        robot_type: written into ``meta/info.json``.
+        use_videos, vcodec, image_writer_threads, image_writer_processes: lerobot options.
+    """
+
+    def __init__(self, root: Path, fps: int, features: dict, robot_type: Optional[str], use_videos: bool,
+                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0):
+        from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+        self.root = Path(root)
+        self.staging = self.root / STAGING
+        self.repo_id = f"local/{self.root.name}"
+        self.dataset = LeRobotDataset.create(
+            repo_id=self.repo_id, fps=fps, features=features, root=self.staging, robot_type=robot_type,
+            use_videos=use_videos, vcodec=vcodec, image_writer_threads=image_writer_threads,
+            image_writer_processes=image_writer_processes)
+        atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
+        self.num_episodes = 0
+        self.num_frames = 0
+        self._subtasks: dict[str, int] = {}
+        self._broken: Optional[BaseException] = None
+        self._finalized = False
+        self._result: Optional[Path] = None
+
+    # -- episodes --------------------------------------------------------------------------------
+    def subtask_index(self, subtask: str) -> int:
+        """The stable index of ``subtask`` (new subtasks get the next index)."""
+        return self._subtasks.setdefault(subtask, len(self._subtasks))
+
+    def write_episode(self, frames: Iterable[dict], record: dict) -> int:
+        """Add, save and publish one episode; return its lerobot episode index.
+
+        ``record`` (JSON-able) becomes the episode's line in ``meta/embodichain_episodes.jsonl``.
+
+        Raises:
+            RuntimeError: the writer is finalized, or broken by an earlier failed save.
+        """
+        self._check_usable()
+        ds = self.dataset
+        try:
+            length = 0
+            for frame in frames:
+                ds.add_frame(frame)
+                length += 1
+        except BaseException:
+            ds.clear_episode_buffer()  # nothing was written: the writer stays usable
+            raise
+        if length == 0:
+            return -1
+        with deferred_sigint():  # a Ctrl-C lands after this episode is saved and counted
+            self._save_and_publish()
+            index = self.num_episodes
+            self.num_episodes += 1
+            self.num_frames += length
+            self._append_sidecar({**record, "lerobot_episode_index": index, "length": length,
+                                  "schema_version": SCHEMA_VERSION})
+        return index
+
+    def _check_usable(self) -> None:
+        if self._finalized:
+            raise RuntimeError(f"dataset {self.root} is finalized; no more episodes can be written")
+        if self._broken is not None:
+            raise RuntimeError(f"dataset {self.root} stopped accepting episodes after an earlier failed save "
+                               f"({self._broken!r}); the episodes saved before it are intact")
+
+    def _save_and_publish(self) -> None:
+        from lerobot.utils.utils import SuppressProgressBars
+
+        try:
+            with SuppressProgressBars():
+                self.dataset.save_episode(parallel_encoding=False)
+            self._continue_in_new_files()
+            self._publish()
+        except BaseException as err:
+            self._broken = err
+            raise
+
+    def _continue_in_new_files(self) -> None:
+        """Close lerobot's writers; its next episode starts new files (lerobot's resume path)."""
+        ds = self.dataset
+        ds._close_writer()
+        ds.meta._close_writer()
+        latest = ds.meta.latest_episode
+        ds.meta.episodes = [{k: (v[0] if isinstance(v, list) else v) for k, v in latest.items()}]
+        ds.meta.latest_episode = None
+        ds.latest_episode = None
+
+    def _publish(self) -> None:
+        """Move the episode's files into the dataset; ``meta/info.json`` goes last."""
+        for sub in _MOVED_DIRS:
+            src_root = self.staging / sub
+            if not src_root.is_dir():
+                continue
+            for src in sorted(p for p in src_root.rglob("*") if p.is_file()):
+                dest = self.root / src.relative_to(self.staging)
+                dest.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(src, dest)
+        for name in _REPLACED_FILES:
+            if (self.staging / name).exists():
+                atomic_copy(self.staging / name, self.root / name)
+        self._write_subtasks()
+        atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
+
+    def _write_subtasks(self) -> None:
+        import pandas as pd
+
+        names = sorted(self._subtasks, key=self._subtasks.__getitem__)
+        frame = pd.DataFrame({"subtask_index": [self._subtasks[n] for n in names]}, index=names)
+        dest = self.root / SUBTASKS
+        tmp = dest.with_name(f".{dest.name}.tmp")
+        frame.to_parquet(tmp)
+        os.replace(tmp, dest)
+
+    def _append_sidecar(self, record: dict) -> None:
+        try:
+            with open(self.root / SIDECAR, "a", encoding="utf-8") as f:
+                f.write(json.dumps(record, default=_json_default) + "\n")
+        except OSError as err:
+            raise RuntimeError(f"episode {record['lerobot_episode_index']} was saved to {self.root}, but its "
+                               f"metadata line could not be written to {SIDECAR}: {err}") from err
+
+    # -- closing ---------------------------------------------------------------------------------
+    def finalize(self) -> Optional[Path]:
+        """Close lerobot's writers and remove the staging folder (idempotent).
+
+        Returns:
+            The dataset folder, or ``None`` (and the folder removed) when no episode was saved.
+        """
+        if self._finalized:
+            return self._result
+        self._finalized = True
+        error: Optional[BaseException] = None
+        try:
+            self.dataset.stop_image_writer()
+            self.dataset.finalize()
+        except Exception as err:  # a broken writer may fail to close; its published episodes are intact
+            error = err
+        shutil.rmtree(self.staging, ignore_errors=True)
+        if self.num_episodes == 0:
+            shutil.rmtree(self.root, ignore_errors=True)
+        self._result = self.root if self.num_episodes else None
+        if error is not None and self._broken is None:
+            raise RuntimeError(f"finalizing dataset {self.root} failed: {error!r}") from error
+        return self._result

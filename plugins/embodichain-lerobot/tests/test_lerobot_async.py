@@ -1,0 +1,112 @@
+"""AsyncLeRobotRecorder: same dataset as the synchronous recorder, commits that do
+not wait for writing, worker errors at the next call and at finalize, no calls
+after finalize."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+
+from lerobot_helpers import arm_cfg, as_np, load, recorder_cfg, reset, run_script
+
+from embodichain_lerobot.async_recorder import AsyncLeRobotRecorder
+from embodichain_lerobot.recorder import LeRobotRecorder
+
+SCRIPT = [[".", "."], ["s", "."], [".", "f"], [".", "."], ["s", "s"], [".", "."]]
+
+
+def run(make_env: Any, tmp_path: Path, func: str) -> Any:
+    env = make_env(arm_cfg(2, dataset=recorder_cfg(tmp_path / func, func=func)))
+    reset(env)
+    run_script(env, SCRIPT)
+    env.close()
+    return load(env.dataset_manager.finalize()[0])
+
+
+def test_async_writes_the_same_dataset_as_sync(make_env: Any, tmp_path: Path) -> None:
+    sync, asyn = run(make_env, tmp_path, "LeRobotRecorder"), run(make_env, tmp_path, "AsyncLeRobotRecorder")
+    assert asyn.num_episodes == sync.num_episodes == 3 and len(asyn) == len(sync)
+    assert list(asyn.meta.episodes["length"]) == list(sync.meta.episodes["length"])
+    for i in range(len(sync)):
+        a, s = asyn[i], sync[i]
+        for key in ("observation.state", "observation.qf", "action", "episode_index", "frame_index"):
+            np.testing.assert_array_equal(as_np(a[key]), as_np(s[key]))
+        assert a["task"] == s["task"]
+
+
+class _Gate:
+    """Makes ``LeRobotRecorder._write_now`` wait until released."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch):
+        self.release, self.entered = threading.Event(), threading.Event()
+        original = LeRobotRecorder._write_now
+
+        def gated(rec: Any, episode: Any) -> None:
+            self.entered.set()
+            assert self.release.wait(30)
+            original(rec, episode)
+
+        monkeypatch.setattr(LeRobotRecorder, "_write_now", gated)
+
+
+def test_commits_do_not_wait_for_writing_and_finalize_drains(make_env: Any, tmp_path: Path,
+                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    gate = _Gate(monkeypatch)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    rec = env.dataset_manager.get_functor("rec")
+    assert isinstance(rec, AsyncLeRobotRecorder)
+    reset(env)
+    run_script(env, [["s"], ["."], ["s"], ["."], ["."]])  # two commits while the worker is blocked
+    assert gate.entered.wait(30) and rec.saved_episodes == 0 and rec.pending_episodes >= 1
+    gate.release.set()
+    path = rec.finalize()  # drains the queue first; the live 2-frame episode is dropped
+    assert rec.saved_episodes == 2 and load(path).num_episodes == 2
+    with pytest.raises(RuntimeError, match="finalized"):
+        rec(env, torch.tensor([0]))
+
+
+def test_episodes_are_copies_unaffected_by_later_steps(make_env: Any, tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    gate = _Gate(monkeypatch)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    obs = reset(env)
+    first = obs["robot"]["qpos"][0].clone()
+    run_script(env, [["."], ["s"]])
+    run_script(env, [["."]] * 5)  # the env moves on while the committed episode waits
+    gate.release.set()
+    env.close()
+    ds = load(env.dataset_manager.finalize()[0])
+    np.testing.assert_array_equal(as_np(ds[0]["observation.state"]), first.numpy())
+    assert len(ds) == 2
+
+
+def test_worker_errors_surface_at_the_next_call_and_at_finalize(make_env: Any, tmp_path: Path,
+                                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    def broken(rec: Any, episode: Any) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(LeRobotRecorder, "_write_now", broken)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    rec = env.dataset_manager.get_functor("rec")
+    reset(env)
+    run_script(env, [["s"]])
+    rec._queue.join()
+    with pytest.raises(RuntimeError, match="disk full"):
+        run_script(env, [["."]])
+    run_script(env, [["s"]])  # the first error was reported; this commit fails on the worker too
+    with pytest.raises(RuntimeError, match=r"dataset finalize failed.*writing 2 episode\(s\) failed.*disk full"):
+        env.close()
+    assert rec.finalize() is None  # idempotent after the failure
+
+
+def test_construction_only_params_are_accepted(make_env: Any, tmp_path: Path) -> None:
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", max_pending_episodes=2,
+                                                   image_writer_threads=2)))
+    rec = env.dataset_manager.get_functor("rec")
+    assert rec.params.max_pending_episodes == 2 and rec.params.image_writer_threads == 2
+    assert rec._queue.maxsize == 2

@@ -1,0 +1,1 @@
+"""Tutorial envs (the seed tutorials, runnable as scripts)."""
