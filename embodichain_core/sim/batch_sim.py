@@ -150,6 +150,11 @@ class BatchSim:
         if name in mujoco.MjModel._setconst_inputs:
             self._const_dirty[ids] = True
 
+    def mark_const_dirty(self, env_ids: Any = None) -> None:
+        """Note that constant inputs of ``env_ids`` changed (written directly into
+        expanded fields); ``mj_setConst`` runs once before they are next used."""
+        self._const_dirty[_np_ids(env_ids, self.num_envs)] = True
+
     def flush_const(self) -> None:
         """Run ``mj_setConst`` once for every env whose constant inputs changed.
 

@@ -1,6 +1,6 @@
 """Simulation helpers: batched per-env model writes and stepping a subset of envs.
 
-``BatchSim.set_model_field`` runs ``mj_setConst`` after every write of a field
+``BatchSim`` defers ``mj_setConst`` after writes of a field
 that MuJoCo derives constants from (masses, positions...). A functor writing
 several such fields would pay it several times; :func:`write_model` writes all
 fields of one call and runs ``mj_setConst`` once, for the envs written.
@@ -72,7 +72,7 @@ def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool
         field[_selector(ids, index)] = _numpy(values)
         needs_const |= name in _SETCONST
     if needs_const and set_const:
-        sim.batch.set_const(batch_ids(ids, sim.num_envs))
+        sim.mark_const_dirty(ids)  # one deferred mj_setConst for every write of a reset
     sim.mark_dirty(ids)
 
 
