@@ -115,8 +115,10 @@ class BatchSim:
     def reset(self, env_ids: Any = None) -> None:
         """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls)."""
         ids = _batch_ids(env_ids, self.num_envs)
-        self.batch.reset(ids, stage=_VEL)
-        self._dirty[_np_ids(env_ids, self.num_envs)] = False
+        # no forward here: resets are followed by state writes; derived fields are
+        # recomputed lazily when next read (or before the next step)
+        self.batch.reset(ids, stage=int(mujoco.mjtStage.mjSTAGE_NONE))
+        self._dirty[_np_ids(env_ids, self.num_envs)] = True
 
     def error(self, env_id: int) -> str:
         return self.batch.error(int(env_id))
