@@ -14,8 +14,12 @@ $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.tom
 
 setup: $(STAMP)
 
+# The main job: scripted PickFork-v1 demonstrations on the DexForce W1, 2 envs, recorded as a
+# LeRobot dataset (stereo camera as mp4) under outputs/datasets/. The built-in demo scene of the
+# core alone: `.venv/bin/embodichain run-env`.
+MAIN_JOB := plugins/embodichain-tasks/embodichain_tasks/configs/main_job.json
 run: $(STAMP)
-	$(VENV)/bin/embodichain run-env --headless
+	$(VENV)/bin/embodichain run-env --gym_config $(MAIN_JOB) --headless
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)

@@ -37,7 +37,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import mujoco  # noqa: E402
 import mujoco.batch as mjbatch  # noqa: E402
-import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 from common import interleaved_timings, machine_info, median, print_table, seven_dof_arm_mjcf, spread, write_json  # noqa: E402
@@ -246,7 +245,6 @@ def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] 
     paired = [r / e for e, r in zip(times["env"], times["raw"])]
     parts = _breakdown(base.sim, run_env, run_raw, steps, min(3, repeats)) if breakdown else None
     env.close()
-    del raw
     return {
         "num_envs": num_envs,
         "sim_steps_per_control": sim_steps_per_control,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from conftest import ARM_ACTIVE, zero_action
+from core_testlib import ARM_ACTIVE, zero_action
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.managers import ActionTerm, ActionTermCfg
@@ -156,7 +156,7 @@ def test_terms_with_their_own_dims(make_env) -> None:
 
 
 def test_qvel_command_drives_velocity(make_env, make_cfg) -> None:
-    from conftest import base_cfg
+    from core_testlib import base_cfg
 
     robot = base_cfg().robot.replace(drive_pros=JointDrivePropertiesCfg(stiffness=0.0, damping=200.0))
     env = make_env(make_cfg(robot=robot, actions={"vel": ActionTermCfg(func=JointVelocity)}))
@@ -172,7 +172,7 @@ def test_qvel_command_drives_velocity(make_env, make_cfg) -> None:
 
 
 def test_qf_command_writes_applied_forces(make_env, make_cfg) -> None:
-    from conftest import base_cfg
+    from core_testlib import base_cfg
 
     robot = base_cfg().robot.replace(drive_pros=JointDrivePropertiesCfg(stiffness=0.0, damping=0.0))
     env = make_env(make_cfg(robot=robot, actions={"effort": ActionTermCfg(func=JointEffort)}))

@@ -8,7 +8,7 @@ from typing import Any, Optional
 import pytest
 import torch
 
-from conftest import FlagEnv, zero_action
+from core_testlib import FlagEnv, zero_action
 
 from embodichain_core.managers import DatasetFunctor, DatasetFunctorCfg
 

@@ -14,7 +14,7 @@ import pytest
 import torch
 from gymnasium.vector import AutoresetMode
 
-from conftest import CUBE_INIT, FlagEnv, base_cfg, zero_action
+from core_testlib import CUBE_INIT, FlagEnv, base_cfg, zero_action
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs import BaseEnv, EmbodiedEnv, EmbodiedEnvCfg, register_env

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 import torch
 
-from conftest import call_log, ids_list, zero_action
+from core_testlib import call_log, ids_list, zero_action
 
 from embodichain_core.managers import EventCfg, Functor, SceneEntityCfg
 
@@ -46,7 +46,7 @@ def test_startup_runs_once_with_none(make_env) -> None:
 
 
 def test_reset_events_get_only_the_reset_ids(make_env, make_cfg) -> None:
-    from conftest import FlagEnv
+    from core_testlib import FlagEnv
 
     env = make_env(make_cfg(num_envs=3, events={"r": EventCfg(func=log_event, mode="reset", params={"tag": "reset"})}),
                    env_cls=FlagEnv)

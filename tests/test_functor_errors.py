@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 import torch
 
-from conftest import zero_action
+from core_testlib import zero_action
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.managers import EventCfg, Functor, ObservationCfg, RewardCfg, SceneEntityCfg
@@ -215,7 +215,7 @@ class LiftPlugin:
 
 
 def test_registered_functor_name_resolves_and_unknown_suggests() -> None:
-    from conftest import base_cfg
+    from core_testlib import base_cfg
     from embodichain_core.envs import EmbodiedEnv
 
     with isolated_plugins():

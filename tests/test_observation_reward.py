@@ -9,7 +9,7 @@ import gymnasium as gym
 import pytest
 import torch
 
-from conftest import CUBE_INIT, ids_list, zero_action
+from core_testlib import CUBE_INIT, ids_list, zero_action
 
 from embodichain_core.envs import EmbodiedEnv
 from embodichain_core.managers import Functor, ObservationCfg, RewardCfg, SceneEntityCfg
