@@ -26,22 +26,10 @@ ARM_MJCF = """
 
 
 def seven_dof_arm_mjcf() -> str:
-    """A 7-DoF arm with a two-finger gripper (mimic second finger), for benchmarks."""
-    axes = ["0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1"]
-    body, close = "", ""
-    for i, ax in enumerate(axes):
-        body += (f'<body name="link{i+1}" pos="0 0 {0.1 if i else 0.08}">'
-                 f'<joint name="joint{i+1}" axis="{ax}" range="-2.8 2.8"/>'
-                 f'<geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.04" mass="1"/>')
-        close += "</body>"
-    hand = ('<body name="hand" pos="0 0 0.1"><geom type="box" size="0.02 0.06 0.02" mass="0.3"/>'
-            '<body name="finger_l" pos="0 0.02 0.04"><joint name="finger_joint1" type="slide" axis="0 1 0" range="0 0.04"/>'
-            '<geom type="box" size="0.01 0.01 0.03" mass="0.05"/></body>'
-            '<body name="finger_r" pos="0 -0.02 0.04"><joint name="finger_joint2" type="slide" axis="0 -1 0" range="0 0.04"/>'
-            '<geom type="box" size="0.01 0.01 0.03" mass="0.05"/></body></body>')
-    return (f'<mujoco model="arm7"><compiler angle="radian"/><worldbody><body name="base"><geom type="cylinder" size="0.08 0.04" mass="5"/>'
-            f'{body}{hand}{close}</body></worldbody>'
-            '<equality><joint joint1="finger_joint2" joint2="finger_joint1" polycoef="0 1 0 0 0"/></equality></mujoco>')
+    """A 7-DoF arm with a two-finger gripper (mimic second finger): the core's demo arm."""
+    from embodichain_core.demo.arm import arm7_mjcf
+
+    return arm7_mjcf()
 
 
 DRAWER_URDF = """<?xml version="1.0"?>
