@@ -74,8 +74,11 @@ class EmbodiedEnv(BaseEnv):
         aid = torch.as_tensor(self.active_joint_ids, dtype=torch.long)
         self._active_qpos_adr = self.robot.qpos_adr[aid]
         self._active_dof_adr = self.robot.dof_adr[aid]
-        self._active_pos_act = self.robot.pos_act[aid]
-        self._active_vel_act = self.robot.vel_act[aid]
+        # per command kind: (driven columns of the action, their actuator ids), resolved once
+        self._drive_targets = {
+            key: ((acts >= 0), acts[acts >= 0])
+            for key, acts in (("qpos", self.robot.pos_act[aid]), ("qvel", self.robot.vel_act[aid]))
+        }
         limits = self.robot.get_qpos_limits()[0, aid].numpy()
         self.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
         self._events_cfg = events
@@ -134,9 +137,8 @@ class EmbodiedEnv(BaseEnv):
         if key == "qf":
             self.sim.qfrc_applied[:, self._active_dof_adr] = value
             return
-        acts = self._active_pos_act if key == "qpos" else self._active_vel_act
-        mask = acts >= 0
-        self.sim.ctrl[:, acts[mask]] = value[:, mask]
+        columns, actuators = self._drive_targets[key]
+        self.sim.ctrl[:, actuators] = value[:, columns]
 
     def _physics_step(self) -> list[int]:
         return self.sim.step(self.sim_steps_per_control)
