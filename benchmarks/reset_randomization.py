@@ -8,17 +8,14 @@ friction, arm joint damping, light position/colour/intensity, table colour, a
 virtual target pose); the plain env has none. Both reset all envs; resets of the
 two are interleaved ``--repeats`` times after a warm-up and medians are reported.
 
-A second pass times each event alone (called by its manager entry for all envs)
-and counts MuJoCo's ``mj_setConst`` batch calls, the part of a physics
-randomization that recomputes derived model constants (masses, frames).
-
-``--proposed-core`` adds a row measured with two core changes proposed in
-docs/functors.md, applied in-process to this benchmark only: a vectorized
-``Light`` colour write, and ``mj_setConst`` deferred to once per reset (run
-before the next forward/step/render) instead of once per written field.
+The mass and centre-of-mass events change constants MuJoCo derives from them; the
+core recomputes those once per reset, on a small proxy model of the free bodies
+(``embodichain_core/sim/free_body_const.py``) or with the whole model's
+``mj_setConst``. The table reports how many of each ran per reset and their time.
+A second pass times each event alone (called by its manager entry for all envs).
 
 Usage:
-    python benchmarks/reset_randomization.py [--num-envs 64] [--repeats 15] [--proposed-core]
+    python benchmarks/reset_randomization.py [--num-envs 64] [--repeats 40]
         [--cpu-num 0] [--out benchmarks/results/reset_randomization.json] [--quick]
 """
 
@@ -94,75 +91,48 @@ def make_env(num_envs: int, randomized: bool) -> EmbodiedEnv:
     return EmbodiedEnv(cfg)
 
 
-class SetConstCounter:
-    """Counts and times ``Batch.set_const`` calls of one env (measurement only)."""
+class ConstCounter:
+    """Counts and times one env's derived-constant updates per path (measurement only):
+    ``Batch.set_const`` of the whole model and the free bodies' proxy model."""
 
     def __init__(self, env: EmbodiedEnv):
-        self.calls, self.seconds = 0, 0.0
-        batch = env.sim.batch
-        original = batch.set_const
+        self.calls = {"full": 0, "proxy": 0}
+        self.seconds = 0.0
+        sim = env.sim
+        env.reset()  # builds the proxy if this env needs one
+        self._wrap(sim.batch, "set_const", "full")
+        original = sim.flush_const
 
-        def counted(*args: Any, **kwargs: Any) -> Any:
+        def timed() -> None:
             start = time.perf_counter()
             try:
-                return original(*args, **kwargs)
+                original()
             finally:
-                self.calls += 1
                 self.seconds += time.perf_counter() - start
+        sim.flush_const = timed
+        if sim._free_const is not None:
+            self._wrap(sim._free_const.proxy_batch, "set_const", "proxy")
 
-        batch.set_const = counted
+    def _wrap(self, obj: Any, name: str, key: str) -> None:
+        original = getattr(obj, name)
 
+        def counted(*args: Any, **kwargs: Any) -> Any:
+            self.calls[key] += 1
+            return original(*args, **kwargs)
+        setattr(obj, name, counted)
 
-class DeferredSetConst:
-    """The proposed core change, in-process: ``Batch.set_const`` calls are collected and
-    run once, before the simulation is next read, stepped or rendered (measurement only)."""
-
-    def __init__(self, env: EmbodiedEnv):
-        import numpy as np
-
-        sim, self.pending = env.sim, None
-        batch, original = sim.batch, sim.batch.set_const
-
-        def defer(ids: Any = None) -> None:
-            ids = np.arange(sim.num_envs) if ids is None else np.asarray(ids)
-            self.pending = ids if self.pending is None else np.union1d(self.pending, ids)
-
-        def flush() -> None:
-            if self.pending is not None:
-                ids, self.pending = self.pending, None
-                original(None if len(ids) == sim.num_envs else ids.astype(np.int32))
-
-        batch.set_const = defer
-        for name in ("forward", "step", "get_model", "get_data"):
-            method = getattr(sim, name)
-            setattr(sim, name, lambda *a, _m=method, **k: (flush(), _m(*a, **k))[1])
+    def clear(self) -> None:
+        self.calls, self.seconds = {"full": 0, "proxy": 0}, 0.0
 
 
-def vectorize_light_colour(env: EmbodiedEnv) -> None:
-    """The proposed core change, in-process for ``env``'s lights: ``Light`` writes its
-    diffuse colour for all envs at once instead of one env at a time (measurement only)."""
-    import types
-
-    def write_diffuse(self: Any, ids: torch.Tensor) -> None:
-        self._touched = True
-        scale = (self._intensity[ids] / 30.0).clamp(0.0, 1.0)[:, None]
-        self.sim.set_model_field("light_diffuse", ids, self.light_id, (self._color[ids] * scale).clamp(0.0, 1.0).numpy())
-        self.sim.set_model_field("light_intensity", ids, self.light_id, self._intensity[ids].numpy())
-
-    for light in env.scene.lights.values():
-        light._write_diffuse = types.MethodType(write_diffuse, light)
-
-
-def per_event(env: EmbodiedEnv, repeats: int, counter: SetConstCounter) -> list[dict[str, Any]]:
-    """Median time of each event alone for every env, and its mj_setConst calls."""
+def per_event(env: EmbodiedEnv, repeats: int) -> list[dict[str, Any]]:
+    """Median time of each event alone for every env."""
     ids = torch.arange(env.num_envs)
     rows = []
     for name, entry in env.event_manager.entries.items():
         entry(env, ids)  # warm-up (and the one-time param checks)
-        calls = counter.calls
         times = [_time(lambda: entry(env, ids)) for _ in range(repeats)]
-        rows.append({"event": name, "functor": entry.cfg.func.__name__, "ms": 1e3 * median(times),
-                     "set_const_calls": (counter.calls - calls) // repeats})
+        rows.append({"event": name, "functor": entry.cfg.func.__name__, "ms": 1e3 * median(times)})
     return rows
 
 
@@ -172,42 +142,33 @@ def _time(fn: Any) -> float:
     return time.perf_counter() - start
 
 
-def _record(name: str, num_envs: int, plain: list[float], randomized: list[float], counter: SetConstCounter,
+def _record(num_envs: int, plain: list[float], randomized: list[float], counter: ConstCounter,
             env: EmbodiedEnv) -> dict[str, Any]:
-    counter.calls, counter.seconds = 0, 0.0
+    counter.clear()
     env.reset()
     t_plain, t_rand = median(plain), median(randomized)
     return {
-        "core": name, "num_envs": num_envs, "events": len(env.event_manager.entries), "repeats": len(plain),
+        "num_envs": num_envs, "events": len(env.event_manager.entries), "repeats": len(plain),
         "plain_reset_ms": 1e3 * t_plain, "randomized_reset_ms": 1e3 * t_rand, "extra_ms": 1e3 * (t_rand - t_plain),
         "target_extra_ms": TARGET_EXTRA_MS, "meets_target": (t_rand - t_plain) * 1e3 <= TARGET_EXTRA_MS,
-        "set_const_calls_per_reset": counter.calls, "set_const_ms_per_reset": 1e3 * counter.seconds,
+        "full_set_const_per_reset": counter.calls["full"], "proxy_set_const_per_reset": counter.calls["proxy"],
+        "constants_ms_per_reset": 1e3 * counter.seconds,
         "spread_plain": spread(plain), "spread_randomized": spread(randomized),
         "load_average_1min": os.getloadavg()[0],
     }
 
 
-def measure(num_envs: int, repeats: int, proposed: bool = False) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Records (as is, and with the proposed core changes) and the per-event rows.
+def measure(num_envs: int, repeats: int) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The record (plain vs randomized reset) and the per-event rows.
 
-    All contenders are reset in interleaved rounds, so background load hits them alike.
+    Both envs are reset in interleaved rounds, so background load hits them alike.
     """
     envs = {"plain": make_env(num_envs, False), "randomized": make_env(num_envs, True)}
-    if proposed:
-        envs.update({"plain+": make_env(num_envs, False), "randomized+": make_env(num_envs, True)})
-    counters = {name: SetConstCounter(env) for name, env in envs.items() if name.startswith("randomized")}
-    for name in ("plain+", "randomized+"):
-        if name in envs:
-            vectorize_light_colour(envs[name])
-            DeferredSetConst(envs[name])
+    counter = ConstCounter(envs["randomized"])
     try:
         timings = interleaved_timings({name: env.reset for name, env in envs.items()}, repeats, warmup=3)
-        records = [_record("as is", num_envs, timings["plain"], timings["randomized"], counters["randomized"],
-                           envs["randomized"])]
-        if proposed:
-            records.append(_record("with proposed changes", num_envs, timings["plain+"], timings["randomized+"],
-                                   counters["randomized+"], envs["randomized+"]))
-        return records, per_event(envs["randomized"], max(3, repeats // 3), counters["randomized"])
+        record = _record(num_envs, timings["plain"], timings["randomized"], counter, envs["randomized"])
+        return record, per_event(envs["randomized"], max(3, repeats // 3))
     finally:
         for env in envs.values():
             env.close()
@@ -216,12 +177,10 @@ def measure(num_envs: int, repeats: int, proposed: bool = False) -> tuple[list[d
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--num-envs", type=int, nargs="+", default=[64])
-    parser.add_argument("--repeats", type=int, default=15)
+    parser.add_argument("--repeats", type=int, default=40)
     parser.add_argument("--out", default=DEFAULT_OUT, help="JSON output ('' writes none)")
     parser.add_argument("--quick", action="store_true", help="2 envs, 2 repeats: checks the script runs")
     parser.add_argument("--cpu-num", type=int, default=0, help="simulation threads (0: one per core)")
-    parser.add_argument("--proposed-core", action="store_true",
-                        help="also measure with the proposed core changes (patched in-process)")
     args = parser.parse_args(argv)
     if args.quick:
         args.num_envs, args.repeats = [2], 2
@@ -229,16 +188,17 @@ def main(argv: list[str] | None = None) -> int:
     CPU_NUM = args.cpu_num
     records, events = [], {}
     for n in args.num_envs:
-        rows, events[str(n)] = measure(n, args.repeats, args.proposed_core)
-        records += rows
-    print_table(records, [("core", "core", "s"), ("num_envs", "envs", "d"), ("plain_reset_ms", "plain reset ms", ".3f"),
+        record, events[str(n)] = measure(n, args.repeats)
+        records.append(record)
+    print_table(records, [("num_envs", "envs", "d"), ("plain_reset_ms", "plain reset ms", ".3f"),
                           ("randomized_reset_ms", "10 events ms", ".3f"), ("extra_ms", "extra ms", ".3f"),
-                          ("set_const_calls_per_reset", "mj_setConst calls", "d"),
-                          ("set_const_ms_per_reset", "mj_setConst ms", ".3f")],
+                          ("full_set_const_per_reset", "full setConst", "d"),
+                          ("proxy_set_const_per_reset", "proxy setConst", "d"),
+                          ("constants_ms_per_reset", "constants ms", ".3f")],
                 title=f"Reset with 10 randomization events vs a plain reset (target: <= {TARGET_EXTRA_MS} ms extra)")
     for n, rows in events.items():
-        print_table(rows, [("event", "event", "s"), ("functor", "functor", "s"), ("ms", "ms", ".3f"),
-                           ("set_const_calls", "mj_setConst calls", "d")], title=f"\nEach event alone, {n} envs")
+        print_table(rows, [("event", "event", "s"), ("functor", "functor", "s"), ("ms", "ms", ".3f")],
+                    title=f"\nEach event alone, {n} envs")
     if args.out:
         path = write_json(args.out, {"benchmark": "reset_randomization", "machine": machine_info(),
                                      "cpu_num": args.cpu_num,

@@ -24,11 +24,14 @@ import mujoco.batch as mjbatch
 import numpy as np
 import torch
 
+from embodichain_core.sim.free_body_const import INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
+
 STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
 OUTPUT_FIELDS = ("xpos", "xquat", "xmat", "cvel", "site_xpos", "site_xmat", "qfrc_actuator", "actuator_force",
                  "cfrc_ext", "qacc", "sensordata", "light_xpos", "light_xdir", "cam_xpos", "cam_xmat", "geom_xpos",
                  "geom_xmat", "ncon")
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
+_SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
 
 
 class SimulationDiverged(RuntimeError):
@@ -43,7 +46,7 @@ class BatchSim:
     """``num_envs`` MuJoCo simulations of one compiled model."""
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
-                 persistent: bool = True):
+                 persistent: bool = True, spec: Optional[mujoco.MjSpec] = None):
         self.model = model
         self.num_envs = int(num_envs)
         self.substeps = int(substeps)
@@ -51,16 +54,27 @@ class BatchSim:
         self.persistent = persistent
         self.env_models: Optional[list[mujoco.MjModel]] = None
         self._dirty = np.zeros(self.num_envs, dtype=bool)
-        self._const_dirty = np.zeros(self.num_envs, dtype=bool)
+        self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
+        self._const_dirty = np.zeros(self.num_envs, dtype=bool)  # full mj_setConst due
+        self._inertial_dirty = np.zeros(self.num_envs, dtype=bool)  # free bodies' constants due
+        self._const_pending = False
+        self._spec = spec  # lets free bodies' constants be recomputed on a small proxy model
+        self._free_bodies: Optional[frozenset[int]] = None
+        self._free_const: Optional[FreeBodyConstants] = None
         self._make_batch()
         self.batch.reset(None)
 
     # -- construction and views --------------------------------------------------------------
     def _make_batch(self) -> None:
         self.batch = mjbatch.Batch(self.model, self.num_envs, nthread=self.nthread, persistent=self.persistent)
+        self._free_const = None
         self._views: dict[str, torch.Tensor] = {}
+        self.arrays: dict[str, np.ndarray] = {}
+        """Numpy views of the state fields (same memory as the torch views): the cheap
+        way to write a few values of a few envs (then call :meth:`mark_dirty`)."""
         for name in STATE_FIELDS:
-            self._views[name] = torch.from_numpy(self.batch.bind(name))
+            self.arrays[name] = self.batch.bind(name)
+            self._views[name] = torch.from_numpy(self.arrays[name])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # outputs are read-only numpy arrays
             for name in OUTPUT_FIELDS:
@@ -72,8 +86,8 @@ class BatchSim:
     def __getattr__(self, name: str) -> torch.Tensor:
         views = self.__dict__.get("_views")
         if views is not None and name in views:
-            if name not in STATE_FIELDS and self._dirty.any():
-                self.forward(np.flatnonzero(self._dirty))
+            if self._maybe_dirty and name not in STATE_FIELDS:
+                self._forward_dirty()
             return views[name]
         raise AttributeError(f"BatchSim has no field {name!r}")
 
@@ -84,14 +98,23 @@ class BatchSim:
 
     def mark_dirty(self, env_ids: Any = None) -> None:
         """Note that state was written directly; derived fields get recomputed lazily."""
-        self._dirty[_np_ids(env_ids, self.num_envs)] = True
+        if env_ids is None:
+            self._dirty[:] = True
+        else:
+            self._dirty[_np_ids(env_ids, self.num_envs)] = True
+        self._maybe_dirty = True
+
+    def _forward_dirty(self) -> None:
+        """Forward the envs marked dirty (if any)."""
+        if self._dirty.any():
+            self.forward(np.flatnonzero(self._dirty))
+        self._maybe_dirty = False
 
     # -- stepping ------------------------------------------------------------------------------
     def step(self, nstep: int = 1) -> list[int]:
         """Advance every env by ``nstep`` physics steps; return envs that diverged."""
         self.flush_const()
-        if self._dirty.any():
-            self.forward(np.flatnonzero(self._dirty))
+        self._forward_dirty()
         failed: list[int] = []
         try:
             self.batch.step(nstep=nstep * self.substeps, stage=_VEL)
@@ -118,7 +141,7 @@ class BatchSim:
         # no forward here: resets are followed by state writes; derived fields are
         # recomputed lazily when next read (or before the next step)
         self.batch.reset(ids, stage=int(mujoco.mjtStage.mjSTAGE_NONE))
-        self._dirty[_np_ids(env_ids, self.num_envs)] = True
+        self.mark_dirty(env_ids)
 
     def error(self, env_id: int) -> str:
         return self.batch.error(int(env_id))
@@ -134,10 +157,13 @@ class BatchSim:
             values = np.broadcast_to(base, (self.num_envs,) + base.shape)
         return values
 
-    def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any) -> None:
+    def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
 
-        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape``.
+        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape``. A field that
+        MuJoCo derives constants from schedules one ``mj_setConst`` for these envs
+        (before their next forward or step) unless ``set_const=False`` (the caller
+        writes the derived values itself).
         """
         ids = _np_ids(env_ids, self.num_envs)
         values = np.asarray(values.detach().cpu().numpy() if isinstance(values, torch.Tensor) else values)
@@ -149,30 +175,59 @@ class BatchSim:
         else:
             field = self.batch.expand(name)
             field[(ids,) + (index if isinstance(index, tuple) else (index,))] = values
-        if name in mujoco.MjModel._setconst_inputs:
-            self._const_dirty[ids] = True
+        if set_const and name in _SETCONST_INPUTS:
+            self.mark_const_dirty(ids, [(name, index)])
 
-    def mark_const_dirty(self, env_ids: Any = None) -> None:
+    def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
         """Note that constant inputs of ``env_ids`` changed (written directly into
-        expanded fields); ``mj_setConst`` runs once before they are next used."""
-        self._const_dirty[_np_ids(env_ids, self.num_envs)] = True
+        expanded fields); ``mj_setConst`` runs once before they are next used.
+
+        ``fields`` (``(name, index)`` pairs of what was written) lets a write of only
+        free bodies' masses and inertial frames take the cheap path
+        (:mod:`embodichain_core.sim.free_body_const`); without it the full one runs.
+        """
+        ids = _np_ids(env_ids, self.num_envs)
+        if fields is not None and all(self._free_body_field(name, index) for name, index in fields):
+            self._inertial_dirty[ids] = True
+        else:
+            self._const_dirty[ids] = True
+        self._const_pending = True
+
+    def _free_body_field(self, name: str, index: Any) -> bool:
+        if name not in INERTIAL_FIELDS or self._spec is None or self.env_models is not None:
+            return False
+        if self._free_bodies is None:
+            self._free_bodies = frozenset(eligible_bodies(self.model))
+        bodies = _index_bodies(index)
+        return bodies is not None and all(b in self._free_bodies for b in bodies)
 
     def flush_const(self) -> None:
-        """Run ``mj_setConst`` once for every env whose constant inputs changed.
+        """Recompute MuJoCo's derived constants once for every env whose inputs changed.
 
         Deferred from :meth:`set_model_field` so that a reset writing several fields
         (mass, centre of mass, light position) pays for one call; run automatically
-        before stepping, forward and ``get_model``/``get_data``.
+        before stepping, forward and ``get_model``/``get_data``. Envs where only free
+        bodies' inertial properties changed use the small proxy model; the others
+        run ``mj_setConst`` on the whole model.
         """
-        if not self._const_dirty.any():
+        if not self._const_pending:
             return
-        ids = np.flatnonzero(self._const_dirty)
+        self._const_pending = False
+        full = np.flatnonzero(self._const_dirty)
+        fast = np.flatnonzero(self._inertial_dirty & ~self._const_dirty)
         self._const_dirty[:] = False
+        self._inertial_dirty[:] = False
+        if len(fast):
+            if self._free_const is None:
+                self._free_const = FreeBodyConstants(self._spec, self.model, self.batch, sorted(self._free_bodies))
+            self._free_const.update(_batch_ids(fast, self.num_envs))
+        if not len(full):
+            return
         if self.env_models is not None:
-            self._set_const_models(ids)
+            self._set_const_models(full)
             self.batch.set_models(self.env_models)
         else:
-            self.batch.set_const(_batch_ids(ids, self.num_envs))
+            self.batch.set_const(_batch_ids(full, self.num_envs))
 
     def _set_const_models(self, ids: Iterable[int]) -> None:
         data = mujoco.MjData(self.model)
@@ -234,14 +289,29 @@ class BatchSim:
 
 
 def _np_ids(env_ids: Any, n: int) -> np.ndarray:
-    if env_ids is None or (isinstance(env_ids, slice) and env_ids == slice(None)):
-        return np.arange(n)
+    if isinstance(env_ids, np.ndarray) and env_ids.dtype == np.int64 and env_ids.ndim == 1:
+        return env_ids
     if isinstance(env_ids, torch.Tensor):
+        if env_ids.dtype == torch.long and env_ids.device.type == "cpu" and env_ids.dim() == 1:
+            return env_ids.numpy()  # the common case: ids from env_index
         env_ids = env_ids.detach().cpu().numpy()
+    elif env_ids is None or (isinstance(env_ids, slice) and env_ids == slice(None)):
+        return np.arange(n)
     arr = np.asarray(env_ids)
     if arr.dtype == bool:
         return np.flatnonzero(arr)
     return np.atleast_1d(arr).astype(np.int64)
+
+
+def _index_bodies(index: Any) -> Optional[list[int]]:
+    """Body ids a model-field index selects (``None`` when it cannot tell)."""
+    if isinstance(index, tuple):
+        return _index_bodies(index[0]) if index else None
+    if isinstance(index, (int, np.integer)):
+        return [int(index)]
+    if isinstance(index, (list, np.ndarray, torch.Tensor)):
+        return [int(i) for i in np.asarray(index).reshape(-1)]
+    return None
 
 
 def _batch_ids(env_ids: Any, n: int) -> Optional[np.ndarray]:

@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.entities.base import Entity, as_values, find_names
+from embodichain_core.sim.entities.base import Entity, as_array, as_values, find_names
 from embodichain_core.utils.math import pose_to_matrix
 
 
@@ -43,6 +43,12 @@ class Articulation(Entity):
         self.mimic_parents = [names.index(par) for par, _, _ in mimic.values()]
         self.mimic_multipliers = [k for _, k, _ in mimic.values()]
         self.mimic_offsets = [o for _, _, o in mimic.values()]
+        adr = [int(self.scene.model.jnt_qposadr[j]) for j in self._joint_ids]
+        self._mimic_child_adr = np.asarray([adr[i] for i in self.mimic_ids], dtype=np.int64)
+        self._mimic_parent_adr = np.asarray([adr[i] for i in self.mimic_parents], dtype=np.int64)
+        self._mimic_k = np.asarray(self.mimic_multipliers, dtype=np.float64)
+        self._mimic_off = np.asarray(self.mimic_offsets, dtype=np.float64)
+        self._mimic_chained = bool(set(self.mimic_ids) & set(self.mimic_parents))
 
     def _init_drives(self, driven: Sequence[str], prefix: str) -> None:
         model = self.scene.model
@@ -55,6 +61,11 @@ class Articulation(Entity):
         self.driven_ids = torch.as_tensor([i for i in range(self.dof) if pos[i] >= 0], dtype=torch.long)
         self.pos_act = torch.as_tensor(pos, dtype=torch.long)
         self.vel_act = torch.as_tensor(vel, dtype=torch.long)
+        self._pos_act_np = np.asarray(pos, dtype=np.int64)
+        self._qpos_adr_np = self.qpos_adr.numpy().copy()
+        self._dof_adr_np = self.dof_adr.numpy().copy()
+        self._all_joints = np.arange(self.dof, dtype=np.int64)
+        self._shared_limits: np.ndarray | None = None
 
     def _init_root(self, model: mujoco.MjModel) -> None:
         jnt = model.body_jntadr[self.root_body_id]
@@ -95,6 +106,13 @@ class Articulation(Entity):
         """Link ids and names matching regexes ``names``."""
         return find_names(self.link_names, names, preserve_order, "link", self.uid)
 
+    def _jids_np(self, joint_ids: Any) -> np.ndarray:
+        if joint_ids is None or (isinstance(joint_ids, slice) and joint_ids == slice(None)):
+            return self._all_joints
+        if isinstance(joint_ids, torch.Tensor):
+            return joint_ids.detach().cpu().numpy().astype(np.int64).reshape(-1)
+        return np.asarray(joint_ids, dtype=np.int64).reshape(-1)
+
     def _jids(self, joint_ids: Any) -> torch.Tensor:
         if joint_ids is None or (isinstance(joint_ids, slice) and joint_ids == slice(None)):
             return torch.arange(self.dof)
@@ -115,21 +133,29 @@ class Articulation(Entity):
 
         Teleporting also sets the drive targets, and mimic joints follow their parents.
         """
-        ids, jids = self._ids(env_ids), self._jids(joint_ids)
-        values = as_values(qpos, len(ids), len(jids))
-        acts = self.pos_act[jids]
+        ids, cols = self._ids(env_ids), self._jids_np(joint_ids)
+        values = as_array(qpos, len(ids), len(cols))
+        rows = ids.numpy()[:, None]
+        acts = self._pos_act_np[cols]
         driven = acts >= 0
-        if driven.any():
-            self.sim.ctrl[ids[:, None], acts[driven][None, :]] = values[:, driven]
+        if driven.all():
+            self.sim.arrays["ctrl"][rows, acts[None, :]] = values
+        elif driven.any():
+            self.sim.arrays["ctrl"][rows, acts[driven][None, :]] = values[:, driven]
         if not target:
-            self.sim.qpos[ids[:, None], self.qpos_adr[jids][None, :]] = values
-            self._apply_mimic(ids)
+            self.sim.arrays["qpos"][rows, self._qpos_adr_np[cols][None, :]] = values
+            self._apply_mimic(rows)
             self.sim.mark_dirty(ids)
 
-    def _apply_mimic(self, ids: torch.Tensor) -> None:
-        for child, parent, k, off in zip(self.mimic_ids, self.mimic_parents, self.mimic_multipliers, self.mimic_offsets):
-            q = self.sim.qpos[ids, int(self.qpos_adr[parent])]
-            self.sim.qpos[ids, int(self.qpos_adr[child])] = k * q + off
+    def _apply_mimic(self, rows: np.ndarray) -> None:
+        """Mimic joints of ``rows`` ((n, 1) env indices) follow their parents."""
+        qpos = self.sim.arrays["qpos"]
+        if self._mimic_chained:  # a mimic of a mimic: in order
+            for child, parent, k, off in zip(self._mimic_child_adr, self._mimic_parent_adr, self._mimic_k,
+                                             self._mimic_off):
+                qpos[rows[:, 0], child] = k * qpos[rows[:, 0], parent] + off
+        elif self._mimic_child_adr.size:
+            qpos[rows, self._mimic_child_adr] = qpos[rows, self._mimic_parent_adr] * self._mimic_k + self._mimic_off
 
     def get_qvel(self, target: bool = False) -> torch.Tensor:
         """(N, dof) joint velocities, or velocity targets with ``target=True``."""
@@ -165,11 +191,25 @@ class Articulation(Entity):
     # -- limits ---------------------------------------------------------------------------------
     def get_qpos_limits(self) -> torch.Tensor:
         """(N, dof, 2) joint position limits (+-inf where unlimited)."""
-        jnt = np.asarray(self._joint_ids)
-        rng = np.array(self.sim.model_field("jnt_range")[:, jnt])
-        limited = self.scene.model.jnt_limited[jnt].astype(bool)
-        rng[:, ~limited] = [-np.inf, np.inf]
-        return self._out(torch.as_tensor(rng))
+        return self._out(torch.from_numpy(self.qpos_limits_array()))
+
+    def qpos_limits_array(self, env_ids: Any = None, joint_ids: Any = None) -> np.ndarray:
+        """(n, k, 2) float64 position limits of ``env_ids`` x ``joint_ids`` (+-inf where
+        unlimited), as numpy: the cheap form for hot paths (a new array each call)."""
+        cols = self._jids_np(joint_ids)
+        n = self.num_envs if env_ids is None else len(self._ids(env_ids))
+        if self.sim.env_models is None and self.sim.batch.expanded("jnt_range") is None:
+            if self._shared_limits is None:  # one value for every env, until randomized per env
+                jnt = np.asarray(self._joint_ids)
+                rng = np.array(self.scene.model.jnt_range[jnt])
+                rng[~self.scene.model.jnt_limited[jnt].astype(bool)] = [-np.inf, np.inf]
+                self._shared_limits = rng
+            return np.repeat(self._shared_limits[None, cols], n, axis=0)
+        jnt = np.asarray(self._joint_ids)[cols]
+        rows = np.arange(self.num_envs) if env_ids is None else self._ids(env_ids).numpy()
+        rng = np.array(self.sim.model_field("jnt_range")[rows[:, None], jnt[None, :]])
+        rng[:, ~self.scene.model.jnt_limited[jnt].astype(bool)] = [-np.inf, np.inf]
+        return rng
 
     def get_qvel_limits(self) -> torch.Tensor:
         """(N, dof) velocity limits from the drive config (``max_velocity``)."""
@@ -253,12 +293,12 @@ class Articulation(Entity):
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero joint velocities and applied efforts of ``env_ids``."""
-        ids = self._ids(env_ids)
-        self.sim.qvel[ids[:, None], self.dof_adr[None, :]] = 0.0
-        self.sim.qfrc_applied[ids[:, None], self.dof_adr[None, :]] = 0.0
+        rows = self._ids(env_ids).numpy()
+        self.sim.arrays["qvel"][rows[:, None], self._dof_adr_np] = 0.0
+        self.sim.arrays["qfrc_applied"][rows[:, None], self._dof_adr_np] = 0.0
         if self.is_floating:
-            self.sim.qvel[ids, self.root_dof_adr : self.root_dof_adr + 6] = 0.0
-        self.sim.mark_dirty(ids)
+            self.sim.arrays["qvel"][rows, self.root_dof_adr : self.root_dof_adr + 6] = 0.0
+        self.sim.mark_dirty(rows)
 
     def reset(self, env_ids: Any = None) -> None:
         ids = self._ids(env_ids)

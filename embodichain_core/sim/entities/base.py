@@ -17,6 +17,8 @@ if TYPE_CHECKING:
 
 def env_index(env_ids: Any, num_envs: int) -> torch.Tensor:
     """Normalize ``env_ids`` (None, slice, list, array, tensor, bool mask) to a long tensor."""
+    if isinstance(env_ids, torch.Tensor) and env_ids.dtype == torch.long and env_ids.dim() == 1:
+        return env_ids  # already normalized (the hot path: managers pass these on)
     if env_ids is None or (isinstance(env_ids, slice) and env_ids == slice(None)):
         return torch.arange(num_envs)
     if isinstance(env_ids, slice):
@@ -93,7 +95,19 @@ class Entity:
 
 def as_values(values: Any, n: int, width: int | None = None) -> torch.Tensor:
     """Values as a float64 CPU tensor broadcast to (n, width) or (n,)."""
+    shape = (n,) if width is None else (n, width)
+    if isinstance(values, torch.Tensor) and values.dtype == torch.float64 and values.shape == shape \
+            and values.device.type == "cpu":
+        return values.detach()
     t = torch.as_tensor(np.asarray(values) if not isinstance(values, torch.Tensor) else values)
     t = t.detach().to("cpu", torch.float64)
-    shape = (n,) if width is None else (n, width)
     return torch.broadcast_to(t, shape)
+
+
+def as_array(values: Any, n: int, width: int | None = None) -> np.ndarray:
+    """Values as a float64 numpy array broadcast to (n, width) or (n,) (read-only when broadcast)."""
+    shape = (n,) if width is None else (n, width)
+    if isinstance(values, torch.Tensor):
+        values = values.detach().cpu().numpy()
+    arr = np.asarray(values, dtype=np.float64)
+    return arr if arr.shape == shape else np.broadcast_to(arr, shape)

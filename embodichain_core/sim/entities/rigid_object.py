@@ -69,18 +69,24 @@ class RigidObject(Entity):
         pose = self._out(pose)
         return pose_to_matrix(pose) if to_matrix else pose
 
-    def set_local_pose(self, pose: torch.Tensor, env_ids: Any = None) -> None:
-        """Teleport ``env_ids`` to ``pose`` ((n, 7) or (n, 4, 4))."""
+    def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
+        """Teleport ``env_ids`` to ``pose`` ((n, 7) or (n, 4, 4); tensor or array)."""
         ids = self._ids(env_ids)
-        pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7)
-        pose7 = pose7.clone()
-        pose7[:, 3:] = pose7[:, 3:] / pose7[:, 3:].norm(dim=-1, keepdim=True).clamp_min(1e-12)
-        if self.is_dynamic:
-            self.sim.qpos[ids, self.qpos_adr : self.qpos_adr + 7] = pose7
+        if isinstance(pose, np.ndarray) and pose.shape == (len(ids), 7):
+            pose7 = pose
         else:
-            self.sim.mocap_pos[ids, self.mocap_id] = pose7[:, :3]
-            self.sim.mocap_quat[ids, self.mocap_id] = pose7[:, 3:]
-        self.sim.mark_dirty(ids)
+            pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7).numpy()
+        quat = pose7[:, 3:]
+        quat = quat / np.maximum(np.sqrt(np.einsum("ij,ij->i", quat, quat)), 1e-12)[:, None]
+        rows = ids.numpy()
+        if self.is_dynamic:
+            qpos = self.sim.arrays["qpos"]
+            qpos[rows, self.qpos_adr : self.qpos_adr + 3] = pose7[:, :3]
+            qpos[rows, self.qpos_adr + 3 : self.qpos_adr + 7] = quat
+        else:
+            self.sim.arrays["mocap_pos"][rows, self.mocap_id] = pose7[:, :3]
+            self.sim.arrays["mocap_quat"][rows, self.mocap_id] = quat
+        self.sim.mark_dirty(rows)
 
     # -- velocity --------------------------------------------------------------------------
     def get_velocity(self) -> torch.Tensor:
@@ -111,11 +117,11 @@ class RigidObject(Entity):
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero velocities and applied wrenches of ``env_ids``."""
-        ids = self._ids(env_ids)
+        rows = self._ids(env_ids).numpy()
         if self.is_dynamic:
-            self.sim.qvel[ids, self.dof_adr : self.dof_adr + 6] = 0.0
-        self.sim.xfrc_applied[ids, self.body_id] = 0.0
-        self.sim.mark_dirty(ids)
+            self.sim.arrays["qvel"][rows, self.dof_adr : self.dof_adr + 6] = 0.0
+        self.sim.arrays["xfrc_applied"][rows, self.body_id] = 0.0
+        self.sim.mark_dirty(rows)
 
     # -- physical attributes -----------------------------------------------------------------
     def get_mass(self) -> torch.Tensor:

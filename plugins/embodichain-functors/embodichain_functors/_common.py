@@ -12,6 +12,7 @@ import inspect
 import math
 from typing import Any, Callable, Optional, Sequence
 
+import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
@@ -98,10 +99,37 @@ def env_ids_of(env: Any, env_ids: Any) -> torch.Tensor:
 
 def uniform(env: Any, low: Any, high: Any, n: int) -> torch.Tensor:
     """``n`` per-env draws in ``[low, high]`` (float64), shape ``(n,) + broadcast(low, high)``."""
-    low = torch.as_tensor(low, dtype=torch.float64)
-    high = torch.as_tensor(high, dtype=torch.float64)
-    shape = (n,) + torch.broadcast_shapes(low.shape, high.shape)
-    return low + (high - low) * torch.rand(shape, generator=env.generator, dtype=torch.float64)
+    return torch.from_numpy(uniform_np(env, low, high, n))
+
+
+def uniform_np(env: Any, low: Any, high: Any, n: int) -> np.ndarray:
+    """:func:`uniform` as a numpy array (the same draws from ``env.generator``)."""
+    low_np, span = _bounds(low, high)
+    draw = torch.rand((n,) + low_np.shape, generator=env.generator, dtype=torch.float64).numpy()
+    draw *= span
+    draw += low_np
+    return draw
+
+
+_SPANS: dict[tuple[int, int], tuple[Any, Any, np.ndarray, np.ndarray]] = {}
+
+
+def _bounds(low: Any, high: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(low, high - low)`` broadcast to one shape, as float64 numpy; cached for tensors
+    (the ranges of :func:`as_range` are converted once per param)."""
+    key = (id(low), id(high))
+    hit = _SPANS.get(key)
+    if hit is not None and hit[0] is low and hit[1] is high:
+        return hit[2], hit[3]
+    lo = np.asarray(low.numpy() if isinstance(low, torch.Tensor) else low, dtype=np.float64)
+    hi = np.asarray(high.numpy() if isinstance(high, torch.Tensor) else high, dtype=np.float64)
+    lo, hi = np.broadcast_arrays(lo, hi)
+    lo, span = np.array(lo), np.array(hi - lo)  # own contiguous copies, 0-d kept 0-d
+    if isinstance(low, torch.Tensor) and isinstance(high, torch.Tensor):
+        if len(_SPANS) >= _RANGE_CACHE_SIZE:
+            _SPANS.clear()
+        _SPANS[key] = (low, high, lo, span)
+    return lo, span
 
 
 def randint(env: Any, high: int, shape: Sequence[int]) -> torch.Tensor:
@@ -145,7 +173,7 @@ def _parse_range(value: Any, functor: str, param: str, width: Optional[int]) -> 
         for bound in (low, high):
             if bound.dim() > 1 or (bound.dim() == 1 and bound.numel() not in (1, width)):
                 raise ParamError(functor, param, f"each bound needs 1 or {width} values, got {value!r}")
-        low, high = low.reshape(-1).expand(width), high.reshape(-1).expand(width)
+        low, high = low.reshape(-1).expand(width).clone(), high.reshape(-1).expand(width).clone()
     elif low.shape != high.shape:
         raise ParamError(functor, param, f"low and high have different shapes in {value!r}")
     if not (torch.isfinite(low).all() and torch.isfinite(high).all()):

@@ -28,8 +28,7 @@ def joint_ids_of(articulation: Articulation, entity_cfg: Any) -> list[int]:
 
 def mj_joint_ids(articulation: Articulation, joint_ids: list[int]) -> list[int]:
     """MuJoCo joint ids of articulation joints ``joint_ids``."""
-    model = articulation.scene.model
-    return [int(model.dof_jntid[int(articulation.dof_adr[j])]) for j in joint_ids]
+    return articulation.scene.model.dof_jntid[articulation.dof_adr.numpy()[joint_ids]].tolist()
 
 
 def link_body_ids(articulation: Articulation, link_names: Any) -> tuple[list[int], list[str]]:

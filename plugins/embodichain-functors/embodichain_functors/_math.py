@@ -11,11 +11,17 @@ import numpy as np
 
 def euler_to_quat(euler: np.ndarray, degrees: bool = True) -> np.ndarray:
     """(n, 3) extrinsic x-y-z Euler angles to (n, 4) quaternions (``qz * qy * qx``)."""
-    half = np.radians(euler) / 2.0 if degrees else np.asarray(euler) / 2.0
+    half = np.asarray(euler, dtype=np.float64) * (np.pi / 360.0 if degrees else 0.5)
     c, s = np.cos(half), np.sin(half)
-    cx, cy, cz, sx, sy, sz = c[:, 0], c[:, 1], c[:, 2], s[:, 0], s[:, 1], s[:, 2]
-    return np.stack((cz * cy * cx + sz * sy * sx, cz * cy * sx - sz * sy * cx,
-                     cz * sy * cx + sz * cy * sx, sz * cy * cx - cz * sy * sx), axis=-1)
+    cx, cy, cz = c.T
+    sx, sy, sz = s.T
+    cycz, sysz, sycz, cysz = cy * cz, sy * sz, sy * cz, cy * sz
+    out = np.empty(half.shape[:-1] + (4,))
+    out[..., 0] = cx * cycz + sx * sysz
+    out[..., 1] = sx * cycz - cx * sysz
+    out[..., 2] = cx * sycz + sx * cysz
+    out[..., 3] = cx * cysz - sx * sycz
+    return out
 
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -22,9 +22,19 @@ Write = tuple[str, Any, Any]
 
 
 def _numpy(values: Any) -> np.ndarray:
+    if isinstance(values, np.ndarray):
+        return values
     if isinstance(values, torch.Tensor):
         return values.detach().cpu().numpy()
     return np.asarray(values)
+
+
+def rows_of(env_ids: Any) -> np.ndarray:
+    """``env_ids`` as a 1-D int64 numpy array (no copy for a CPU long tensor)."""
+    if isinstance(env_ids, torch.Tensor) and env_ids.dtype == torch.long and env_ids.dim() == 1 \
+            and env_ids.device.type == "cpu":
+        return env_ids.numpy()
+    return _numpy(env_ids).astype(np.int64).reshape(-1)
 
 
 def _is_list(index: Any) -> bool:
@@ -33,6 +43,8 @@ def _is_list(index: Any) -> bool:
 
 def _selector(ids: np.ndarray, index: Any) -> tuple:
     """``field[selector]`` of ``index`` for ``ids``; a list (first) index selects several elements."""
+    if isinstance(index, int):
+        return ids, index
     if _is_list(index):
         return ids[:, None], _numpy(index).astype(np.int64)[None, :]
     if isinstance(index, tuple) and index and _is_list(index[0]):
@@ -58,28 +70,26 @@ def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool
             elements (values then have shape ``(n, k, ...)``).
         set_const: recompute MuJoCo's derived constants when a written field feeds them.
     """
-    ids = _numpy(env_ids).astype(np.int64).reshape(-1)
+    ids = rows_of(env_ids)
     if len(ids) == 0:
         return
-    writes = list(writes)
     if sim.env_models is not None:  # per-env models: the core writes each model
         for name, index, values in writes:
             sim.set_model_field(name, ids, index, _numpy(values))
         return
-    needs_const = False
+    const_fields = []
     for name, index, values in writes:
-        field = sim.batch.expand(name)
-        field[_selector(ids, index)] = _numpy(values)
-        needs_const |= name in _SETCONST
-    if needs_const and set_const:
-        sim.mark_const_dirty(ids)  # one deferred mj_setConst for every write of a reset
+        sim.batch.expand(name)[_selector(ids, index)] = _numpy(values)
+        if name in _SETCONST:
+            const_fields.append((name, index))
+    if const_fields and set_const:
+        sim.mark_const_dirty(ids, const_fields)  # one deferred mj_setConst for every write of a reset
     sim.mark_dirty(ids)
 
 
 def read_model(sim: Any, name: str, env_ids: Any, index: Any) -> np.ndarray:
     """Per-env values ``field[env_ids, index]`` (a copy)."""
-    ids = _numpy(env_ids).astype(np.int64).reshape(-1)
-    return np.array(sim.model_field(name)[_selector(ids, index)])
+    return np.array(sim.model_field(name)[_selector(rows_of(env_ids), index)])
 
 
 def base_model_value(scene: Any, name: str, index: Any) -> np.ndarray:
@@ -92,7 +102,7 @@ def step_envs(env: Any, env_ids: Any, nsteps: int) -> None:
     if nsteps <= 0:
         return
     sim = env.sim
-    ids = _numpy(env_ids).astype(np.int64).reshape(-1)
+    ids = rows_of(env_ids)
     sim.forward(ids)  # stepping starts from up-to-date derived fields
     try:
         sim.batch.step(batch_ids(ids, sim.num_envs), nstep=int(nsteps) * sim.substeps, stage=_VEL)

@@ -48,20 +48,29 @@ def test_uniform_draws_per_env_from_the_env_generator() -> None:
     assert torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
 
 
-def test_write_model_defers_one_set_const_for_the_written_envs(build) -> None:
+def test_write_model_defers_one_constants_update_for_the_written_envs(build, monkeypatch) -> None:
+    from embodichain_core.sim.free_body_const import FreeBodyConstants
+
     env = build()
-    calls = []
+    full, proxy = [], []
     original = env.sim.batch.set_const
-    env.sim.batch.set_const = lambda ids=None: (calls.append(ids), original(ids))[1]
+    env.sim.batch.set_const = lambda ids=None: (full.append(ids), original(ids))[1]
+    update = FreeBodyConstants.update
+    monkeypatch.setattr(FreeBodyConstants, "update", lambda self, ids: (proxy.append(ids), update(self, ids))[1])
     body = env.scene["cube"].body_id
     before = field(env, "body_mass")[:, body]
     write_model(env.sim, torch.tensor([1, 2]), [("body_mass", body, [2.0, 3.0]), ("body_inertia", body, 1e-3),
                                                 ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9)])
     after = field(env, "body_mass")[:, body]
     assert after[1] == 2.0 and after[2] == 3.0 and after[0] == before[0] and after[3] == before[3]
-    assert len(calls) == 0  # deferred: one mj_setConst before the sim is next used
+    assert full == proxy == []  # deferred: one update before the sim is next used
     env.sim.flush_const()
-    assert len(calls) == 1 and list(calls[0]) == [1, 2]
+    # the cube is a free body: its constants come from the small proxy model
+    assert full == [] and len(proxy) == 1 and list(proxy[0]) == [1, 2]
     write_model(env.sim, torch.tensor([0]), [("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.5)])
     env.sim.flush_const()
-    assert len(calls) == 1  # friction feeds no derived constant
+    assert len(full) + len(proxy) == 1  # friction feeds no derived constant
+    link = int(env.robot.body_ids[-1])
+    write_model(env.sim, torch.tensor([3]), [("body_mass", link, 1.0), ("body_mass", body, 1.0)])
+    env.sim.flush_const()
+    assert len(full) == 1 and list(full[0]) == [3]  # a robot link: the whole model's mj_setConst

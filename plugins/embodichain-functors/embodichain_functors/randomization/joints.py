@@ -14,7 +14,7 @@ import torch
 from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.entities.articulation import Articulation
 
-from embodichain_functors._common import ParamError, as_range, entity_of, env_ids_of, uniform, validated
+from embodichain_functors._common import ParamError, as_range, entity_of, env_ids_of, uniform, uniform_np, validated
 from embodichain_functors._entities import joint_ids_of, mj_joint_ids
 from embodichain_functors._sim import write_model
 
@@ -27,9 +27,9 @@ def _joint_param(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, value_range
     ids = env_ids_of(env, env_ids)
     art = env.scene[entity_cfg.uid]
     joints = joint_ids_of(art, entity_cfg)
-    index = [int(art.dof_adr[j]) for j in joints] if field == "dof_damping" else mj_joint_ids(art, joints)
+    index = art.dof_adr.numpy()[joints] if field == "dof_damping" else mj_joint_ids(art, joints)
     low, high = as_range(value_range, name, f"{field.split('_')[1]}_range")
-    sample = uniform(env, low, high, len(ids) * len(index)).reshape(len(ids), len(index)).numpy()
+    sample = uniform_np(env, low, high, len(ids) * len(index)).reshape(len(ids), len(index))
     base = getattr(env.scene.model, field)[index][None, :] if relative else 0.0
     write_model(env.sim, ids, [(field, index, np.maximum(base + sample, 0.0))])
 

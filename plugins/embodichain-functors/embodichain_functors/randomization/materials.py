@@ -25,7 +25,7 @@ from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.shapes import VisualMaterialCfg
 
 from embodichain_functors._common import (
-    ParamError, check_optional_range, check_positive, check_probability, env_ids_of, randint, uniform,
+    ParamError, as_range, check_optional_range, check_positive, check_probability, env_ids_of, randint, uniform_np,
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._sim import write_model
@@ -154,13 +154,13 @@ class randomize_visual_material(CheckedFunctor):
         self.groups = material_groups(env.scene, uid_of(params["entity_cfg"]), type(self).__name__)
         files = texture_files(params["texture_path"], int(params.get("max_textures", 64)), type(self).__name__) \
             if params.get("texture_path") else []
-        self.textures = torch.tensor([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXTURE, texture_name(f))
-                                      for f in files], dtype=torch.long)
+        self.textures = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXTURE, texture_name(f))
+                                  for f in files], dtype=np.int64)
         mats = [m for group in self.groups for m in group]
-        self._mats = mats
-        self._part = torch.tensor([g for g, group in enumerate(self.groups) for _ in group], dtype=torch.long)
-        self._rgba0 = torch.as_tensor(model.mat_rgba[mats], dtype=torch.float64)
-        self._tex0 = torch.as_tensor(model.mat_texid[mats, RGB_ROLE], dtype=torch.long)
+        self._mats = np.asarray(mats, dtype=np.int64)
+        self._part = np.array([g for g, group in enumerate(self.groups) for _ in group], dtype=np.int64)
+        self._rgba0 = np.array(model.mat_rgba[mats], dtype=np.float64)
+        self._tex0 = np.array(model.mat_texid[mats, RGB_ROLE], dtype=np.int64)
 
     def check(self, env: Any, entity_cfg: Any = None, random_texture_prob: Any = 0.5, texture_path: Any = None,
               base_color_range: Any = None, metallic_range: Any = None, roughness_range: Any = None,
@@ -181,21 +181,23 @@ class randomize_visual_material(CheckedFunctor):
                  roughness_range: Any = None, max_textures: int = 64) -> None:
         ids = env_ids_of(env, env_ids)
         n, parts = len(ids), len(self.groups)
-        rgba = self._rgba0.expand(n, -1, -1).clone()
-        texid = self._tex0.expand(n, -1).clone()
+        rgba = np.repeat(self._rgba0[None], n, axis=0)
+        texid = np.repeat(self._tex0[None], n, axis=0)
         if base_color_range is not None:
-            color = uniform(env, base_color_range[0], base_color_range[1], n * parts).reshape(n, parts, 3)
+            low, high = as_range(base_color_range, type(self).__name__, "base_color_range", 3)
+            color = uniform_np(env, low, high, n * parts).reshape(n, parts, 3)
             rgba[..., :3], texid[:] = color[:, self._part], -1
         if len(self.textures) and random_texture_prob > 0:
-            use = (torch.rand(n, parts, generator=env.generator) < random_texture_prob)[:, self._part]
-            pick = self.textures[randint(env, len(self.textures), (n, parts))][:, self._part]
-            texid = torch.where(use, pick, texid)
-            rgba = torch.where(use[..., None], torch.tensor([1.0, 1.0, 1.0, 1.0], dtype=torch.float64), rgba)
-        writes = [("mat_rgba", self._mats, rgba), ("mat_texid", (self._mats, RGB_ROLE), texid.numpy())]
-        for field, rng in (("mat_metallic", metallic_range), ("mat_roughness", roughness_range)):
+            use = (torch.rand(n, parts, generator=env.generator) < random_texture_prob).numpy()[:, self._part]
+            pick = self.textures[randint(env, len(self.textures), (n, parts)).numpy()][:, self._part]
+            texid = np.where(use, pick, texid)
+            rgba = np.where(use[..., None], 1.0, rgba)
+        writes = [("mat_rgba", self._mats, rgba), ("mat_texid", (self._mats, RGB_ROLE), texid)]
+        for field, param, rng in (("mat_metallic", "metallic_range", metallic_range),
+                                  ("mat_roughness", "roughness_range", roughness_range)):
             if rng is not None:
-                draw = uniform(env, rng[0], rng[1], n * parts).reshape(n, parts)
-                writes.append((field, self._mats, draw[:, self._part]))
+                low, high = as_range(rng, type(self).__name__, param)
+                writes.append((field, self._mats, uniform_np(env, low, high, n * parts).reshape(n, parts)[:, self._part]))
         write_model(env.sim, ids, writes)
 
 

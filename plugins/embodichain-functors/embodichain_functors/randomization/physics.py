@@ -8,7 +8,6 @@ import warnings
 from typing import Any, Optional, Union
 
 import numpy as np
-import torch
 
 from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.entities.articulation import Articulation
@@ -16,7 +15,7 @@ from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.entities.rigid_object import RigidObject
 
 from embodichain_functors._common import (
-    ParamError, as_range, entity_of, env_ids_of, uniform, validated,
+    ParamError, as_range, entity_of, env_ids_of, uniform_np, validated,
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._entities import link_body_ids, rigid_bodies
@@ -36,12 +35,13 @@ __all__ = [
 _OBJECTS = (RigidObject, RigidObjectGroup)
 
 
-def _masses(env: Any, ids: torch.Tensor, bodies: list[int], sample: torch.Tensor, relative: bool) -> list:
+def _masses(env: Any, ids: Any, bodies: list[int], sample: np.ndarray, relative: bool) -> list:
     """Writes setting body masses (n, k) and scaling inertias along (same density distribution)."""
     old = read_model(env.sim, "body_mass", ids, bodies)
-    base = env.scene.model.body_mass[bodies][None, :] if relative else 0.0
-    mass = np.maximum(base + sample.numpy(), 1e-6)
-    inertia = read_model(env.sim, "body_inertia", ids, bodies) * (mass / np.maximum(old, 1e-12))[..., None]
+    mass = sample + env.scene.model.body_mass[bodies][None, :] if relative else sample
+    mass = np.maximum(mass, 1e-6)
+    inertia = read_model(env.sim, "body_inertia", ids, bodies)
+    inertia *= (mass / np.maximum(old, 1e-12))[..., None]
     return [("body_mass", bodies, mass), ("body_inertia", bodies, inertia)]
 
 
@@ -75,7 +75,7 @@ def randomize_rigid_object_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     ids = env_ids_of(env, env_ids)
     low, high = as_range(mass_range, "randomize_rigid_object_mass", "mass_range")
     bodies = [obj.body_id for obj in rigid_bodies(env.scene[entity_cfg.uid])]
-    sample = uniform(env, low, high, len(ids)).reshape(len(ids), 1).expand(len(ids), len(bodies))
+    sample = np.repeat(uniform_np(env, low, high, len(ids)).reshape(len(ids), 1), len(bodies), axis=1)
     write_model(env.sim, ids, _masses(env, ids, bodies, sample, relative))
 
 
@@ -122,8 +122,8 @@ class randomize_rigid_object_center_of_mass(CheckedFunctor):
             warnings.warn(f"{type(self).__name__}: {entity_cfg.uid!r} is not dynamic; skipped", RuntimeWarning,
                           stacklevel=2)
             return
-        offset = uniform(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies), 3)
-        com = env.scene.model.body_ipos[bodies][None] + offset.numpy()
+        offset = uniform_np(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies), 3)
+        com = env.scene.model.body_ipos[bodies][None] + offset
         write_model(env.sim, ids, [("body_ipos", bodies, com)])
 
 
@@ -178,7 +178,7 @@ def randomize_articulation_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     writes = []
     for bodies, rng in _link_ranges(art, mass_range, link_names):
         low, high = as_range(rng, "randomize_articulation_mass", "mass_range")
-        sample = uniform(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies))
+        sample = uniform_np(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies))
         writes += _masses(env, ids, bodies, sample, relative)
     write_model(env.sim, ids, writes)
 
@@ -208,7 +208,7 @@ def randomize_rigid_object_friction(env: Any, env_ids: Any, entity_cfg: SceneEnt
     """
     ids = env_ids_of(env, env_ids)
     low, high = as_range(friction_range, "randomize_rigid_object_friction", "friction_range")
-    value = uniform(env, low, high, len(ids)).reshape(len(ids)).numpy()
+    value = uniform_np(env, low, high, len(ids)).reshape(len(ids))
     writes = []
     for obj in rigid_bodies(env.scene[entity_cfg.uid]):
         for gid in obj.geom_ids:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Optional, Sequence
 
+import numpy as np
 import torch
 
 from embodichain_core.managers.cfg import SceneEntityCfg
@@ -20,7 +21,7 @@ from embodichain_core.sim.entities.robot import Robot
 from embodichain_core.utils.math import pose_to_matrix
 
 from embodichain_functors._common import (
-    ParamError, as_range, check_optional_range, entity_of, env_ids_of, uniform, validated,
+    ParamError, as_range, check_optional_range, entity_of, env_ids_of, uniform_np, validated,
 )
 from embodichain_functors._entities import joint_ids_of
 from embodichain_functors._math import euler_to_quat, quat_mul
@@ -36,7 +37,7 @@ __all__ = [
 ]
 
 
-def get_random_pose(env: Any, init_pose: torch.Tensor, position_range: Optional[Sequence] = None,
+def get_random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
                     rotation_range: Optional[Sequence] = None, relative_position: bool = True,
                     relative_rotation: bool = False) -> torch.Tensor:
     """Draw one pose per row of ``init_pose`` ((n, 7) xyz + wxyz); returns (n, 7) float64.
@@ -45,17 +46,27 @@ def get_random_pose(env: Any, init_pose: torch.Tensor, position_range: Optional[
     position adds the draw to it. Without ``rotation_range`` the orientation stays;
     a drawn rotation replaces it, or with ``relative_rotation`` composes with it.
     """
-    pose = torch.as_tensor(init_pose, dtype=torch.float64).numpy().copy()
+    return torch.from_numpy(random_pose(env, init_pose, position_range, rotation_range, relative_position,
+                                        relative_rotation))
+
+
+def random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
+                rotation_range: Optional[Sequence] = None, relative_position: bool = True,
+                relative_rotation: bool = False) -> np.ndarray:
+    """:func:`get_random_pose` as a new (n, 7) float64 numpy array (the hot-path form)."""
+    if isinstance(init_pose, torch.Tensor):
+        init_pose = init_pose.detach().cpu().numpy()
+    pose = np.array(init_pose, dtype=np.float64)
     n = pose.shape[0]
     if position_range is not None:
         low, high = as_range(position_range, "get_random_pose", "position_range", 3)
-        draw = uniform(env, low, high, n).numpy()
+        draw = uniform_np(env, low, high, n)
         pose[:, :3] = pose[:, :3] + draw if relative_position else draw
     if rotation_range is not None:
         low, high = as_range(rotation_range, "get_random_pose", "rotation_range", 3)
-        quat = euler_to_quat(uniform(env, low, high, n).numpy())
+        quat = euler_to_quat(uniform_np(env, low, high, n))
         pose[:, 3:] = quat_mul(pose[:, 3:], quat) if relative_rotation else quat
-    return torch.from_numpy(pose)
+    return pose
 
 
 def _check_pose_ranges(functor: str, position_range: Any, rotation_range: Any) -> None:
@@ -94,8 +105,8 @@ def randomize_rigid_object_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     """
     ids = env_ids_of(env, env_ids)
     obj = env.scene[entity_cfg.uid]
-    init = obj.init_pose.to(torch.float64).expand(len(ids), 7)
-    pose = get_random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
+    init = np.broadcast_to(obj.init_pose.numpy(), (len(ids), 7))
+    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
     obj.set_local_pose(pose, ids)
     obj.clear_dynamics(ids)
     step_envs(env, ids, physics_update_step)
@@ -136,13 +147,13 @@ def randomize_robot_qpos(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, qpo
     """
     ids = env_ids_of(env, env_ids)
     art = env.scene[entity_cfg.uid]
-    joints = _qpos_joints(art, entity_cfg, joint_ids)
+    joints = np.asarray(_qpos_joints(art, entity_cfg, joint_ids), dtype=np.int64)
     low, high = as_range(qpos_range, "randomize_robot_qpos", "qpos_range", len(joints))
-    qpos = uniform(env, low, high, len(ids))
+    qpos = uniform_np(env, low, high, len(ids))
     if relative_qpos:
-        qpos = qpos + art.get_qpos()[ids][:, joints].to(torch.float64)
-    limits = art.get_qpos_limits()[ids][:, joints].to(torch.float64)
-    qpos = torch.maximum(torch.minimum(qpos, limits[..., 1]), limits[..., 0])
+        qpos += env.sim.arrays["qpos"][ids.numpy()[:, None], art.qpos_adr.numpy()[joints][None, :]]
+    limits = art.qpos_limits_array(ids, joints)
+    qpos = np.minimum(np.maximum(qpos, limits[..., 0]), limits[..., 1])
     art.set_qpos(qpos, joint_ids=joints, env_ids=ids, target=False)
     art.clear_dynamics(ids)
 
@@ -245,6 +256,9 @@ def randomize_articulation_root_pose(env: Any, env_ids: Any, entity_cfg: SceneEn
     step_envs(env, ids, physics_update_step)
 
 
+_IDENTITY_POSE = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+
+
 def _check_target(env: Any, position_range: Any = None, rotation_range: Any = None, store_key: str = "target_pose",
                   reference_entity_cfg: Any = None, **_: Any) -> None:
     _check_pose_ranges("randomize_target_pose", position_range, rotation_range)
@@ -282,8 +296,12 @@ def randomize_target_pose(env: Any, env_ids: Any, position_range: Any = None, ro
     ids = env_ids_of(env, env_ids)
     if getattr(env, store_key, None) is None:
         setattr(env, store_key, torch.eye(4).repeat(env.num_envs, 1, 1))
-    init = torch.tensor([0.0, 0, 0, 1, 0, 0, 0], dtype=torch.float64).expand(len(ids), 7)
+    init = np.broadcast_to(_IDENTITY_POSE, (len(ids), 7))
     if reference_entity_cfg is not None:
         init = env.scene[reference_entity_cfg.uid].get_local_pose()[ids].to(torch.float64)
-    pose = get_random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
-    getattr(env, store_key)[ids] = torch.from_numpy(pose_matrix(pose.numpy())).to(torch.float32)
+    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
+    target, mats = getattr(env, store_key), pose_matrix(pose)
+    if target.device.type == "cpu" and not target.requires_grad:
+        target.numpy()[ids.numpy()] = mats
+    else:
+        target[ids] = torch.from_numpy(mats).to(target)

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import torch
 
 from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.entities.light import Light
 
-from embodichain_functors._common import check_optional_range, entity_of, env_ids_of, uniform, validated
-from embodichain_functors._sim import write_model
+from embodichain_functors._common import as_range, check_optional_range, entity_of, env_ids_of, uniform_np, validated
 from embodichain_functors.randomization.cameras import randomize_camera_extrinsics, randomize_camera_intrinsics
 from embodichain_functors.randomization.materials import (
     randomize_visual_material,
@@ -42,14 +42,20 @@ def _check_light(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = Non
     check_optional_range(direction_range, name, "direction_range", 3)
 
 
-def _light_draws(env: Any, light: Light, n: int, ranges: dict) -> dict[str, torch.Tensor]:
+_LIGHT_PARAMS = {"pos": ("position_range", 3), "color": ("color_range", 3), "intensity": ("intensity_range", None),
+                 "dir": ("direction_range", 3)}
+
+
+def _light_draws(env: Any, light: Light, n: int, ranges: dict) -> dict[str, np.ndarray]:
     """One draw per env (one shared draw for a global light) of each given range."""
     rows = 1 if light.is_global else n
     out = {}
     for key, rng in ranges.items():
         if rng is not None:
-            draw = uniform(env, rng[0], rng[1], rows)
-            out[key] = draw.expand((n,) + draw.shape[1:]) if light.is_global else draw
+            param, width = _LIGHT_PARAMS[key]
+            low, high = as_range(rng, "randomize_light", param, width)
+            draw = uniform_np(env, low, high, rows)
+            out[key] = np.broadcast_to(draw, (n,) + draw.shape[1:]) if light.is_global else draw
     return out
 
 
@@ -84,20 +90,11 @@ def randomize_light(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position
     draws = _light_draws(env, light, len(ids), {
         "pos": position_range if point_like else None, "color": color_range, "intensity": intensity_range,
         "dir": direction_range if cfg.light_type != "point" else None})
-    writes = []
-    if "pos" in draws:
-        pos = light.init_pos.to(torch.float64) + draws["pos"]
-        writes += [("light_pos", light.light_id, pos), ("light_pos0", light.light_id, pos)]
-    if "dir" in draws:
-        direction = torch.as_tensor(cfg.direction, dtype=torch.float64) + draws["dir"]
-        direction = direction / direction.norm(dim=-1, keepdim=True).clamp_min(1e-9)
-        writes += [("light_dir", light.light_id, direction), ("light_dir0", light.light_id, direction)]
-    # world lights: light_pos0/light_dir0 are what mj_setConst would derive, so skip it
-    write_model(env.sim, ids, writes, set_const=False)
-    if "color" in draws:
-        light.set_color(draws["color"].clamp(0.0, 1.0), ids)
-    if "intensity" in draws:
-        light.set_intensity((float(cfg.intensity) + draws["intensity"]).clamp_min(0.0), ids)
+    pos = light.init_pos.numpy() + draws["pos"] if "pos" in draws else None
+    direction = np.asarray(cfg.direction, dtype=np.float64) + draws["dir"] if "dir" in draws else None
+    color = np.minimum(np.maximum(draws["color"], 0.0), 1.0) if "color" in draws else None
+    intensity = np.maximum(draws["intensity"] + float(cfg.intensity), 0.0) if "intensity" in draws else None
+    light.set_properties(ids, position=pos, color=color, intensity=intensity, direction=direction)
 
 
 randomize_light.embodichain_category = VISUAL  # type: ignore[attr-defined]

@@ -1,0 +1,129 @@
+"""The proxy-model path for free bodies' inertial constants matches a full mj_setConst."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from embodichain_core.sim.batch_sim import BatchSim
+from embodichain_core.sim.free_body_const import eligible_bodies
+
+SCENE = """
+<mujoco>
+  <worldbody>
+    <light name="lamp" pos="0 0 2" mode="{light_mode}"/>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+    <body name="arm" pos="0 0 0.1">
+      <joint name="hinge" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+    </body>
+    <body name="box" pos="0.5 0 0.1">
+      <freejoint/>
+      <geom type="box" size="0.05 0.04 0.03"/>
+      <geom type="sphere" size="0.02" pos="0.05 0 0"/>
+    </body>
+    <body name="ball" pos="-0.5 0 0.2" quat="0.9 0.1 0.3 0.2">
+      <freejoint/>
+      <geom type="sphere" size="0.05"/>
+    </body>
+    <body name="chain" pos="0 0.5 0.2">
+      <freejoint/>
+      <geom type="box" size="0.03 0.03 0.03"/>
+      <body name="tail" pos="0.1 0 0">
+        <joint axis="0 1 0"/>
+        <geom type="box" size="0.02 0.02 0.02"/>
+      </body>
+    </body>
+    <body name="table" mocap="true" pos="1 1 0">
+      <geom type="box" size="0.2 0.2 0.2"/>
+    </body>
+  </worldbody>
+  <actuator><position joint="hinge" kp="10" dampratio="1"/></actuator>
+</mujoco>
+"""
+
+DERIVED = ("body_invweight0", "body_subtreemass", "body_sameframe", "dof_M0", "dof_invweight0", "dof_length",
+           "bvh_aabb", "geom_sameframe", "actuator_acc0", "tendon_invweight0")
+
+
+def _spec(light_mode: str = "fixed") -> mujoco.MjSpec:
+    spec = mujoco.MjSpec.from_string(SCENE.format(light_mode=light_mode))
+    for body in spec.bodies:
+        body.simple = False  # centres of mass move
+    return spec
+
+
+def _sims(light_mode: str = "fixed") -> tuple[BatchSim, BatchSim, mujoco.MjModel]:
+    spec = _spec(light_mode)
+    model = spec.compile()
+    fast = BatchSim(model, 6, nthread=1, spec=spec)
+    full = BatchSim(model, 6, nthread=1)  # no spec: always the full mj_setConst
+    return fast, full, model
+
+
+def _write(sims: tuple[BatchSim, ...], model: mujoco.MjModel, name: str, env_ids: list[int], rng: np.random.Generator):
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+    mass = rng.uniform(0.1, 3.0, len(env_ids))
+    inertia = rng.uniform(1e-4, 1e-2, (len(env_ids), 3))
+    com = rng.uniform(-0.02, 0.02, (len(env_ids), 3))
+    for sim in sims:
+        sim.set_model_field("body_mass", env_ids, body, mass)
+        sim.set_model_field("body_inertia", env_ids, body, inertia)
+        sim.set_model_field("body_ipos", env_ids, body, com)
+
+
+def _derived(sim: BatchSim) -> dict[str, np.ndarray]:
+    return {name: np.array(sim.model_field(name)) for name in DERIVED}
+
+
+def test_only_free_leaf_bodies_without_actuators_are_eligible():
+    model = _spec().compile()
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in eligible_bodies(model)]
+    assert names == ["box", "ball"]
+    assert eligible_bodies(_spec("trackcom").compile()) == []  # a light follows the scene's centre of mass
+
+
+def test_fast_path_matches_full_set_const(monkeypatch):
+    fast, full, model = _sims()
+    calls = []
+    original = fast.batch.set_const
+    monkeypatch.setattr(fast.batch, "set_const", lambda ids=None: (calls.append(ids), original(ids))[1])
+    rng = np.random.default_rng(0)
+    for round_ in range(3):
+        _write((fast, full), model, "box", [0, 2, 3], rng)
+        _write((fast, full), model, "ball", [1, 2, 5] if round_ else [0, 1, 2, 3, 4, 5], rng)
+        fast.flush_const()
+        full.flush_const()
+        got, want = _derived(fast), _derived(full)
+        for name in DERIVED:
+            np.testing.assert_allclose(got[name], want[name], rtol=1e-12, atol=1e-14, err_msg=name)
+    assert calls == []  # the whole model's mj_setConst never ran
+    for sim in (fast, full):  # the objects fall onto the floor: contacts use the constants
+        sim.step(60)
+    np.testing.assert_allclose(fast.qpos.numpy(), full.qpos.numpy(), rtol=0, atol=1e-9)
+
+
+def test_other_writes_take_the_full_path(monkeypatch):
+    fast, full, model = _sims()
+    calls = []
+    original = fast.batch.set_const
+    monkeypatch.setattr(fast.batch, "set_const", lambda ids=None: (calls.append(ids), original(ids))[1])
+    rng = np.random.default_rng(1)
+    _write((fast, full), model, "chain", [0, 1], rng)  # has a child body
+    _write((fast, full), model, "box", [2], rng)
+    fast.flush_const()
+    full.flush_const()
+    assert len(calls) == 1 and list(calls[0]) == [0, 1]
+    got, want = _derived(fast), _derived(full)
+    for name in DERIVED:
+        np.testing.assert_allclose(got[name], want[name], rtol=1e-12, atol=1e-14, err_msg=name)
+
+
+@pytest.mark.parametrize("field,index", [("geom_size", 0), ("body_mass", "arm")])
+def test_non_inertial_or_robot_fields_are_not_fast(field, index):
+    fast, _, model = _sims()
+    if index == "arm":
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "arm")
+    assert not fast._free_body_field(field, index)
+    assert fast._free_body_field("body_ipos", (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"),))
