@@ -160,7 +160,8 @@ class BatchSim:
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
 
-        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape``. A field that
+        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape`` (a list ``index``
+        selects several elements: values ``(n, k, ...)``). A field that
         MuJoCo derives constants from schedules one ``mj_setConst`` for these envs
         (before their next forward or step) unless ``set_const=False`` (the caller
         writes the derived values itself).
@@ -172,9 +173,10 @@ class BatchSim:
             for k, env in enumerate(ids):
                 getattr(self.env_models[env], name)[index] = vals[k]
             self.batch.set_models(self.env_models)
+        elif isinstance(index, (list, np.ndarray)):  # several elements: (n, k, ...) values
+            self.batch.expand(name)[ids[:, None], np.asarray(index, dtype=np.int64)[None, :]] = values
         else:
-            field = self.batch.expand(name)
-            field[(ids,) + (index if isinstance(index, tuple) else (index,))] = values
+            self.batch.expand(name)[(ids,) + (index if isinstance(index, tuple) else (index,))] = values
         if set_const and name in _SETCONST_INPUTS:
             self.mark_const_dirty(ids, [(name, index)])
 

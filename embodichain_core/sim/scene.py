@@ -80,17 +80,36 @@ class Scene:
             raise ValueError(f"{uid!r} is not a mesh rigid object; only those can swap meshes per env")
         add_variants(self._b(), uid, [str(f) for f in files])
 
+    def reserve_scale_variants(self, uid: str, factors: list) -> list[str]:
+        """Before build: let mesh object ``uid`` take its mesh scaled by any of ``factors``
+        ((sx, sy, sz) each) per env; returns the variant keys for :meth:`set_mesh_variants`."""
+        from embodichain_core.sim.variants import add_variants
+
+        record = self._b().record(uid)
+        if record.kind not in ("rigid_object", "background") or "mesh_file" not in record.extra:
+            raise ValueError(f"{uid!r} is not a mesh rigid object; only those have scale variants")
+        return add_variants(self._b(), uid, [], factors=[tuple(f) for f in factors])
+
     def set_mesh_variant(self, uid: str, fpath: str, env_ids: Any = None) -> None:
         """After build: ``env_ids`` simulate and render ``uid`` with the mesh ``fpath``
         (reserved before build). The object's body keeps its pose."""
         from embodichain_core.sim.entities.base import env_index
-        from embodichain_core.sim.variants import apply_variant
 
         ids = env_index(env_ids, self.num_envs)
-        apply_variant(self, uid, str(fpath), ids)
+        self.set_mesh_variants(uid, [str(fpath)] * len(ids), ids)
+
+    def set_mesh_variants(self, uid: str, keys: list[str], env_ids: Any = None) -> None:
+        """After build: env ``env_ids[i]`` uses variant ``keys[i]`` (a reserved file or scale key)."""
+        from embodichain_core.sim.entities.base import env_index
+        from embodichain_core.sim.variants import apply_variants
+
+        ids = env_index(env_ids, self.num_envs)
+        if len(keys) != len(ids):
+            raise ValueError(f"{uid}: {len(keys)} variant keys for {len(ids)} envs")
+        apply_variants(self, uid, [str(k) for k in keys], ids)
         current = self.current_mesh.setdefault(uid, [self.builder.record(uid).extra.get("mesh_file")] * self.num_envs)
-        for env in ids.tolist():
-            current[env] = str(fpath)
+        for env, key in zip(ids.tolist(), keys):
+            current[env] = str(key)
 
     def _b(self) -> SceneBuilder:
         if self.builder is None or self.model is not None:

@@ -10,15 +10,23 @@ Why not one compiled model per variant (``Batch.set_models``)? MuJoCo sizes
 MjData by the meshes' BVHs and by the sparsity of the mass matrix, which differ
 between meshes, and a batch needs one layout.
 
+A variant is another mesh file or the object's own mesh scaled by a factor (a mesh
+cannot be rescaled per env otherwise: its vertices are shared by every env). A
+scaled variant keeps the object's mass; its inertia and centre of mass follow the
+scaled shape.
+
 Example:
     >>> scene.reserve_mesh_variants("fork", ["a.ply", "b.ply"])   # before build
+    >>> keys = scene.reserve_scale_variants("mug", [(0.8, 0.8, 0.8), (1.2, 1.2, 1.2)])
     >>> scene.build()
     >>> scene.set_mesh_variant("fork", "b.ply", env_ids=[0, 2])  # any time after
+    >>> scene.set_mesh_variants("mug", [keys[0], keys[1]], env_ids=[0, 1])  # one per env
 """
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from typing import Any, Optional, Sequence
 
 import mujoco
 import numpy as np
@@ -30,8 +38,9 @@ PARKED = 1 << 30  # collides with nothing, but compiled as a colliding geom
 HIDDEN_MATERIAL = "embodichain/hidden"
 
 
-def load_variant_parts(cfg: Any, fpath: str) -> tuple[Any, list]:
-    """Visual mesh and collision parts of ``fpath`` with ``cfg``'s scale and options."""
+def load_variant_parts(cfg: Any, fpath: str, factor: Optional[Sequence[float]] = None) -> tuple[Any, list]:
+    """Visual mesh and collision parts of ``fpath`` with ``cfg``'s scale and options,
+    times ``factor`` (the parts are scaled, not decomposed again)."""
     from embodichain_core.sim.convex import collision_parts
     from embodichain_core.sim.mesh import load_mesh
 
@@ -39,11 +48,28 @@ def load_variant_parts(cfg: Any, fpath: str) -> tuple[Any, list]:
     mesh = load_mesh(fpath, scale=tuple(cfg.body_scale), compute_uv=shape.compute_uv,
                      project_direction=tuple(shape.project_direction))
     hulls = cfg.max_convex_hull_num if cfg.max_convex_hull_num is not None else shape.max_convex_hull_num
-    return mesh, collision_parts(mesh, max_convex_hull_num=int(hulls))
+    parts = collision_parts(mesh, max_convex_hull_num=int(hulls))
+    if factor is None:
+        return mesh, parts
+    return _scaled(mesh, factor), [_scaled(p, factor) for p in parts]
 
 
-def add_variants(builder: Any, uid: str, files: list[str]) -> None:
-    """Add the geoms of every file in ``files`` (disabled) to ``uid``'s body."""
+def _scaled(mesh: Any, factor: Sequence[float]) -> Any:
+    f = np.asarray(factor, dtype=np.float64)
+    normals = None if mesh.normals is None else mesh.normals / f
+    if normals is not None:
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    return dataclasses.replace(mesh, vertices=mesh.vertices * f, normals=normals)
+
+
+def scale_key(factor: Sequence[float]) -> str:
+    """The variant key of the object's own mesh scaled by ``factor``."""
+    return "scale:" + "x".join(f"{float(v):.6g}" for v in factor)
+
+
+def add_variants(builder: Any, uid: str, files: list[str], factors: Optional[list[Sequence[float]]] = None) -> list[str]:
+    """Add the geoms of every file in ``files`` (or of the object's mesh scaled by each of
+    ``factors``) to ``uid``'s body, disabled; return their keys."""
     from embodichain_core.sim.builder_objects import add_collision_geoms, add_mesh_asset
 
     record = builder.record(uid)
@@ -55,9 +81,13 @@ def add_variants(builder: Any, uid: str, files: list[str]) -> None:
     _hidden_material(builder.spec)
     body = builder.spec.body(uid)
     body.simple = False  # the inertial frame changes per env: keep a general mass matrix
-    for k, fpath in enumerate(f for f in files if f not in variants):
+    items = [(f, f, None) for f in files] if factors is None else \
+        [(scale_key(f), record.extra["mesh_file"], tuple(float(v) for v in f)) for f in factors]
+    for key, fpath, factor in items:
+        if key in variants:
+            continue
         name = f"{uid}/v{len(variants)}"
-        mesh, parts = load_variant_parts(cfg, fpath)
+        mesh, parts = load_variant_parts(cfg, fpath, factor)
         asset = add_mesh_asset(builder.spec, f"{name}/visual", mesh)
         vgeom = body.add_geom(name=f"{name}/visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=asset,
                               material=HIDDEN_MATERIAL, rgba=[0, 0, 0, 0])
@@ -68,8 +98,11 @@ def add_variants(builder: Any, uid: str, files: list[str]) -> None:
             geom = builder.spec.geom(gname)
             geom.contype, geom.conaffinity = PARKED, 0
             geom.mass, geom.density = 0.0, 0.0
-        variants[fpath] = {"visual": [vgeom.name], "collision": collision, "parts": parts}
-    builder.on_compile(lambda model: _inertials(builder, uid, model))
+        variants[key] = {"visual": [vgeom.name], "collision": collision, "parts": parts, "factor": factor}
+    if not record.extra.get("variant_hook"):
+        record.extra["variant_hook"] = True
+        builder.on_compile(lambda model: _inertials(builder, uid, model))
+    return [key for key, _, _ in items]
 
 
 def _hidden_material(spec: mujoco.MjSpec) -> None:
@@ -78,46 +111,57 @@ def _hidden_material(spec: mujoco.MjSpec) -> None:
 
 
 def _inertials(builder: Any, uid: str, model: mujoco.MjModel) -> None:
-    """Each variant's mass, centre of mass and inertia, as MuJoCo computes them."""
+    """Each variant's mass, centre of mass and inertia, as MuJoCo computes them (a scaled
+    variant keeps the object's mass: its inertia scales along)."""
     from embodichain_core.sim.builder_objects import add_collision_geoms
 
     record = builder.record(uid)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, uid)
-    for fpath, variant in record.extra["variants"].items():
+    mass0 = None
+    for variant in record.extra["variants"].values():
         if "parts" not in variant:
             variant["inertial"] = tuple(np.array(getattr(model, f)[base]) for f in _INERTIAL)
+            mass0 = float(model.body_mass[base])
             continue
         spec = mujoco.MjSpec()
         body = spec.worldbody.add_body(name="b")
         body.add_freejoint()
         add_collision_geoms(spec, body, "b", variant["parts"], record.cfg)
         small = spec.compile()
-        variant["inertial"] = tuple(np.array(getattr(small, f)[1]) for f in _INERTIAL)
+        mass, ipos, iquat, inertia = (np.array(getattr(small, f)[1]) for f in _INERTIAL)
+        if variant.get("factor") is not None and mass0 is not None:
+            inertia, mass = inertia * (mass0 / mass), np.array(mass0)
+        variant["inertial"] = (mass, ipos, iquat, inertia)
 
 
 _INERTIAL = ("body_mass", "body_ipos", "body_iquat", "body_inertia")
 
 
-def apply_variant(scene: Any, uid: str, fpath: str, env_ids: Any) -> None:
-    """Enable ``fpath``'s geoms (and inertia) for ``env_ids``; disable the others."""
+def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> None:
+    """Enable variant ``keys[i]`` (geoms and inertia) in env ``env_ids[i]``; disable the others."""
     record = scene.builder.record(uid)
     variants = record.extra.get("variants", {})
-    if fpath not in variants:
-        raise ValueError(f"{uid}: {fpath!r} was not reserved; call scene.reserve_mesh_variants({uid!r}, files) "
-                         f"before build (reserved: {list(variants)})")
+    names = list(variants)
+    for key in set(keys):
+        if key not in variants:
+            raise ValueError(f"{uid}: {key!r} was not reserved; call scene.reserve_mesh_variants({uid!r}, files) "
+                             f"or reserve_scale_variants before build (reserved: {names})")
     model, sim = scene.model, scene.sim
-    ids = lambda names: [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) for n in names]
-    mat = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_MATERIAL, record.extra["material"])
-    hidden = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_MATERIAL, HIDDEN_MATERIAL)
-    for name, variant in variants.items():
-        on = name == fpath
-        for g in ids(variant["collision"]):
-            sim.set_model_field("geom_contype", env_ids, g, 1 if on else PARKED)
-            sim.set_model_field("geom_conaffinity", env_ids, g, ALL_BITS if on else 0)
-        for g in ids(variant["visual"]):
-            sim.set_model_field("geom_matid", env_ids, g, mat if on else hidden)
-            # MuJoCo's default geom rgba lets the material's colour show
-            sim.set_model_field("geom_rgba", env_ids, g, [0.5, 0.5, 0.5, 1] if on else [0, 0, 0, 0])
-    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, uid)
-    for field, value in zip(_INERTIAL, variants[fpath]["inertial"]):
-        sim.set_model_field(field, env_ids, body, value)
+    choice = np.array([names.index(k) for k in keys], dtype=np.int64)
+    find = lambda kind, name: mujoco.mj_name2id(model, kind, name)
+    mat = find(mujoco.mjtObj.mjOBJ_MATERIAL, record.extra["material"])
+    hidden = find(mujoco.mjtObj.mjOBJ_MATERIAL, HIDDEN_MATERIAL)
+    for part, fields in (("collision", (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))),
+                         ("visual", (("geom_matid", mat, hidden),))):
+        geoms = [(v, find(mujoco.mjtObj.mjOBJ_GEOM, g)) for v, name in enumerate(names) for g in variants[name][part]]
+        on = choice[:, None] == np.array([v for v, _ in geoms])[None, :]
+        index = [g for _, g in geoms]
+        for field, yes, no in fields:
+            sim.set_model_field(field, env_ids, index, np.where(on, yes, no))
+        if part == "visual":  # MuJoCo's default geom rgba lets the material's colour show
+            sim.set_model_field("geom_rgba", env_ids, index, np.where(on[..., None], [0.5, 0.5, 0.5, 1.0], 0.0))
+    body = find(mujoco.mjtObj.mjOBJ_BODY, uid)
+    for k, field in enumerate(_INERTIAL):
+        stacked = np.stack([np.asarray(variants[name]["inertial"][k]) for name in names])
+        sim.set_model_field(field, env_ids, body, stacked[choice])
+

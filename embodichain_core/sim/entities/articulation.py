@@ -66,6 +66,7 @@ class Articulation(Entity):
         self._dof_adr_np = self.dof_adr.numpy().copy()
         self._all_joints = np.arange(self.dof, dtype=np.int64)
         self._shared_limits: np.ndarray | None = None
+        self._link_body: dict[str, int] = {}
 
     def _init_root(self, model: mujoco.MjModel) -> None:
         jnt = model.body_jntadr[self.root_body_id]
@@ -229,8 +230,11 @@ class Articulation(Entity):
     # -- links and root -------------------------------------------------------------------------------
     def get_link_pose(self, link_name: str, env_ids: Any = None, to_matrix: bool = False) -> torch.Tensor:
         """Pose of one link in the env frame, (n, 7) or (n, 4, 4)."""
-        ids, names = self.find_bodies(link_name)
-        body = int(self.body_ids[ids[0]])
+        body = self._link_body.get(link_name) if isinstance(link_name, str) else None
+        if body is None:  # resolve a name (regex) once
+            body = int(self.body_ids[self.find_bodies(link_name)[0][0]])
+            if isinstance(link_name, str):
+                self._link_body[link_name] = body
         env = self._ids(env_ids)
         pose = self._out(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), dim=-1))
         return pose_to_matrix(pose) if to_matrix else pose

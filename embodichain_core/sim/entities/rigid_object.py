@@ -8,13 +8,12 @@ import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.entities.base import Entity, as_values
+from embodichain_core.sim.entities.base import Entity, as_array, as_values
 from embodichain_core.utils.math import (
     as_pose7,
     init_pos_from_cfg,
     init_quat_from_cfg,
     pose_to_matrix,
-    quat_conjugate,
     quat_rotate,
 )
 
@@ -109,11 +108,12 @@ class RigidObject(Entity):
         if not self.is_dynamic:
             return
         ids = self._ids(env_ids)
-        vel = as_values(velocity, len(ids), 6)
-        quat = self.sim.qpos[ids, self.qpos_adr + 3 : self.qpos_adr + 7]
-        local = quat_rotate(quat_conjugate(quat), vel[:, 3:])
-        self.sim.qvel[ids, self.dof_adr : self.dof_adr + 6] = torch.cat((vel[:, :3], local), dim=-1)
-        self.sim.mark_dirty(ids)
+        rows, vel = ids.numpy(), as_array(velocity, len(ids), 6)
+        quat = self.sim.arrays["qpos"][rows, self.qpos_adr + 3 : self.qpos_adr + 7]
+        qvel = self.sim.arrays["qvel"]
+        qvel[rows, self.dof_adr : self.dof_adr + 3] = vel[:, :3]
+        qvel[rows, self.dof_adr + 3 : self.dof_adr + 6] = _rotate_inverse(quat, vel[:, 3:])
+        self.sim.mark_dirty(rows)
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero velocities and applied wrenches of ``env_ids``."""
@@ -167,3 +167,19 @@ class RigidObject(Entity):
         ids = self._ids(env_ids)
         self.set_local_pose(self.init_pose.expand(len(ids), 7), ids)
         self.clear_dynamics(ids)
+
+
+def _rotate_inverse(quat: np.ndarray, vec: np.ndarray) -> np.ndarray:
+    """Rotate (n, 3) world vectors into the frames of (n, 4) unit wxyz quaternions."""
+    w, u = quat[:, :1], -quat[:, 1:]  # the conjugate rotation
+    t = 2.0 * _cross(u, vec)
+    return vec + w * t + _cross(u, t)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (n, 3) arrays (``np.cross`` costs ~10 us of overhead)."""
+    out = np.empty_like(b)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out

@@ -26,7 +26,6 @@ EVENTS = [
     (rand.randomize_joint_stiffness, {"entity_cfg": E(uid="arm"), "stiffness_range": [-2, -1]}, "stiffness_range"),
     (rand.randomize_joint_drive, {"entity_cfg": E(uid="arm", joint_names=["finger_joint2"]),
                                   "stiffness_range": [1, 2]}, "entity_cfg"),
-    (rand.randomize_rigid_objects_scale, {"entity_cfgs": [], "scale_factor_range": [1, 2]}, "entity_cfgs"),
     (rand.randomize_robot_eef_pose, {"entity_cfg": E(uid="cube")}, "entity_cfg"),
     (rand.randomize_camera_extrinsics, {"entity_cfg": E(uid="cube"), "pos_range": [[0] * 3, [1] * 3]}, "entity_cfg"),
 ]
@@ -49,6 +48,9 @@ CLASSES = [
     (rand.randomize_visual_material, {"entity_cfg": E(uid="cube"), "max_textures": 0}, "max_textures"),
     (rand.set_rigid_object_group_visual_material, {"entity_cfg": E(uid="cube"), "mat_cfg": {}}, "entity_cfg"),
     (rand.set_rigid_object_visual_material, {"entity_cfg": E(uid="cube"), "mat_cfg": 3}, "mat_cfg"),
+    (rand.randomize_rigid_objects_scale, {"entity_cfgs": [], "scale_factor_range": [1, 2]}, "entity_cfgs"),
+    (rand.randomize_rigid_object_scale, {"entity_cfg": E(uid="cube"), "scale_factor_range": [1, 2],
+                                         "mesh_scale_levels": 0}, "mesh_scale_levels"),
     (rand.planner_grid_cell_sampler, {"position_range": [[0, 0], [1, 1]], "reference_height": 0.1,
                                       "object_uid_list": ["arm"], "grid_size": [2, 2]}, "object_uid_list"),
 ]

@@ -1,5 +1,6 @@
 """Geometry randomization: per-env scale of primitive objects (size, collision bounds,
-inertia), visible to the body-scale observation; meshes are rejected."""
+inertia) and of mesh objects (precompiled scaled copies), visible to the body-scale
+observation."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import torch
 from functors_testlib import apply, event, field, others, write_box_obj
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.managers import ObservationCfg
+from embodichain_core.managers import EventCfg, ObservationCfg
 from embodichain_core.managers import SceneEntityCfg as E
 from embodichain_core.sim.cfg import RigidObjectCfg
 from embodichain_core.sim.shapes import MeshCfg
@@ -60,13 +61,57 @@ def test_several_objects_with_a_shared_sample(build) -> None:
     assert torch.allclose(c1[IDS] / c0[IDS], b1[IDS] / b0[IDS])
 
 
-def test_mesh_objects_are_rejected(build, tmp_path) -> None:
-    mesh = RigidObjectCfg(uid="box", shape=MeshCfg(fpath=write_box_obj(str(tmp_path / "b.obj"), (0.02, 0.02, 0.02))),
-                          init_pos=(0.3, -0.3, 0.02))
-    with pytest.raises(ConfigError, match="not a primitive shape") as err:
-        build(rigid_object=[mesh], events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="box"),
-                                                scale_factor_range=[1, 2]))
-    assert err.value.path == "env.events.ev.params.entity_cfg"
+def _mesh_box(tmp_path, uid: str = "box", z: float = 0.02) -> RigidObjectCfg:
+    path = write_box_obj(str(tmp_path / f"{uid}.obj"), (0.02, 0.02, 0.02))
+    return RigidObjectCfg(uid=uid, shape=MeshCfg(fpath=path), init_pos=(0.3, -0.3, z))
+
+
+def test_mesh_object_takes_the_nearest_precompiled_scale(build, tmp_path) -> None:
+    env = build(rigid_object=[_mesh_box(tmp_path)],
+                events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="box"),
+                             scale_factor_range=[1.0, 3.0], mesh_scale_levels=4),
+                observations={"s": ObservationCfg(func=obs.get_object_body_scale, mode="add", name="object/scale",
+                                                  params={"entity_cfg": E(uid="box")})})
+    box = env.scene["box"]
+    mass0, inertia0 = field(env, "body_mass")[:, box.body_id], field(env, "body_inertia")[:, box.body_id]
+    apply(env, [0, 1, 2, 3])
+    scale = env.get_obs()["object"]["scale"][:, 0].double()
+    levels = torch.tensor([1.25, 1.75, 2.25, 2.75], dtype=torch.float64)  # bin centres of [1, 3]
+    assert all(torch.isclose(levels, s).any() for s in scale)
+    assert torch.allclose(field(env, "body_mass")[:, box.body_id], mass0)  # the mass is kept
+    inertia = field(env, "body_inertia")[:, box.body_id]
+    assert torch.allclose(inertia, inertia0 * scale[:, None] ** 2, rtol=1e-4)
+    env.scene["box"].set_local_pose(torch.tensor([[0.3, -0.3, 0.2, 1.0, 0, 0, 0]]).expand(4, 7))
+    for _ in range(40):
+        env.step(torch.zeros(env.action_space.shape))
+    z = env.scene["box"].get_local_pose()[:, 2].double()
+    assert torch.allclose(z, 0.02 * scale, atol=3e-3)  # rests on its scaled half height
+
+
+def test_mesh_scale_per_axis_uses_a_grid(build, tmp_path) -> None:
+    env = build(rigid_object=[_mesh_box(tmp_path)],
+                events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="box"),
+                             scale_factor_range=[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]], same_scale_all_axes=False,
+                             mesh_scale_levels=8))
+    variants = env.scene.builder.records["box"].extra["variants"]
+    assert len([v for v in variants.values() if v.get("factor")]) == 8  # 2 values per axis
+    apply(env, [0, 1, 2, 3])
+    keys = set(env.scene.current_mesh["box"])
+    assert keys <= {k for k, v in variants.items() if v.get("factor")}
+
+
+def test_mesh_scaling_and_mesh_swapping_do_not_combine(build, tmp_path) -> None:
+    import embodichain_functors.events as events
+
+    folder = tmp_path / "meshes"
+    folder.mkdir()
+    for k in range(2):
+        write_box_obj(str(folder / f"m{k}.obj"), (0.02 + 0.01 * k,) * 3)
+    evs = {**event(events.replace_assets_from_group, entity_cfg=E(uid="box"), folder_path=str(folder)),
+           "scale": EventCfg(func=rand.randomize_rigid_object_scale, mode="test",
+                             params={"entity_cfg": E(uid="box"), "scale_factor_range": [1, 2]})}
+    with pytest.raises(ConfigError, match="also swaps meshes"):
+        build(rigid_object=[_mesh_box(tmp_path)], events=evs)
 
 
 @pytest.mark.parametrize("rng", [[2.0, 1.0], [0.0, 1.0], [[1, 1], [2, 2]]])
