@@ -24,6 +24,9 @@ import mujoco.batch as mjbatch
 import numpy as np
 import torch
 
+from embodichain_core.sim.env_rows import batch_ids as _batch_ids
+from embodichain_core.sim.env_rows import index_bodies as _index_bodies
+from embodichain_core.sim.env_rows import np_ids as _np_ids
 from embodichain_core.sim.free_body_const import INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
 
 STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
@@ -189,19 +192,27 @@ class BatchSim:
         (:mod:`embodichain_core.sim.free_body_const`); without it the full one runs.
         """
         ids = _np_ids(env_ids, self.num_envs)
-        if fields is not None and all(self._free_body_field(name, index) for name, index in fields):
+        if fields is not None and self._all_free_body_fields(fields):
             self._inertial_dirty[ids] = True
         else:
             self._const_dirty[ids] = True
         self._const_pending = True
+
+    def _all_free_body_fields(self, fields: Iterable[tuple[str, Any]]) -> bool:
+        for name, index in fields:
+            if not self._free_body_field(name, index):
+                return False
+        return True
 
     def _free_body_field(self, name: str, index: Any) -> bool:
         if name not in INERTIAL_FIELDS or self._spec is None or self.env_models is not None:
             return False
         if self._free_bodies is None:
             self._free_bodies = frozenset(eligible_bodies(self.model))
+        if isinstance(index, (int, np.integer)):
+            return int(index) in self._free_bodies
         bodies = _index_bodies(index)
-        return bodies is not None and all(b in self._free_bodies for b in bodies)
+        return bodies is not None and self._free_bodies.issuperset(bodies)
 
     def flush_const(self) -> None:
         """Recompute MuJoCo's derived constants once for every env whose inputs changed.
@@ -289,35 +300,3 @@ class BatchSim:
             self.forward([int(env_id)])
         return self.batch.get_data(int(env_id), data)
 
-
-def _np_ids(env_ids: Any, n: int) -> np.ndarray:
-    if isinstance(env_ids, np.ndarray) and env_ids.dtype == np.int64 and env_ids.ndim == 1:
-        return env_ids
-    if isinstance(env_ids, torch.Tensor):
-        if env_ids.dtype == torch.long and env_ids.device.type == "cpu" and env_ids.dim() == 1:
-            return env_ids.numpy()  # the common case: ids from env_index
-        env_ids = env_ids.detach().cpu().numpy()
-    elif env_ids is None or (isinstance(env_ids, slice) and env_ids == slice(None)):
-        return np.arange(n)
-    arr = np.asarray(env_ids)
-    if arr.dtype == bool:
-        return np.flatnonzero(arr)
-    return np.atleast_1d(arr).astype(np.int64)
-
-
-def _index_bodies(index: Any) -> Optional[list[int]]:
-    """Body ids a model-field index selects (``None`` when it cannot tell)."""
-    if isinstance(index, tuple):
-        return _index_bodies(index[0]) if index else None
-    if isinstance(index, (int, np.integer)):
-        return [int(index)]
-    if isinstance(index, (list, np.ndarray, torch.Tensor)):
-        return [int(i) for i in np.asarray(index).reshape(-1)]
-    return None
-
-
-def _batch_ids(env_ids: Any, n: int) -> Optional[np.ndarray]:
-    if env_ids is None:
-        return None
-    ids = np.unique(_np_ids(env_ids, n)).astype(np.int32)
-    return None if len(ids) == n else ids

@@ -29,7 +29,6 @@ INERTIAL_FIELDS = frozenset({"body_mass", "body_inertia", "body_ipos", "body_iqu
 """Fields whose change the proxy can absorb (for eligible bodies)."""
 
 _DERIVED = ("body_invweight0", "body_subtreemass", "body_sameframe", "dof_M0", "dof_invweight0", "dof_length")
-PROXY_THREADS = 1
 _COM_TRACKING = (int(mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM),)
 
 
@@ -88,7 +87,7 @@ class FreeBodyConstants:
         self.model, self.batch = model, batch
         names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in bodies]
         self.proxy = _proxy_model(spec, set(names))
-        self.proxy_batch = mjbatch.Batch(self.proxy, batch.nsim, nthread=PROXY_THREADS)
+        self.proxy_batch = mjbatch.Batch(self.proxy, batch.nsim, nthread=batch.nthread)
         pids = [mujoco.mj_name2id(self.proxy, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
         self._maps = _index_maps(model, self.proxy, list(bodies), pids)
 
@@ -101,26 +100,21 @@ class FreeBodyConstants:
 
     def _copy_inputs(self, rows: np.ndarray) -> None:
         """Every per-env setConst input of the mapped elements, main -> proxy."""
-        for name in _INPUTS:
-            values = self.batch.expanded(name)
-            if values is None:
-                continue
+        expanded = self.batch._expanded  # the fields with per-env values (few)
+        for name in _INPUTS_SET.intersection(expanded):
             src, dst = self._maps[_kind(name)]
-            self.proxy_batch.expand(name)[rows[:, None], dst[None, :]] = values[rows[:, None], src[None, :]]
+            self.proxy_batch.expand(name)[rows[:, None], dst[None, :]] = expanded[name][rows[:, None], src[None, :]]
 
     def _copy_outputs(self, rows: np.ndarray) -> None:
         """The proxy's derived constants of the mapped elements, proxy -> main."""
-        sub = self.batch.expand("body_subtreemass")
-        src_b, dst_b = self._maps["body"]
-        before = sub[rows[:, None], src_b[None, :]].sum(axis=1)
-        for name in _DERIVED:
-            src, dst = self._maps[_kind(name)]
-            self.batch.expand(name)[rows[:, None], src[None, :]] = self.proxy_batch.expand(name)[rows[:, None],
-                                                                                               dst[None, :]]
-        src, dst = self._maps["bvh"]
-        self.batch.expand("bvh_aabb")[rows[:, None], src[None, :]] = \
-            self.proxy_batch.expand("bvh_aabb")[rows[:, None], dst[None, :]]
-        sub[rows, 0] += sub[rows[:, None], src_b[None, :]].sum(axis=1) - before
+        main, proxy, col = self.batch.expand, self.proxy_batch.expand, rows[:, None]
+        sub = main("body_subtreemass")
+        src_b = self._maps["body"][0]
+        before = sub[col, src_b].sum(axis=1)
+        for name, kind in _OUTPUTS:
+            src, dst = self._maps[kind]
+            main(name)[col, src] = proxy(name)[col, dst]
+        sub[rows, 0] += sub[col, src_b].sum(axis=1) - before
 
 
 def _kind(name: str) -> str:
@@ -132,18 +126,25 @@ def _kind(name: str) -> str:
 _INPUTS = tuple(sorted(n for n in mujoco.MjModel._setconst_inputs
                       if n in mjbatch.MODEL_FIELDS and _kind(n) in ("qpos", "body", "jnt", "dof", "geom")))
 """The per-env setConst inputs that may concern a proxy body (copied to the proxy)."""
+_INPUTS_SET = frozenset(_INPUTS)
+_OUTPUTS = tuple((name, _kind(name)) for name in _DERIVED) + (("bvh_aabb", "bvh"),)
 
 
 def _proxy_model(spec: mujoco.MjSpec, keep: set[str]) -> mujoco.MjModel:
-    """A copy of ``spec`` with only the world bodies named in ``keep``."""
+    """A copy of ``spec`` with only the world bodies named in ``keep`` (and their meshes)."""
     proxy = spec.copy()
-    for body in list(proxy.worldbody.bodies):
+    world = proxy.worldbody
+    for body in list(world.bodies):
         if body.name not in keep:
             proxy.delete(body)
-    for group in (proxy.actuators, proxy.sensors, proxy.tendons, proxy.equalities, proxy.excludes, proxy.pairs,
-                  proxy.keys):
+    for group in (world.geoms, world.sites, world.cameras, world.lights, proxy.actuators, proxy.sensors,
+                  proxy.tendons, proxy.equalities, proxy.excludes, proxy.pairs, proxy.keys):
         for element in list(group):
             proxy.delete(element)
+    used = {g.meshname for b in world.bodies for g in b.geoms if g.meshname}
+    for mesh in list(proxy.meshes):
+        if mesh.name not in used:
+            proxy.delete(mesh)
     return proxy.compile()
 
 

@@ -35,9 +35,11 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def pose_to_matrix(pose: np.ndarray) -> np.ndarray:
     """(n, 7) xyz + wxyz poses to (n, 4, 4) homogeneous matrices."""
     w, x, y, z = pose[:, 3], pose[:, 4], pose[:, 5], pose[:, 6]
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
     out = np.zeros((pose.shape[0], 4, 4))
-    out[:, 0] = np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), pose[:, 0]), -1)
-    out[:, 1] = np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), pose[:, 1]), -1)
-    out[:, 2] = np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), pose[:, 2]), -1)
+    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+    out[:, :3, 3] = pose[:, :3]
     out[:, 3, 3] = 1.0
     return out
