@@ -60,3 +60,21 @@ def test_bad_arguments_are_rejected():
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert "must be positive" in proc.stderr
+
+
+@pytest.mark.timeout(300)
+def test_reset_randomization_quick_run_writes_json(tmp_path):
+    out = tmp_path / "reset.json"
+    script = os.path.join(ROOT, "benchmarks", "reset_randomization.py")
+    proc = subprocess.run([sys.executable, script, "--quick", "--out", str(out)], cwd=ROOT, capture_output=True,
+                          text=True, timeout=280)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    data = json.loads(out.read_text())
+    rec = data["records"][0]
+    keys = {"plain_reset_ms", "randomized_reset_ms", "extra_ms", "meets_target", "full_set_const_per_reset",
+            "proxy_set_const_per_reset", "constants_ms_per_reset", "raw_forward_ms", "extra_in_raw_forwards"}
+    assert keys <= set(rec), keys - set(rec)
+    assert rec["num_envs"] == 2 and rec["events"] == 10
+    # the mass and centre-of-mass events touch free bodies only: the proxy path, once per reset
+    assert rec["full_set_const_per_reset"] == 0 and rec["proxy_set_const_per_reset"] == 1
+    assert len(data["per_event"]["2"]) == 10
