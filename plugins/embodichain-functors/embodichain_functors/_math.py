@@ -12,6 +12,10 @@ import numpy as np
 def euler_to_quat(euler: np.ndarray, degrees: bool = True) -> np.ndarray:
     """(n, 3) extrinsic x-y-z Euler angles to (n, 4) quaternions (``qz * qy * qx``)."""
     half = np.asarray(euler, dtype=np.float64) * (np.pi / 360.0 if degrees else 0.5)
+    if half.ndim == 2 and not half[:, :2].any():  # yaw only (the common case): qz
+        out = np.zeros((half.shape[0], 4))
+        out[:, 0], out[:, 3] = np.cos(half[:, 2]), np.sin(half[:, 2])
+        return out
     c, s = np.cos(half), np.sin(half)
     cx, cy, cz = c.T
     sx, sy, sz = s.T

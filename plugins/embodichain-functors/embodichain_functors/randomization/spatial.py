@@ -61,7 +61,10 @@ def random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = N
     if position_range is not None:
         low, high = as_range(position_range, "get_random_pose", "position_range", 3)
         draw = uniform_np(env, low, high, n)
-        pose[:, :3] = pose[:, :3] + draw if relative_position else draw
+        if relative_position:
+            pose[:, :3] += draw
+        else:
+            pose[:, :3] = draw
     if rotation_range is not None:
         low, high = as_range(rotation_range, "get_random_pose", "rotation_range", 3)
         quat = euler_to_quat(uniform_np(env, low, high, n))
@@ -300,7 +303,12 @@ def randomize_target_pose(env: Any, env_ids: Any, position_range: Any = None, ro
     if reference_entity_cfg is not None:
         init = env.scene[reference_entity_cfg.uid].get_local_pose()[ids].to(torch.float64)
     pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
-    target, mats = getattr(env, store_key), pose_matrix(pose)
+    if rotation_range is None and reference_entity_cfg is None:  # identity rotations: only translations
+        mats = np.repeat(np.eye(4)[None], len(ids), axis=0)
+        mats[:, :3, 3] = pose[:, :3]
+    else:
+        mats = pose_matrix(pose)
+    target = getattr(env, store_key)
     if target.device.type == "cpu" and not target.requires_grad:
         target.numpy()[ids.numpy()] = mats
     else:
