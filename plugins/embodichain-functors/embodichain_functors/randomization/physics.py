@@ -19,7 +19,7 @@ from embodichain_functors._common import (
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._entities import link_body_ids, rigid_bodies
-from embodichain_functors._sim import read_model, write_model
+from embodichain_functors._sim import set_masses, write_model
 from embodichain_functors.randomization.joints import (  # re-exported
     randomize_joint_damping,
     randomize_joint_drive,
@@ -35,14 +35,11 @@ __all__ = [
 _OBJECTS = (RigidObject, RigidObjectGroup)
 
 
-def _masses(env: Any, ids: Any, bodies: list[int], sample: np.ndarray, relative: bool) -> list:
-    """Writes setting body masses (n, k) and scaling inertias along (same density distribution)."""
-    old = read_model(env.sim, "body_mass", ids, bodies)
-    mass = sample + env.scene.model.body_mass[bodies][None, :] if relative else sample
-    mass = np.maximum(mass, 1e-6)
-    inertia = read_model(env.sim, "body_inertia", ids, bodies)
-    inertia *= (mass / np.maximum(old, 1e-12))[..., None]
-    return [("body_mass", bodies, mass), ("body_inertia", bodies, inertia)]
+def _masses(env: Any, ids: Any, bodies: list[int], sample: np.ndarray, relative: bool) -> None:
+    """Set body masses (n, k) (relative: added to the configured ones), inertias scaled along."""
+    index = np.asarray(bodies, dtype=np.int64)
+    mass = sample + env.scene.model.body_mass[index][None, :] if relative else sample
+    set_masses(env.sim, ids, index, np.maximum(mass, 1e-6))
 
 
 def _check_mass(env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, relative: bool = False) -> None:
@@ -75,8 +72,8 @@ def randomize_rigid_object_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     ids = env_ids_of(env, env_ids)
     low, high = as_range(mass_range, "randomize_rigid_object_mass", "mass_range")
     bodies = [obj.body_id for obj in rigid_bodies(env.scene[entity_cfg.uid])]
-    sample = np.repeat(uniform_np(env, low, high, len(ids)).reshape(len(ids), 1), len(bodies), axis=1)
-    write_model(env.sim, ids, _masses(env, ids, bodies, sample, relative))
+    sample = np.repeat(uniform_np(env, low, high, len(ids))[:, None], len(bodies), axis=1)
+    _masses(env, ids, bodies, sample, relative)
 
 
 class randomize_rigid_object_center_of_mass(CheckedFunctor):
@@ -175,12 +172,10 @@ def randomize_articulation_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     """
     ids = env_ids_of(env, env_ids)
     art = env.scene[entity_cfg.uid]
-    writes = []
     for bodies, rng in _link_ranges(art, mass_range, link_names):
         low, high = as_range(rng, "randomize_articulation_mass", "mass_range")
         sample = uniform_np(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies))
-        writes += _masses(env, ids, bodies, sample, relative)
-    write_model(env.sim, ids, writes)
+        _masses(env, ids, bodies, sample, relative)
 
 
 def _check_friction(env: Any, entity_cfg: SceneEntityCfg, friction_range: Any, relative: bool = False) -> None:
