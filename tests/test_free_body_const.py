@@ -127,3 +127,22 @@ def test_non_inertial_or_robot_fields_are_not_fast(field, index):
         index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "arm")
     assert not fast._free_body_field(field, index)
     assert fast._free_body_field("body_ipos", (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"),))
+
+
+def test_a_proxy_that_cannot_be_built_falls_back_to_the_whole_model(monkeypatch):
+    import embodichain_core.sim.batch_sim as batch_sim
+
+    fast, full, model = _sims()
+
+    def broken(*args, **kwargs):
+        raise ValueError("cannot cut the spec")
+
+    monkeypatch.setattr(batch_sim, "FreeBodyConstants", broken)
+    _write((fast, full), model, "box", [0, 4], np.random.default_rng(2))
+    with pytest.warns(RuntimeWarning, match="fall back to mj_setConst"):
+        fast.flush_const()
+    full.flush_const()
+    got, want = _derived(fast), _derived(full)
+    for name in DERIVED:
+        np.testing.assert_allclose(got[name], want[name], rtol=1e-12, atol=1e-14, err_msg=name)
+    assert not fast._free_body_field("body_mass", mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"))

@@ -230,9 +230,9 @@ class BatchSim:
         fast = np.flatnonzero(self._inertial_dirty & ~self._const_dirty)
         self._const_dirty[:] = False
         self._inertial_dirty[:] = False
-        if len(fast):
-            if self._free_const is None:
-                self._free_const = FreeBodyConstants(self._spec, self.model, self.batch, sorted(self._free_bodies))
+        if len(fast) and self._free_body_constants() is None:
+            full = np.union1d(full, fast).astype(np.int64)  # no proxy for this scene: the whole model
+        elif len(fast):
             self._free_const.update(_batch_ids(fast, self.num_envs))
         if not len(full):
             return
@@ -241,6 +241,17 @@ class BatchSim:
             self.batch.set_models(self.env_models)
         else:
             self.batch.set_const(_batch_ids(full, self.num_envs))
+
+    def _free_body_constants(self) -> Optional[FreeBodyConstants]:
+        """The proxy of the free bodies, built on first use (``None`` if it cannot be built:
+        then every constant update takes the whole model's ``mj_setConst``)."""
+        if self._free_const is None and self._free_bodies:
+            try:
+                self._free_const = FreeBodyConstants(self._spec, self.model, self.batch, sorted(self._free_bodies))
+            except Exception as err:  # a spec the proxy cannot be cut from: keep the exact slow path
+                warnings.warn(f"free-body constants fall back to mj_setConst: {err}", RuntimeWarning, stacklevel=3)
+                self._free_bodies = frozenset()
+        return self._free_const
 
     def _set_const_models(self, ids: Iterable[int]) -> None:
         data = mujoco.MjData(self.model)
