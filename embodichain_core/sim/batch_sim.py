@@ -183,6 +183,22 @@ class BatchSim:
         if set_const and name in _SETCONST_INPUTS:
             self.mark_const_dirty(ids, [(name, index)])
 
+    def set_body_masses(self, env_ids: Any, bodies: Any, mass: Any) -> None:
+        """Set masses ``(n, k)`` of MuJoCo ``bodies`` in ``env_ids``; their inertias scale
+        along (the density distribution is kept). One deferred constants update."""
+        rows = _np_ids(env_ids, self.num_envs)
+        bodies = np.asarray(bodies, dtype=np.int64).reshape(-1)
+        mass = np.broadcast_to(np.asarray(mass, dtype=np.float64), (len(rows), len(bodies)))
+        sel = (rows[:, None], bodies[None, :])
+        ratio = (mass / np.maximum(self.model_field("body_mass")[sel], 1e-12))[..., None]
+        if self.env_models is not None:
+            self.set_model_field("body_inertia", rows, bodies, self.model_field("body_inertia")[sel] * ratio)
+            self.set_model_field("body_mass", rows, bodies, mass)
+            return
+        self.batch.expand("body_inertia")[sel] *= ratio
+        self.batch.expand("body_mass")[sel] = mass
+        self.mark_const_dirty(rows, (("body_mass", bodies), ("body_inertia", bodies)))
+
     def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
         """Note that constant inputs of ``env_ids`` changed (written directly into
         expanded fields); ``mj_setConst`` runs once before they are next used.

@@ -287,13 +287,7 @@ class Articulation(Entity):
         """Set (n, n_links) link masses; inertias scale along."""
         env = self._ids(env_ids)
         ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
-        mass = as_values(mass, len(env), len(ids)).numpy()
-        old = np.asarray(self.sim.model_field("body_mass")[env.numpy()][:, ids.numpy()])
-        for k, body in enumerate(ids.tolist()):
-            inertia = np.asarray(self.sim.model_field("body_inertia")[env.numpy(), body])
-            ratio = mass[:, k] / np.maximum(old[:, k], 1e-12)
-            self.sim.set_model_field("body_inertia", env, body, inertia * ratio[:, None])
-            self.sim.set_model_field("body_mass", env, body, mass[:, k])
+        self.sim.set_body_masses(env, ids.numpy(), as_array(mass, len(env), len(ids)))
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero joint velocities and applied efforts of ``env_ids``."""

@@ -134,10 +134,7 @@ class RigidObject(Entity):
         mass = as_values(mass, len(ids)).numpy()
         if (mass <= 0).any():
             raise ValueError(f"{self.uid}: masses must be > 0, got {mass.min()}")
-        old = np.asarray(self.sim.model_field("body_mass")[ids.numpy(), self.body_id])
-        inertia = np.asarray(self.sim.model_field("body_inertia")[ids.numpy(), self.body_id])
-        self.sim.set_model_field("body_inertia", ids, self.body_id, inertia * (mass / old)[:, None])
-        self.sim.set_model_field("body_mass", ids, self.body_id, mass)
+        self.sim.set_body_masses(ids, [self.body_id], mass[:, None])
 
     def get_com(self) -> torch.Tensor:
         """(N, 3) centre of mass in the body frame."""

@@ -87,23 +87,6 @@ def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool
     sim.mark_dirty(ids)
 
 
-def set_masses(sim: Any, env_ids: Any, bodies: np.ndarray, mass: np.ndarray) -> None:
-    """Set (n, k) masses of ``bodies`` in ``env_ids``, scaling their inertias along (the
-    density distribution is kept); one deferred constants update."""
-    rows = rows_of(env_ids)
-    if sim.env_models is not None:
-        old = read_model(sim, "body_mass", rows, bodies)
-        inertia = read_model(sim, "body_inertia", rows, bodies) * (mass / np.maximum(old, 1e-12))[..., None]
-        write_model(sim, rows, [("body_mass", bodies, mass), ("body_inertia", bodies, inertia)])
-        return
-    sel = (rows[:, None], bodies[None, :])
-    masses, inertias = sim.batch.expand("body_mass"), sim.batch.expand("body_inertia")
-    inertias[sel] *= (mass / np.maximum(masses[sel], 1e-12))[..., None]
-    masses[sel] = mass
-    sim.mark_const_dirty(rows, (("body_mass", bodies), ("body_inertia", bodies)))
-    sim.mark_dirty(rows)
-
-
 def read_model(sim: Any, name: str, env_ids: Any, index: Any) -> np.ndarray:
     """Per-env values ``field[env_ids, index]`` (a copy)."""
     return np.array(sim.model_field(name)[_selector(rows_of(env_ids), index)])

@@ -19,7 +19,7 @@ from embodichain_functors._common import (
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._entities import link_body_ids, rigid_bodies
-from embodichain_functors._sim import set_masses, write_model
+from embodichain_functors._sim import write_model
 from embodichain_functors.randomization.joints import (  # re-exported
     randomize_joint_damping,
     randomize_joint_drive,
@@ -39,7 +39,7 @@ def _masses(env: Any, ids: Any, bodies: list[int], sample: np.ndarray, relative:
     """Set body masses (n, k) (relative: added to the configured ones), inertias scaled along."""
     index = np.asarray(bodies, dtype=np.int64)
     mass = sample + env.scene.model.body_mass[index][None, :] if relative else sample
-    set_masses(env.sim, ids, index, np.maximum(mass, 1e-6))
+    env.sim.set_body_masses(ids, index, np.maximum(mass, 1e-6))
 
 
 def _check_mass(env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, relative: bool = False) -> None:
