@@ -14,16 +14,16 @@ small interface (``step``, ``reset``, ``forward``, state views, model fields).
 
 from __future__ import annotations
 
-import copy
 import os
 import warnings
-from typing import Any, Iterable, Optional, Sequence
+from typing import Any, Iterable, Optional
 
 import mujoco
 import mujoco.batch as mjbatch
 import numpy as np
 import torch
 
+from embodichain_core.sim.batch_env_models import PerEnvModels
 from embodichain_core.sim.env_rows import batch_ids as _batch_ids
 from embodichain_core.sim.env_rows import index_bodies as _index_bodies
 from embodichain_core.sim.env_rows import np_ids as _np_ids
@@ -45,7 +45,7 @@ class SimulationDiverged(RuntimeError):
         super().__init__(f"simulation diverged in envs {env_ids}: {messages[:1]}")
 
 
-class BatchSim:
+class BatchSim(PerEnvModels):
     """``num_envs`` MuJoCo simulations of one compiled model."""
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
@@ -268,46 +268,6 @@ class BatchSim:
                 warnings.warn(f"free-body constants fall back to mj_setConst: {err}", RuntimeWarning, stacklevel=3)
                 self._free_bodies = frozenset()
         return self._free_const
-
-    def _set_const_models(self, ids: Iterable[int]) -> None:
-        data = mujoco.MjData(self.model)
-        for env in ids:
-            model = self.env_models[env]
-            self.batch.get_data(int(env), data)
-            mujoco.mj_setConst(model, data)
-
-    def use_env_models(self, models: Sequence[mujoco.MjModel]) -> None:
-        """Run env ``i`` on ``models[i]`` (same data layout), keeping every env's state.
-
-        Expanded fields are folded into the new models first, so values written
-        before the switch are kept.
-        """
-        if len(models) != self.num_envs:
-            raise ValueError(f"need one model per env ({self.num_envs}), got {len(models)}")
-        self.flush_const()
-        state = self.batch.state.copy()
-        expanded = {name: self.batch.expanded(name) for name in list(self.batch._expanded)}
-        models = [copy.copy(m) for m in models]
-        for name, values in expanded.items():
-            if values is None or name.startswith("opt."):
-                continue
-            for env, model in enumerate(models):
-                if getattr(model, name).shape == values[env].shape:
-                    getattr(model, name)[...] = values[env]
-        self._make_batch()
-        self.batch.state[...] = state
-        self.batch.set_models(models)
-        self.env_models = models
-        self.forward(None)
-
-    def set_env_model(self, env_ids: Any, model: mujoco.MjModel) -> None:
-        """Give ``env_ids`` a copy of ``model`` (e.g. a structural variant)."""
-        if self.env_models is None:
-            self.use_env_models([self.batch.get_model(i) for i in range(self.num_envs)])
-        for env in _np_ids(env_ids, self.num_envs):
-            self.env_models[env] = copy.copy(model)
-        self.batch.set_models(self.env_models)
-        self.mark_dirty(env_ids)
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
         """The model env ``env_id`` runs on (for rendering or any mj_ function).
