@@ -73,6 +73,14 @@ def _write(sims: tuple[BatchSim, ...], model: mujoco.MjModel, name: str, env_ids
         sim.set_model_field("body_ipos", env_ids, body, com)
 
 
+def _full_set_const_calls(sim: BatchSim, monkeypatch) -> list:
+    """The ids of every whole-model ``set_const`` of ``sim`` from now on."""
+    calls: list = []
+    original = sim.batch.set_const
+    monkeypatch.setattr(sim.batch, "set_const", lambda ids=None: (calls.append(ids), original(ids))[1])
+    return calls
+
+
 def _derived(sim: BatchSim) -> dict[str, np.ndarray]:
     return {name: np.array(sim.model_field(name)) for name in DERIVED}
 
@@ -86,9 +94,7 @@ def test_only_free_leaf_bodies_without_actuators_are_eligible():
 
 def test_fast_path_matches_full_set_const(monkeypatch):
     fast, full, model = _sims()
-    calls = []
-    original = fast.batch.set_const
-    monkeypatch.setattr(fast.batch, "set_const", lambda ids=None: (calls.append(ids), original(ids))[1])
+    calls = _full_set_const_calls(fast, monkeypatch)
     rng = np.random.default_rng(0)
     for round_ in range(3):
         _write((fast, full), model, "box", [0, 2, 3], rng)
@@ -106,9 +112,7 @@ def test_fast_path_matches_full_set_const(monkeypatch):
 
 def test_other_writes_take_the_full_path(monkeypatch):
     fast, full, model = _sims()
-    calls = []
-    original = fast.batch.set_const
-    monkeypatch.setattr(fast.batch, "set_const", lambda ids=None: (calls.append(ids), original(ids))[1])
+    calls = _full_set_const_calls(fast, monkeypatch)
     rng = np.random.default_rng(1)
     _write((fast, full), model, "chain", [0, 1], rng)  # has a child body
     _write((fast, full), model, "box", [2], rng)

@@ -25,6 +25,7 @@ import torch
 
 from embodichain_core.sim.batch_env_models import PerEnvModels
 from embodichain_core.sim.env_rows import batch_ids as _batch_ids
+from embodichain_core.sim.env_rows import field_selector as _field_selector
 from embodichain_core.sim.env_rows import index_bodies as _index_bodies
 from embodichain_core.sim.env_rows import np_ids as _np_ids
 from embodichain_core.sim.free_body_const import INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
@@ -163,8 +164,8 @@ class BatchSim(PerEnvModels):
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
 
-        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape`` (a list ``index``
-        selects several elements: values ``(n, k, ...)``). A field that
+        ``values`` broadcasts to ``(len(env_ids),) + field[index].shape`` (a list ``index``,
+        or a tuple starting with one, selects several elements: values ``(n, k, ...)``). A field that
         MuJoCo derives constants from schedules one ``mj_setConst`` for these envs
         (before their next forward or step) unless ``set_const=False`` (the caller
         writes the derived values itself).
@@ -176,10 +177,8 @@ class BatchSim(PerEnvModels):
             for k, env in enumerate(ids):
                 getattr(self.env_models[env], name)[index] = vals[k]
             self.batch.set_models(self.env_models)
-        elif isinstance(index, (list, np.ndarray)):  # several elements: (n, k, ...) values
-            self.batch.expand(name)[ids[:, None], np.asarray(index, dtype=np.int64)[None, :]] = values
         else:
-            self.batch.expand(name)[(ids,) + (index if isinstance(index, tuple) else (index,))] = values
+            self.batch.expand(name)[_field_selector(ids, index)] = values
         if set_const and name in _SETCONST_INPUTS:
             self.mark_const_dirty(ids, [(name, index)])
 

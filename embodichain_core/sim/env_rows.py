@@ -42,3 +42,24 @@ def batch_ids(env_ids: Any, n: int) -> Optional[np.ndarray]:
         return None
     ids = np.unique(np_ids(env_ids, n)).astype(np.int32)
     return None if len(ids) == n else ids
+
+
+def _is_list(index: Any) -> bool:
+    return isinstance(index, (list, np.ndarray, torch.Tensor))
+
+
+def field_selector(ids: np.ndarray, index: Any) -> tuple:
+    """``field[selector]`` of model-field ``index`` for env rows ``ids``.
+
+    A list index (or a tuple whose first element is a list) selects several elements:
+    the result then has shape ``(n, k, ...)``.
+    """
+    if isinstance(index, (int, np.integer)):
+        return ids, index
+    if _is_list(index):
+        return ids[:, None], np.asarray(index, dtype=np.int64).reshape(-1)[None, :]
+    if isinstance(index, tuple) and index and _is_list(index[0]):
+        return (ids[:, None], np.asarray(index[0], dtype=np.int64).reshape(-1)[None, :]) + index[1:]
+    if isinstance(index, tuple):
+        return (ids,) + index
+    return ids, index

@@ -115,9 +115,7 @@ class Articulation(Entity):
         return np.asarray(joint_ids, dtype=np.int64).reshape(-1)
 
     def _jids(self, joint_ids: Any) -> torch.Tensor:
-        if joint_ids is None or (isinstance(joint_ids, slice) and joint_ids == slice(None)):
-            return torch.arange(self.dof)
-        return torch.as_tensor(joint_ids, dtype=torch.long).reshape(-1)
+        return torch.from_numpy(self._jids_np(joint_ids).copy())
 
     # -- joint state ------------------------------------------------------------------------------
     def get_qpos(self, target: bool = False) -> torch.Tensor:

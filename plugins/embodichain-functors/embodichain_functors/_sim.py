@@ -14,6 +14,8 @@ import mujoco
 import numpy as np
 import torch
 
+from embodichain_core.sim.env_rows import batch_ids, field_selector, np_ids
+
 _SETCONST = frozenset(mujoco.MjModel._setconst_inputs)
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 
@@ -29,37 +31,6 @@ def _numpy(values: Any) -> np.ndarray:
     return np.asarray(values)
 
 
-def rows_of(env_ids: Any) -> np.ndarray:
-    """``env_ids`` as a 1-D int64 numpy array (no copy for a CPU long tensor)."""
-    if isinstance(env_ids, torch.Tensor) and env_ids.dtype == torch.long and env_ids.dim() == 1 \
-            and env_ids.device.type == "cpu":
-        return env_ids.numpy()
-    return _numpy(env_ids).astype(np.int64).reshape(-1)
-
-
-def _is_list(index: Any) -> bool:
-    return isinstance(index, (list, np.ndarray, torch.Tensor))
-
-
-def _selector(ids: np.ndarray, index: Any) -> tuple:
-    """``field[selector]`` of ``index`` for ``ids``; a list (first) index selects several elements."""
-    if isinstance(index, int):
-        return ids, index
-    if _is_list(index):
-        return ids[:, None], _numpy(index).astype(np.int64)[None, :]
-    if isinstance(index, tuple) and index and _is_list(index[0]):
-        return (ids[:, None], _numpy(index[0]).astype(np.int64)[None, :]) + index[1:]
-    if isinstance(index, tuple):
-        return (ids,) + index
-    return ids, index
-
-
-def batch_ids(ids: np.ndarray, num_envs: int) -> Any:
-    """``ids`` as the batch expects them (``None`` for every env)."""
-    unique = np.unique(ids).astype(np.int32)
-    return None if len(unique) == num_envs else unique
-
-
 def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool = True) -> None:
     """Write per-env model fields of ``env_ids``; at most one ``mj_setConst`` per call.
 
@@ -70,26 +41,22 @@ def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool
             elements (values then have shape ``(n, k, ...)``).
         set_const: recompute MuJoCo's derived constants when a written field feeds them.
     """
-    ids = rows_of(env_ids)
+    ids = np_ids(env_ids, sim.num_envs)
     if len(ids) == 0:
-        return
-    if sim.env_models is not None:  # per-env models: the core writes each model
-        for name, index, values in writes:
-            sim.set_model_field(name, ids, index, _numpy(values))
         return
     const_fields = []
     for name, index, values in writes:
-        sim.batch.expand(name)[_selector(ids, index)] = _numpy(values)
+        sim.set_model_field(name, ids, index, _numpy(values), set_const=False)
         if name in _SETCONST:
             const_fields.append((name, index))
     if const_fields and set_const:
-        sim.mark_const_dirty(ids, const_fields)  # one deferred mj_setConst for every write of a reset
+        sim.mark_const_dirty(ids, const_fields)  # one deferred constants update for every write of a reset
     sim.mark_dirty(ids)
 
 
 def read_model(sim: Any, name: str, env_ids: Any, index: Any) -> np.ndarray:
     """Per-env values ``field[env_ids, index]`` (a copy)."""
-    return np.array(sim.model_field(name)[_selector(rows_of(env_ids), index)])
+    return np.array(sim.model_field(name)[field_selector(np_ids(env_ids, sim.num_envs), index)])
 
 
 def base_model_value(scene: Any, name: str, index: Any) -> np.ndarray:
@@ -102,7 +69,7 @@ def step_envs(env: Any, env_ids: Any, nsteps: int) -> None:
     if nsteps <= 0:
         return
     sim = env.sim
-    ids = rows_of(env_ids)
+    ids = np_ids(env_ids, sim.num_envs)
     sim.forward(ids)  # stepping starts from up-to-date derived fields
     try:
         sim.batch.step(batch_ids(ids, sim.num_envs), nstep=int(nsteps) * sim.substeps, stage=_VEL)
