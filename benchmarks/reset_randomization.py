@@ -9,7 +9,7 @@ virtual target pose); the plain env has none. Both reset all envs; resets of the
 two are interleaved ``--repeats`` times after a warm-up and medians are reported.
 
 The mass and centre-of-mass events change constants MuJoCo derives from them; the
-core recomputes those once per reset, on a small proxy model of the free bodies
+core recomputes those once per reset, in closed form for free bodies
 (``embodichain_core/sim/free_body_const.py``) or with the whole model's
 ``mj_setConst``. The table reports how many of each ran per reset and their time.
 A second pass times each event alone (called by its manager entry for all envs).
@@ -96,13 +96,13 @@ def make_env(num_envs: int, randomized: bool) -> EmbodiedEnv:
 
 class ConstCounter:
     """Counts and times one env's derived-constant updates per path (measurement only):
-    ``Batch.set_const`` of the whole model and the free bodies' proxy model."""
+    ``Batch.set_const`` of the whole model and the free bodies' closed form."""
 
     def __init__(self, env: EmbodiedEnv):
-        self.calls = {"full": 0, "proxy": 0}
+        self.calls = {"full": 0, "closed": 0}
         self.seconds = 0.0
         sim = env.sim
-        env.reset()  # builds the proxy if this env needs one
+        env.reset()  # builds the closed form's layout if this env needs one
         self._wrap(sim.batch, "set_const", "full")
         original = sim.flush_const
 
@@ -114,7 +114,7 @@ class ConstCounter:
                 self.seconds += time.perf_counter() - start
         sim.flush_const = timed
         if sim._free_const is not None:
-            self._wrap(sim._free_const.proxy_batch, "set_const", "proxy")
+            self._wrap(sim._free_const, "update", "closed")
 
     def _wrap(self, obj: Any, name: str, key: str) -> None:
         original = getattr(obj, name)
@@ -125,7 +125,7 @@ class ConstCounter:
         setattr(obj, name, counted)
 
     def clear(self) -> None:
-        self.calls, self.seconds = {"full": 0, "proxy": 0}, 0.0
+        self.calls, self.seconds = {"full": 0, "closed": 0}, 0.0
 
 
 def per_event(env: EmbodiedEnv, repeats: int) -> list[dict[str, Any]]:
@@ -153,7 +153,7 @@ def _record(num_envs: int, plain: list[float], randomized: list[float], counter:
         "plain_reset_ms": 1e3 * t_plain, "randomized_reset_ms": 1e3 * t_rand, "extra_ms": 1e3 * (t_rand - t_plain),
         "target_extra_ms": TARGET_EXTRA_MS, "meets_target": (t_rand - t_plain) * 1e3 <= TARGET_EXTRA_MS,
         "full_set_const_per_reset": counter.calls["full"] / resets,
-        "proxy_set_const_per_reset": counter.calls["proxy"] / resets,
+        "closed_form_per_reset": counter.calls["closed"] / resets,
         "constants_ms_per_reset": 1e3 * counter.seconds / resets,  # mean over the rounds
         "spread_plain": spread(plain), "spread_randomized": spread(randomized),
         "load_average_1min": os.getloadavg()[0],
@@ -201,7 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     print_table(records, [("num_envs", "envs", "d"), ("plain_reset_ms", "plain reset ms", ".3f"),
                           ("randomized_reset_ms", "10 events ms", ".3f"), ("extra_ms", "extra ms", ".3f"),
                           ("full_set_const_per_reset", "full setConst", ".0f"),
-                          ("proxy_set_const_per_reset", "proxy setConst", ".0f"),
+                          ("closed_form_per_reset", "closed form", ".0f"),
                           ("constants_ms_per_reset", "constants ms", ".3f"),
                           ("raw_forward_ms", "raw forward ms", ".3f"),
                           ("extra_in_raw_forwards", "extra / raw forward", ".2f")],

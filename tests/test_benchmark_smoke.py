@@ -72,9 +72,9 @@ def test_reset_randomization_quick_run_writes_json(tmp_path):
     data = json.loads(out.read_text())
     rec = data["records"][0]
     keys = {"plain_reset_ms", "randomized_reset_ms", "extra_ms", "meets_target", "full_set_const_per_reset",
-            "proxy_set_const_per_reset", "constants_ms_per_reset", "raw_forward_ms", "extra_in_raw_forwards"}
+            "closed_form_per_reset", "constants_ms_per_reset", "raw_forward_ms", "extra_in_raw_forwards"}
     assert keys <= set(rec), keys - set(rec)
     assert rec["num_envs"] == 2 and rec["events"] == 10
-    # the mass and centre-of-mass events touch free bodies only: the proxy path, once per reset
-    assert rec["full_set_const_per_reset"] == 0 and rec["proxy_set_const_per_reset"] == 1
+    # the mass and centre-of-mass events touch free bodies only: the closed form, once per reset
+    assert rec["full_set_const_per_reset"] == 0 and rec["closed_form_per_reset"] == 1
     assert len(data["per_event"]["2"]) == 10

@@ -50,7 +50,7 @@ class BatchSim(PerEnvModels):
     """``num_envs`` MuJoCo simulations of one compiled model."""
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
-                 persistent: bool = True, spec: Optional[mujoco.MjSpec] = None):
+                 persistent: bool = True, fast_constants: bool = True):
         self.model = model
         self.num_envs = int(num_envs)
         self.substeps = int(substeps)
@@ -61,8 +61,9 @@ class BatchSim(PerEnvModels):
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
         self._const_dirty = np.zeros(self.num_envs, dtype=bool)  # full mj_setConst due
         self._inertial_dirty = np.zeros(self.num_envs, dtype=bool)  # free bodies' constants due
+        self._inertial_fields: set[str] = set()  # the inertial fields written since then
         self._const_pending = False
-        self._spec = spec  # lets free bodies' constants be recomputed on a small proxy model
+        self._fast_constants = fast_constants  # free bodies' constants in closed form (else mj_setConst)
         self._free_bodies: Optional[frozenset[int]] = None
         self._free_const: Optional[FreeBodyConstants] = None
         self._make_batch()
@@ -207,8 +208,10 @@ class BatchSim(PerEnvModels):
         (:mod:`embodichain_core.sim.free_body_const`); without it the full one runs.
         """
         ids = _np_ids(env_ids, self.num_envs)
+        fields = None if fields is None else list(fields)
         if fields is not None and self._all_free_body_fields(fields):
             self._inertial_dirty[ids] = True
+            self._inertial_fields.update(name for name, _ in fields)
         else:
             self._const_dirty[ids] = True
         self._const_pending = True
@@ -220,7 +223,7 @@ class BatchSim(PerEnvModels):
         return True
 
     def _free_body_field(self, name: str, index: Any) -> bool:
-        if name not in INERTIAL_FIELDS or self._spec is None or self.env_models is not None:
+        if name not in INERTIAL_FIELDS or not self._fast_constants or self.env_models is not None:
             return False
         if self._free_bodies is None:
             self._free_bodies = frozenset(eligible_bodies(self.model))
@@ -235,8 +238,9 @@ class BatchSim(PerEnvModels):
         Deferred from :meth:`set_model_field` so that a reset writing several fields
         (mass, centre of mass, light position) pays for one call; run automatically
         before stepping, forward and ``get_model``/``get_data``. Envs where only free
-        bodies' inertial properties changed use the small proxy model; the others
-        run ``mj_setConst`` on the whole model.
+        bodies' inertial properties changed get them in closed form
+        (:mod:`embodichain_core.sim.free_body_const`); the others run
+        ``mj_setConst`` on the whole model.
         """
         if not self._const_pending:
             return
@@ -245,10 +249,9 @@ class BatchSim(PerEnvModels):
         fast = np.flatnonzero(self._inertial_dirty & ~self._const_dirty)
         self._const_dirty[:] = False
         self._inertial_dirty[:] = False
-        if len(fast) and self._free_body_constants() is None:
-            full = np.union1d(full, fast).astype(np.int64)  # no proxy for this scene: the whole model
-        elif len(fast):
-            self._free_const.update(_batch_ids(fast, self.num_envs))
+        written, self._inertial_fields = self._inertial_fields, set()
+        if len(fast) and not self._free_body_constants().update(fast, written):
+            full = np.union1d(full, fast).astype(np.int64)  # a case the closed form does not cover
         if not len(full):
             return
         if self.env_models is not None:
@@ -257,15 +260,10 @@ class BatchSim(PerEnvModels):
         else:
             self.batch.set_const(_batch_ids(full, self.num_envs))
 
-    def _free_body_constants(self) -> Optional[FreeBodyConstants]:
-        """The proxy of the free bodies, built on first use (``None`` if it cannot be built:
-        then every constant update takes the whole model's ``mj_setConst``)."""
-        if self._free_const is None and self._free_bodies:
-            try:
-                self._free_const = FreeBodyConstants(self._spec, self.model, self.batch, sorted(self._free_bodies))
-            except Exception as err:  # a spec the proxy cannot be cut from: keep the exact slow path
-                warnings.warn(f"free-body constants fall back to mj_setConst: {err}", RuntimeWarning, stacklevel=3)
-                self._free_bodies = frozenset()
+    def _free_body_constants(self) -> FreeBodyConstants:
+        """The closed-form constants of the eligible free bodies (built on first use)."""
+        if self._free_const is None:
+            self._free_const = FreeBodyConstants(self.model, self.batch, sorted(self._free_bodies or ()))
         return self._free_const
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:

@@ -1,39 +1,55 @@
-"""Cheap ``mj_setConst`` for the inertial properties of free-floating bodies.
+"""``mj_setConst`` in closed form for the inertial properties of free-floating bodies.
 
 Randomizing a dynamic object's mass or centre of mass on every reset must update
 the constants MuJoCo derives from them (``body_invweight0``, ``dof_M0``,
 ``body_subtreemass``, bounding volumes...). ``mj_setConst`` recomputes them for the
 *whole* model, robot included (12 us per env for a 7-DoF arm scene). For a body
 that hangs directly off the world on a free joint, with nothing attached to it,
-those constants depend on that body alone, so MuJoCo can compute them on a small
-*proxy* model holding only such bodies (a copy of the scene spec, everything else
-deleted): same geoms, joints and compiler settings, hence the same numbers, at a
-fraction of the cost. The world's subtree mass is then updated by the difference.
+they follow from that body's own inertia in closed form, which this module
+evaluates for every env at once in numpy (:class:`FreeBodyConstants`). At the
+reference configuration, with ``m`` the mass, ``I`` the principal inertia, ``R``
+the inertial frame's rotation and ``c`` the centre of mass in the body frame:
 
-Eligible bodies: children of the world with exactly one free joint, no child
-bodies, no actuator, tendon or flex attached, and no camera or light tracking a
-centre of mass (whose ``*_poscom0`` reference would change). Anything else takes
-the full ``Batch.set_const``. ``tests/test_free_body_const.py`` checks that both
-give the same derived fields.
+* the joint-space inertia has ``m`` on the translational diagonal and
+  ``R diag(I) R^T + m ([c]x)^T [c]x`` as the rotational block, so ``dof_M0`` is
+  ``m`` and ``sum_k R_jk^2 I_k + m (|c|^2 - c_j^2)``;
+* its inverse, seen from the centre of mass, is ``diag(1/m, I^-1)``:
+  ``body_invweight0 = (1/m, mean(1/I))``; the free joint's translational
+  ``dof_invweight0`` adds ``(|c|^2 sum(1/I) - sum(c'^2 / I)) / 3`` (``c'``: ``c`` in the
+  inertial frame), the rotational one is ``mean(1/I)``;
+* ``dof_length`` of the rotations is the body size MuJoCo's statistics use (the
+  largest of ``|c|`` and ``rbound + |c - geom_pos|``, at least 1e-5);
+* the bounding-volume leaves are the geoms' boxes in the inertial frame, inner
+  nodes the union of their children; ``*_sameframe`` follow MuJoCo's rules.
+
+The world's subtree mass is re-summed. Eligible bodies: children of the world with
+exactly one free joint, no armature on it, no child bodies, no actuator, tendon or
+flex attached, and no camera or light tracking a centre of mass (whose
+``*_poscom0`` reference would change). Anything else takes the full
+``Batch.set_const``; ``tests/test_free_body_const.py`` checks that both give the
+same derived fields.
 """
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Optional
+from typing import Iterable, Optional
 
 import mujoco
 import mujoco.batch as mjbatch
 import numpy as np
 
-INERTIAL_FIELDS = frozenset({"body_mass", "body_inertia", "body_ipos", "body_iquat"})
-"""Fields whose change the proxy can absorb (for eligible bodies)."""
+from embodichain_core.sim.free_body_geometry import (
+    GEOMETRY_FIELDS, GeomLayout, body_sameframe, member_sameframe, null_quat, null_vec, quat_to_mat,
+)
 
-_DERIVED = ("body_invweight0", "body_subtreemass", "body_sameframe", "dof_M0", "dof_invweight0", "dof_length")
+INERTIAL_FIELDS = frozenset({"body_mass", "body_inertia", "body_ipos", "body_iquat"})
+"""Fields whose change the closed form absorbs (for eligible bodies)."""
+
 _COM_TRACKING = (int(mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM),)
 
 
 def eligible_bodies(model: mujoco.MjModel) -> list[int]:
-    """Ids of the bodies whose inertial constants the proxy can recompute."""
+    """Ids of the bodies whose inertial constants the closed form covers."""
     if any(int(m) in _COM_TRACKING for m in list(model.cam_mode) + list(model.light_mode)):
         return []
     attached = _attached_bodies(model)
@@ -44,6 +60,8 @@ def eligible_bodies(model: mujoco.MjModel) -> list[int]:
         if model.jnt_type[model.body_jntadr[b]] != mujoco.mjtJoint.mjJNT_FREE:
             continue
         if (model.body_parentid[1:] == b).any():
+            continue
+        if np.any(model.dof_armature[model.body_dofadr[b]:model.body_dofadr[b] + 6] != 0):
             continue
         out.append(b)
     return out
@@ -73,96 +91,133 @@ def _attached_bodies(model: mujoco.MjModel) -> set[int]:
 
 
 class FreeBodyConstants:
-    """A proxy batch of the eligible bodies of ``model``; :meth:`update` refreshes the
-    main batch's derived constants of those bodies for some envs.
+    """Refreshes the derived constants of the eligible bodies of ``model`` in ``batch``'s
+    per-env (expanded) fields, for some envs, without ``mj_setConst``.
 
     Args:
-        spec: the spec ``model`` was compiled from (copied, not changed).
         model: the scene model.
-        batch: the scene's batch.
+        batch: the scene's batch (its expanded fields are read and written).
         bodies: the eligible body ids (see :func:`eligible_bodies`).
     """
 
-    def __init__(self, spec: mujoco.MjSpec, model: mujoco.MjModel, batch: mjbatch.Batch, bodies: list[int]):
+    def __init__(self, model: mujoco.MjModel, batch: mjbatch.Batch, bodies: list[int]):
         self.model, self.batch = model, batch
-        names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in bodies]
-        self.proxy = _proxy_model(spec, set(names))
-        self.proxy_batch = mjbatch.Batch(self.proxy, batch.nsim, nthread=batch.nthread)
-        pids = [mujoco.mj_name2id(self.proxy, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
-        self._maps = _index_maps(model, self.proxy, list(bodies), pids)
+        self.bodies = np.asarray(sorted(bodies), dtype=np.int64)
+        self.dofs = (model.body_dofadr[self.bodies][:, None] + np.arange(6)).astype(np.int64)  # (nb, 6)
+        self.rot_dofs = self.dofs[:, 3:]
+        self.world_children = np.flatnonzero(model.body_parentid == 0)[1:]
+        self.layout = GeomLayout(model, self.bodies)
+        self._blocks: dict[int, tuple[np.ndarray, Optional[slice]]] = {}  # see _Writer
 
-    def update(self, ids: Optional[np.ndarray]) -> None:
-        """Recompute the eligible bodies' derived constants for envs ``ids`` (None: all)."""
-        rows = np.arange(self.batch.nsim) if ids is None else np.asarray(ids)
-        self._copy_inputs(rows)
-        self.proxy_batch.set_const(None if ids is None else rows.astype(np.int32))
-        self._copy_outputs(rows)
+    def update(self, rows: Optional[np.ndarray] = None, fields: Optional[Iterable[str]] = None) -> bool:
+        """Recompute the constants for env ``rows`` (sorted, unique int64; None: all).
 
-    def _copy_inputs(self, rows: np.ndarray) -> None:
-        """Every per-env setConst input of the mapped elements, main -> proxy."""
-        expanded = self.batch._expanded  # the fields with per-env values (few)
-        for name in _INPUTS_SET.intersection(expanded):
-            src, dst = self._maps[_kind(name)]
-            self.proxy_batch.expand(name)[rows[:, None], dst[None, :]] = expanded[name][rows[:, None], src[None, :]]
+        Args:
+            rows: the envs.
+            fields: the inertial fields written since the last update (None: any); without
+                ``body_ipos``/``body_iquat`` the frame-dependent constants are kept.
 
-    def _copy_outputs(self, rows: np.ndarray) -> None:
-        """The proxy's derived constants of the mapped elements, proxy -> main."""
-        main, proxy, col = self.batch.expand, self.proxy_batch.expand, rows[:, None]
-        sub = main("body_subtreemass")
-        src_b = self._maps["body"][0]
-        before = sub[col, src_b].sum(axis=1)
-        for name, kind in _OUTPUTS:
-            src, dst = self._maps[kind]
-            main(name)[col, src] = proxy(name)[col, dst]
-        sub[rows, 0] += sub[col, src_b].sum(axis=1) - before
+        Returns:
+            ``False`` (nothing written) where the closed form does not apply to the current
+            values: a per-env armature on an eligible joint or per-env geoms or sites.
+        """
+        rows = np.arange(self.batch.nsim) if rows is None else np.asarray(rows, dtype=np.int64)
+        expanded = self.batch._expanded
+        if any(name in expanded for name in GEOMETRY_FIELDS):
+            return False
+        get, put = _Reader(self.batch, self.model, rows), _Writer(self.batch, rows, self._blocks)
+        if "dof_armature" in expanded and np.any(get("dof_armature", self.dofs) != 0):
+            return False
+        mass, ipos, iquat = get("body_mass", self.bodies), get("body_ipos", self.bodies), get("body_iquat", self.bodies)
+        rot = quat_to_mat(iquat)  # (n, nb, 3, 3): the inertial frame in the body frame
+        cc = ipos * ipos
+        c2 = cc[..., 0] + cc[..., 1] + cc[..., 2]
+        self._inertia_terms(put, mass, get("body_inertia", self.bodies), ipos, rot, cc, c2)
+        if fields is None or "body_ipos" in fields or "body_iquat" in fields:
+            self._frame_terms(put, ipos, iquat, rot, c2)
+        sub = self.batch.expand("body_subtreemass")  # the world's: MuJoCo's sum over its children
+        sel = slice(None) if get.all else rows
+        sub[sel, 0] = self.model.body_mass[0] + sub[sel][:, self.world_children].sum(axis=1)
+        return True
 
+    def _inertia_terms(self, put: "_Writer", mass: np.ndarray, inertia: np.ndarray, ipos: np.ndarray,
+                       rot: np.ndarray, cc: np.ndarray, c2: np.ndarray) -> None:
+        """``body_subtreemass``, ``body_invweight0``, ``dof_M0`` and ``dof_invweight0``."""
+        n = max(len(mass), len(inertia), len(ipos), len(rot))
+        inv_i, inv_m = 1.0 / inertia, 1.0 / mass
+        mean_inv = (inv_i[..., 0] + inv_i[..., 1] + inv_i[..., 2]) / 3
+        c_in = (ipos[..., None, :] @ rot)[..., 0, :]  # centre of mass in the inertial frame
+        w = c_in * c_in * inv_i
+        lever = c2 * mean_inv - (w[..., 0] + w[..., 1] + w[..., 2]) / 3
+        out = np.empty((n, len(self.bodies), 14))  # invweight0 (2), M0 (6), dof invweight0 (6)
+        out[..., 0], out[..., 1] = inv_m, mean_inv
+        out[..., 2:5] = mass[..., None]
+        out[..., 5:8] = ((rot * rot) @ inertia[..., None])[..., 0] + mass[..., None] * (c2[..., None] - cc)
+        out[..., 8:11] = (inv_m + lever)[..., None]
+        out[..., 11:14] = mean_inv[..., None]
+        put("body_subtreemass", self.bodies, mass)
+        put("body_invweight0", self.bodies, out[..., :2])
+        put("dof_M0", self.dofs, out[..., 2:8])
+        put("dof_invweight0", self.dofs, out[..., 8:])
 
-def _kind(name: str) -> str:
-    if name in ("qpos0", "qpos_spring"):
-        return "qpos"
-    return {"jnt": "jnt", "dof": "dof", "body": "body", "geom": "geom"}.get(name.split("_", 1)[0], "other")
-
-
-_INPUTS = tuple(sorted(n for n in mujoco.MjModel._setconst_inputs
-                      if n in mjbatch.MODEL_FIELDS and _kind(n) in ("qpos", "body", "jnt", "dof", "geom")))
-"""The per-env setConst inputs that may concern a proxy body (copied to the proxy)."""
-_INPUTS_SET = frozenset(_INPUTS)
-_OUTPUTS = tuple((name, _kind(name)) for name in _DERIVED) + (("bvh_aabb", "bvh"),)
-
-
-def _proxy_model(spec: mujoco.MjSpec, keep: set[str]) -> mujoco.MjModel:
-    """A copy of ``spec`` with only the world bodies named in ``keep`` (and their meshes)."""
-    proxy = spec.copy()
-    world = proxy.worldbody
-    for body in list(world.bodies):
-        if body.name not in keep:
-            proxy.delete(body)
-    for group in (world.geoms, world.sites, world.cameras, world.lights, proxy.actuators, proxy.sensors,
-                  proxy.tendons, proxy.equalities, proxy.excludes, proxy.pairs, proxy.keys):
-        for element in list(group):
-            proxy.delete(element)
-    used = {g.meshname for b in world.bodies for g in b.geoms if g.meshname}
-    for mesh in list(proxy.meshes):
-        if mesh.name not in used:
-            proxy.delete(mesh)
-    return proxy.compile()
-
-
-def _index_maps(model: mujoco.MjModel, proxy: mujoco.MjModel, bodies: list[int],
-                pids: list[int]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """``{kind: (main indices, proxy indices)}`` of bodies, joints, dofs, geoms, bvh nodes."""
-    pairs: dict[str, list[tuple[int, int]]] = {k: [] for k in ("body", "jnt", "dof", "geom", "bvh", "qpos")}
-    for b, p in zip(bodies, pids):
-        pairs["body"].append((b, p))
-        pairs["jnt"].append((int(model.body_jntadr[b]), int(proxy.body_jntadr[p])))
-        jnt, pjnt = int(model.body_jntadr[b]), int(proxy.body_jntadr[p])
-        pairs["qpos"] += _ranges(model.jnt_qposadr[jnt], proxy.jnt_qposadr[pjnt], 7)
-        pairs["dof"] += _ranges(model.body_dofadr[b], proxy.body_dofadr[p], model.body_dofnum[b])
-        pairs["geom"] += _ranges(model.body_geomadr[b], proxy.body_geomadr[p], model.body_geomnum[b])
-        pairs["bvh"] += _ranges(model.body_bvhadr[b], proxy.body_bvhadr[p], model.body_bvhnum[b])
-    return {k: (np.array([a for a, _ in v], dtype=np.int64), np.array([c for _, c in v], dtype=np.int64))
-            for k, v in pairs.items()}
+    def _frame_terms(self, put: "_Writer", ipos: np.ndarray, iquat: np.ndarray, rot: np.ndarray,
+                     c2: np.ndarray) -> None:
+        """``*_sameframe``, ``dof_length`` of the rotations and ``bvh_aabb``."""
+        layout = self.layout
+        put("body_sameframe", self.bodies, body_sameframe(null_vec(ipos), null_quat(iquat)))
+        for kind, (ids, owner, pos, quat) in layout.rotated.items():
+            if len(ids):
+                put(f"{kind}_sameframe", ids, member_sameframe(pos, quat, ipos[:, owner], iquat[:, owner]))
+        size = layout.sizes(ipos, np.sqrt(c2))
+        put("dof_length", self.rot_dofs, np.broadcast_to(size[..., None], size.shape + (3,)))
+        if len(layout.bvh.nodes):
+            put("bvh_aabb", layout.bvh.nodes, layout.bvh.boxes(rot, ipos))
 
 
-def _ranges(a: Any, b: Any, n: Any) -> Iterable[tuple[int, int]]:
-    return [(int(a) + k, int(b) + k) for k in range(int(n))]
+class _Reader:
+    """Current values of model fields for env ``rows``: ``(n, ...)`` where the field is
+    per env, ``(1, ...)`` (to broadcast) where every env shares the model's value."""
+
+    def __init__(self, batch: mjbatch.Batch, model: mujoco.MjModel, rows: np.ndarray):
+        self.batch, self.model, self.rows = batch, model, rows
+        self.all = len(rows) == batch.nsim
+
+    def __call__(self, name: str, index: np.ndarray) -> np.ndarray:
+        per_env = self.batch._expanded.get(name)
+        if per_env is None:
+            return getattr(self.model, name)[index][None]
+        if self.all:
+            return per_env[:, index]
+        return per_env[self.rows.reshape((-1,) + (1,) * index.ndim), index]
+
+
+class _Writer:
+    """Writes derived fields of env ``rows`` into the batch's per-env (expanded) values;
+    a contiguous block of elements of every env is written as one slice (``blocks``
+    caches which element-id arrays are contiguous)."""
+
+    def __init__(self, batch: mjbatch.Batch, rows: np.ndarray, blocks: dict[int, tuple[np.ndarray, Optional[slice]]]):
+        self.batch, self.blocks = batch, blocks
+        self.all, self._ids = len(rows) == batch.nsim, rows
+
+    def __call__(self, name: str, index: np.ndarray, values: np.ndarray) -> None:
+        field = self.batch.expand(name)
+        if not self.all:
+            field[self._ids.reshape((-1,) + (1,) * index.ndim), index] = values
+            return
+        block = _block(index, self.blocks)
+        if block is None:
+            field[:, index] = values
+        else:
+            field[:, block] = values.reshape(values.shape[:1] + (-1,) + field.shape[2:])
+
+
+def _block(index: np.ndarray, cache: dict[int, tuple[np.ndarray, Optional[slice]]]) -> Optional[slice]:
+    """``index`` (element ids, any shape) as a slice when it is a contiguous run."""
+    hit = cache.get(id(index))
+    if hit is None or hit[0] is not index:
+        flat = index.reshape(-1)
+        run = len(flat) > 0 and bool((np.diff(flat) == 1).all())
+        hit = (index, slice(int(flat[0]), int(flat[-1]) + 1) if run else None)
+        cache[id(index)] = hit
+    return hit[1]

@@ -122,7 +122,7 @@ class Scene:
         self.model = self._b().compile()
         cfg = self.sim_cfg
         self.sim = BatchSim(self.model, self.num_envs, substeps=cfg.physics_substeps,
-                            nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent, spec=self.builder.spec)
+                            nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent)
         for uid, rec in self.builder.records.items():
             self._make_entity(uid, rec)
         for sensor in self.sensors.values():

@@ -52,24 +52,25 @@ def test_write_model_defers_one_constants_update_for_the_written_envs(build, mon
     from embodichain_core.sim.free_body_const import FreeBodyConstants
 
     env = build()
-    full, proxy = [], []
+    full, closed = [], []
     original = env.sim.batch.set_const
     env.sim.batch.set_const = lambda ids=None: (full.append(ids), original(ids))[1]
     update = FreeBodyConstants.update
-    monkeypatch.setattr(FreeBodyConstants, "update", lambda self, ids: (proxy.append(ids), update(self, ids))[1])
+    monkeypatch.setattr(FreeBodyConstants, "update",
+                        lambda self, ids, fields=None: (closed.append(ids), update(self, ids, fields))[1])
     body = env.scene["cube"].body_id
     before = field(env, "body_mass")[:, body]
     write_model(env.sim, torch.tensor([1, 2]), [("body_mass", body, [2.0, 3.0]), ("body_inertia", body, 1e-3),
                                                 ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9)])
     after = field(env, "body_mass")[:, body]
     assert after[1] == 2.0 and after[2] == 3.0 and after[0] == before[0] and after[3] == before[3]
-    assert full == proxy == []  # deferred: one update before the sim is next used
+    assert full == closed == []  # deferred: one update before the sim is next used
     env.sim.flush_const()
-    # the cube is a free body: its constants come from the small proxy model
-    assert full == [] and len(proxy) == 1 and list(proxy[0]) == [1, 2]
+    # the cube is a free body: its constants come in closed form
+    assert full == [] and len(closed) == 1 and list(closed[0]) == [1, 2]
     write_model(env.sim, torch.tensor([0]), [("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.5)])
     env.sim.flush_const()
-    assert len(full) + len(proxy) == 1  # friction feeds no derived constant
+    assert len(full) + len(closed) == 1  # friction feeds no derived constant
     link = int(env.robot.body_ids[-1])
     write_model(env.sim, torch.tensor([3]), [("body_mass", link, 1.0), ("body_mass", body, 1.0)])
     env.sim.flush_const()
