@@ -188,6 +188,28 @@ def test_a_com_moved_off_a_geom_frame_keeps_the_geom_in_place(monkeypatch):
     np.testing.assert_allclose(geom_xpos, fast.get_data(0).geom_xpos[geom], atol=1e-12)
 
 
+def test_collision_filters_and_inertia_of_a_swapped_part_skip_mj_set_const(monkeypatch):
+    """What a per-env mesh swap writes: geom collision filters (of any body) and a free
+    body's inertia; the bodies' aggregate filters follow without mj_setConst."""
+    fast, full, model = _sims()
+    calls = _full_set_const_calls(fast, monkeypatch)
+    rng = np.random.default_rng(4)
+    box, arm = (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in ("box", "arm"))
+    box_geoms = list(range(model.body_geomadr[box], model.body_geomadr[box] + model.body_geomnum[box]))
+    for sim in (fast, full):
+        sim.set_model_field("geom_contype", [0, 3], box_geoms, np.array([[0, 1, 4, 0], [2, 0, 0, 8]]))
+        sim.set_model_field("geom_conaffinity", [3], box_geoms[1], 5)
+        sim.set_model_field("geom_contype", [5], int(model.body_geomadr[arm]), 6)  # a robot link's geom
+    _write((fast, full), model, "box", [0, 3], rng)
+    for sim in (fast, full):
+        sim.flush_const()
+    assert calls == []
+    _assert_same(fast, full)
+    for name in ("body_contype", "body_conaffinity"):
+        np.testing.assert_array_equal(fast.model_field(name), full.model_field(name), err_msg=name)
+    assert fast.model_field("body_contype")[0, box] == 5 and fast.model_field("body_contype")[3, box] == 10
+
+
 def test_a_per_env_armature_takes_the_full_path(monkeypatch):
     fast, full, model = _sims()
     calls = _full_set_const_calls(fast, monkeypatch)

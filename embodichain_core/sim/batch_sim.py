@@ -28,7 +28,7 @@ from embodichain_core.sim.env_rows import batch_ids as _batch_ids
 from embodichain_core.sim.env_rows import field_selector as _field_selector
 from embodichain_core.sim.env_rows import index_bodies as _index_bodies
 from embodichain_core.sim.env_rows import np_ids as _np_ids
-from embodichain_core.sim.free_body_const import INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
+from embodichain_core.sim.free_body_const import FILTER_FIELDS, INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
 
 STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
 OUTPUT_FIELDS = ("xpos", "xquat", "xmat", "cvel", "site_xpos", "site_xmat", "qfrc_actuator", "actuator_force",
@@ -223,7 +223,11 @@ class BatchSim(PerEnvModels):
         return True
 
     def _free_body_field(self, name: str, index: Any) -> bool:
-        if name not in INERTIAL_FIELDS or not self._fast_constants or self.env_models is not None:
+        if not self._fast_constants or self.env_models is not None:
+            return False
+        if name in FILTER_FIELDS:  # any geom's: only the bodies' aggregate filters follow
+            return True
+        if name not in INERTIAL_FIELDS:
             return False
         if self._free_bodies is None:
             self._free_bodies = frozenset(eligible_bodies(self.model))
@@ -263,7 +267,9 @@ class BatchSim(PerEnvModels):
     def _free_body_constants(self) -> FreeBodyConstants:
         """The closed-form constants of the eligible free bodies (built on first use)."""
         if self._free_const is None:
-            self._free_const = FreeBodyConstants(self.model, self.batch, sorted(self._free_bodies or ()))
+            if self._free_bodies is None:
+                self._free_bodies = frozenset(eligible_bodies(self.model))
+            self._free_const = FreeBodyConstants(self.model, self.batch, sorted(self._free_bodies))
         return self._free_const
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:

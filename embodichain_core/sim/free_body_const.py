@@ -44,6 +44,8 @@ from embodichain_core.sim.free_body_geometry import (
 
 INERTIAL_FIELDS = frozenset({"body_mass", "body_inertia", "body_ipos", "body_iquat"})
 """Fields whose change the closed form absorbs (for eligible bodies)."""
+FILTER_FIELDS = frozenset({"geom_contype", "geom_conaffinity"})
+"""Collision filters: every body's aggregate (the OR of its geoms') is recomputed directly."""
 
 _COM_TRACKING = (int(mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM),)
 
@@ -107,6 +109,9 @@ class FreeBodyConstants:
         self.rot_dofs = self.dofs[:, 3:]
         self.world_children = np.flatnonzero(model.body_parentid == 0)[1:]
         self.layout = GeomLayout(model, self.bodies)
+        self.filter_bodies = np.flatnonzero(model.body_geomnum > 0)
+        self.filter_starts = model.body_geomadr[self.filter_bodies].astype(np.int64)
+        self.all_geoms = np.arange(model.ngeom)
         self._blocks: dict[int, tuple[np.ndarray, Optional[slice]]] = {}  # see _Writer
 
     def update(self, rows: Optional[np.ndarray] = None, fields: Optional[Iterable[str]] = None) -> bool:
@@ -114,7 +119,7 @@ class FreeBodyConstants:
 
         Args:
             rows: the envs.
-            fields: the inertial fields written since the last update (None: any); without
+            fields: the fields written since the last update (None: any); without
                 ``body_ipos``/``body_iquat`` the frame-dependent constants are kept.
 
         Returns:
@@ -128,6 +133,10 @@ class FreeBodyConstants:
         get, put = _Reader(self.batch, self.model, rows), _Writer(self.batch, rows, self._blocks)
         if "dof_armature" in expanded and np.any(get("dof_armature", self.dofs) != 0):
             return False
+        if fields is None or not FILTER_FIELDS.isdisjoint(fields):
+            self._filter_terms(get, put)
+        if fields is not None and INERTIAL_FIELDS.isdisjoint(fields):
+            return True
         mass, ipos, iquat = get("body_mass", self.bodies), get("body_ipos", self.bodies), get("body_iquat", self.bodies)
         rot = quat_to_mat(iquat)  # (n, nb, 3, 3): the inertial frame in the body frame
         cc = ipos * ipos
@@ -139,6 +148,12 @@ class FreeBodyConstants:
         sel = slice(None) if get.all else rows
         sub[sel, 0] = self.model.body_mass[0] + sub[sel][:, self.world_children].sum(axis=1)
         return True
+
+    def _filter_terms(self, get: "_Reader", put: "_Writer") -> None:
+        """``body_contype``/``body_conaffinity``: the OR of each body's geoms'."""
+        for geom_field, body_field in (("geom_contype", "body_contype"), ("geom_conaffinity", "body_conaffinity")):
+            flags = get(geom_field, self.all_geoms)
+            put(body_field, self.filter_bodies, np.bitwise_or.reduceat(flags, self.filter_starts, axis=-1))
 
     def _inertia_terms(self, put: "_Writer", mass: np.ndarray, inertia: np.ndarray, ipos: np.ndarray,
                        rot: np.ndarray, cc: np.ndarray, c2: np.ndarray) -> None:
