@@ -64,7 +64,7 @@ class BatchSim(PerEnvModels):
         self._inertial_fields: set[str] = set()  # the inertial fields written since then
         self._const_pending = False
         self._fast_constants = fast_constants  # free bodies' constants in closed form (else mj_setConst)
-        self._free_bodies: Optional[frozenset[int]] = None
+        self._free_bodies: Optional[np.ndarray] = None  # see _eligible_bodies
         self._free_const: Optional[FreeBodyConstants] = None
         self._make_batch()
         self.batch.reset(None)
@@ -223,18 +223,27 @@ class BatchSim(PerEnvModels):
         return True
 
     def _free_body_field(self, name: str, index: Any) -> bool:
+        """Whether a write of ``name[index]`` is one the closed form absorbs."""
         if not self._fast_constants or self.env_models is not None:
             return False
         if name in FILTER_FIELDS:  # any geom's: only the bodies' aggregate filters follow
             return True
         if name not in INERTIAL_FIELDS:
             return False
-        if self._free_bodies is None:
-            self._free_bodies = frozenset(eligible_bodies(self.model))
+        eligible = self._eligible_bodies()
         if isinstance(index, (int, np.integer)):
-            return int(index) in self._free_bodies
+            return bool(eligible[index])
+        if isinstance(index, np.ndarray) and index.dtype.kind in "iu":
+            return bool(eligible[index].all())
         bodies = _index_bodies(index)
-        return bodies is not None and self._free_bodies.issuperset(bodies)
+        return bodies is not None and bool(eligible[bodies].all())
+
+    def _eligible_bodies(self) -> np.ndarray:
+        """``(nbody,)`` mask of the free bodies whose constants have a closed form."""
+        if self._free_bodies is None:
+            self._free_bodies = np.zeros(self.model.nbody, dtype=bool)
+            self._free_bodies[eligible_bodies(self.model)] = True
+        return self._free_bodies
 
     def flush_const(self) -> None:
         """Recompute MuJoCo's derived constants once for every env whose inputs changed.
@@ -267,9 +276,8 @@ class BatchSim(PerEnvModels):
     def _free_body_constants(self) -> FreeBodyConstants:
         """The closed-form constants of the eligible free bodies (built on first use)."""
         if self._free_const is None:
-            if self._free_bodies is None:
-                self._free_bodies = frozenset(eligible_bodies(self.model))
-            self._free_const = FreeBodyConstants(self.model, self.batch, sorted(self._free_bodies))
+            bodies = np.flatnonzero(self._eligible_bodies()).tolist()
+            self._free_const = FreeBodyConstants(self.model, self.batch, bodies)
         return self._free_const
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
