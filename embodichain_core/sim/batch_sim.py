@@ -47,7 +47,17 @@ class SimulationDiverged(RuntimeError):
 
 
 class BatchSim(PerEnvModels):
-    """``num_envs`` MuJoCo simulations of one compiled model."""
+    """``num_envs`` MuJoCo simulations of one compiled model.
+
+    Args:
+        model: the compiled scene.
+        num_envs: simulations (one state row each).
+        substeps: MuJoCo steps per :meth:`step`.
+        nthread: batch threads (0: one per core, at most ``num_envs``).
+        persistent: keep the thread pool between calls.
+        fast_constants: derive what the closed form covers without ``mj_setConst``
+            (False: always the whole model's, e.g. as a reference in tests).
+    """
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
                  persistent: bool = True, fast_constants: bool = True):
@@ -60,10 +70,10 @@ class BatchSim(PerEnvModels):
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
         self._const_dirty = np.zeros(self.num_envs, dtype=bool)  # full mj_setConst due
-        self._inertial_dirty = np.zeros(self.num_envs, dtype=bool)  # free bodies' constants due
-        self._inertial_fields: set[str] = set()  # the inertial fields written since then
+        self._closed_form_dirty = np.zeros(self.num_envs, dtype=bool)  # closed-form update due
+        self._closed_form_fields: set[str] = set()  # the fields written since then
         self._const_pending = False
-        self._fast_constants = fast_constants  # free bodies' constants in closed form (else mj_setConst)
+        self._fast_constants = fast_constants  # closed form where it applies (else always mj_setConst)
         self._free_bodies: Optional[np.ndarray] = None  # see _eligible_bodies
         self._free_const: Optional[FreeBodyConstants] = None
         self._make_batch()
@@ -204,25 +214,26 @@ class BatchSim(PerEnvModels):
         expanded fields); ``mj_setConst`` runs once before they are next used.
 
         ``fields`` (``(name, index)`` pairs of what was written) lets a write of only
-        free bodies' masses and inertial frames take the cheap path
-        (:mod:`embodichain_core.sim.free_body_const`); without it the full one runs.
+        free bodies' masses and inertial frames, or of geoms' collision filters, take
+        the closed form (:mod:`embodichain_core.sim.free_body_const`); without it the
+        full one runs.
         """
         ids = _np_ids(env_ids, self.num_envs)
         fields = None if fields is None else list(fields)
-        if fields is not None and self._all_free_body_fields(fields):
-            self._inertial_dirty[ids] = True
-            self._inertial_fields.update(name for name, _ in fields)
+        if fields is not None and self._all_closed_form_fields(fields):
+            self._closed_form_dirty[ids] = True
+            self._closed_form_fields.update(name for name, _ in fields)
         else:
             self._const_dirty[ids] = True
         self._const_pending = True
 
-    def _all_free_body_fields(self, fields: Iterable[tuple[str, Any]]) -> bool:
+    def _all_closed_form_fields(self, fields: Iterable[tuple[str, Any]]) -> bool:
         for name, index in fields:
-            if not self._free_body_field(name, index):
+            if not self._closed_form_field(name, index):
                 return False
         return True
 
-    def _free_body_field(self, name: str, index: Any) -> bool:
+    def _closed_form_field(self, name: str, index: Any) -> bool:
         """Whether a write of ``name[index]`` is one the closed form absorbs."""
         if not self._fast_constants or self.env_models is not None:
             return False
@@ -259,10 +270,10 @@ class BatchSim(PerEnvModels):
             return
         self._const_pending = False
         full = np.flatnonzero(self._const_dirty)
-        fast = np.flatnonzero(self._inertial_dirty & ~self._const_dirty)
+        fast = np.flatnonzero(self._closed_form_dirty & ~self._const_dirty)
         self._const_dirty[:] = False
-        self._inertial_dirty[:] = False
-        written, self._inertial_fields = self._inertial_fields, set()
+        self._closed_form_dirty[:] = False
+        written, self._closed_form_fields = self._closed_form_fields, set()
         if len(fast) and not self._free_body_constants().update(fast, written):
             full = np.union1d(full, fast).astype(np.int64)  # a case the closed form does not cover
         if not len(full):
