@@ -32,7 +32,7 @@ same derived fields.
 
 from __future__ import annotations
 
-from typing import Iterable, Optional
+from typing import Callable, Iterable, Optional
 
 import mujoco
 import mujoco.batch as mjbatch
@@ -92,6 +92,10 @@ def _attached_bodies(model: mujoco.MjModel) -> set[int]:
     return out
 
 
+_Get = Callable[[str, np.ndarray], np.ndarray]  # _EnvRows.get
+_Put = Callable[[str, np.ndarray, np.ndarray], None]  # _EnvRows.put
+
+
 class FreeBodyConstants:
     """Refreshes the derived constants of the eligible bodies of ``model`` in ``batch``'s
     per-env (expanded) fields, for some envs, without ``mj_setConst``.
@@ -112,7 +116,7 @@ class FreeBodyConstants:
         self.filter_bodies = np.flatnonzero(model.body_geomnum > 0)
         self.filter_starts = model.body_geomadr[self.filter_bodies].astype(np.int64)
         self.all_geoms = np.arange(model.ngeom)
-        self._blocks: dict[int, tuple[np.ndarray, Optional[slice]]] = {}  # see _Writer
+        self._blocks: dict[int, tuple[np.ndarray, Optional[slice]]] = {}  # see _EnvRows
 
     def update(self, rows: Optional[np.ndarray] = None, fields: Optional[Iterable[str]] = None) -> bool:
         """Recompute the constants for env ``rows`` (sorted, unique int64; None: all).
@@ -130,7 +134,8 @@ class FreeBodyConstants:
         expanded = self.batch._expanded
         if any(name in expanded for name in GEOMETRY_FIELDS):
             return False
-        get, put = _Reader(self.batch, self.model, rows), _Writer(self.batch, rows, self._blocks)
+        env_rows = _EnvRows(self.batch, self.model, rows, self._blocks)
+        get, put = env_rows.get, env_rows.put
         if "dof_armature" in expanded and np.any(get("dof_armature", self.dofs) != 0):
             return False
         if fields is None or not FILTER_FIELDS.isdisjoint(fields):
@@ -145,17 +150,17 @@ class FreeBodyConstants:
         if fields is None or "body_ipos" in fields or "body_iquat" in fields:
             self._frame_terms(put, ipos, iquat, rot, c2)
         sub = self.batch.expand("body_subtreemass")  # the world's: MuJoCo's sum over its children
-        sel = slice(None) if get.all else rows
+        sel = slice(None) if env_rows.all else rows
         sub[sel, 0] = self.model.body_mass[0] + sub[sel][:, self.world_children].sum(axis=1)
         return True
 
-    def _filter_terms(self, get: "_Reader", put: "_Writer") -> None:
+    def _filter_terms(self, get: _Get, put: _Put) -> None:
         """``body_contype``/``body_conaffinity``: the OR of each body's geoms'."""
         for geom_field, body_field in (("geom_contype", "body_contype"), ("geom_conaffinity", "body_conaffinity")):
             flags = get(geom_field, self.all_geoms)
             put(body_field, self.filter_bodies, np.bitwise_or.reduceat(flags, self.filter_starts, axis=-1))
 
-    def _inertia_terms(self, put: "_Writer", mass: np.ndarray, inertia: np.ndarray, ipos: np.ndarray,
+    def _inertia_terms(self, put: _Put, mass: np.ndarray, inertia: np.ndarray, ipos: np.ndarray,
                        rot: np.ndarray, cc: np.ndarray, c2: np.ndarray) -> None:
         """``body_subtreemass``, ``body_invweight0``, ``dof_M0`` and ``dof_invweight0``."""
         n = max(len(mass), len(inertia), len(ipos), len(rot))
@@ -175,7 +180,7 @@ class FreeBodyConstants:
         put("dof_M0", self.dofs, out[..., 2:8])
         put("dof_invweight0", self.dofs, out[..., 8:])
 
-    def _frame_terms(self, put: "_Writer", ipos: np.ndarray, iquat: np.ndarray, rot: np.ndarray,
+    def _frame_terms(self, put: _Put, ipos: np.ndarray, iquat: np.ndarray, rot: np.ndarray,
                      c2: np.ndarray) -> None:
         """``*_sameframe``, ``dof_length`` of the rotations and ``bvh_aabb``."""
         layout = self.layout
@@ -189,36 +194,32 @@ class FreeBodyConstants:
             put("bvh_aabb", layout.bvh.nodes, layout.bvh.boxes(rot, ipos))
 
 
-class _Reader:
-    """Current values of model fields for env ``rows``: ``(n, ...)`` where the field is
-    per env, ``(1, ...)`` (to broadcast) where every env shares the model's value."""
+class _EnvRows:
+    """Model fields of env ``rows`` in ``batch``: :meth:`get` reads current values
+    (``(n, ...)`` where the field is per env, ``(1, ...)`` to broadcast where every env
+    shares the model's); :meth:`put` writes derived values into the per-env (expanded)
+    field, as one slice when every env is written and the elements are a contiguous run
+    (``blocks`` caches which element-id arrays are)."""
 
-    def __init__(self, batch: mjbatch.Batch, model: mujoco.MjModel, rows: np.ndarray):
-        self.batch, self.model, self.rows = batch, model, rows
+    def __init__(self, batch: mjbatch.Batch, model: mujoco.MjModel, rows: np.ndarray,
+                 blocks: dict[int, tuple[np.ndarray, Optional[slice]]]):
+        self.batch, self.model, self.rows, self.blocks = batch, model, rows, blocks
         self.all = len(rows) == batch.nsim
 
-    def __call__(self, name: str, index: np.ndarray) -> np.ndarray:
+    def _select(self, index: np.ndarray) -> tuple:
+        """``field[selector]`` of elements ``index`` (any shape) of the rows: ``(n,) + index.shape``."""
+        return self.rows.reshape((-1,) + (1,) * index.ndim), index
+
+    def get(self, name: str, index: np.ndarray) -> np.ndarray:
         per_env = self.batch._expanded.get(name)
         if per_env is None:
             return getattr(self.model, name)[index][None]
-        if self.all:
-            return per_env[:, index]
-        return per_env[self.rows.reshape((-1,) + (1,) * index.ndim), index]
+        return per_env[:, index] if self.all else per_env[self._select(index)]
 
-
-class _Writer:
-    """Writes derived fields of env ``rows`` into the batch's per-env (expanded) values;
-    a contiguous block of elements of every env is written as one slice (``blocks``
-    caches which element-id arrays are contiguous)."""
-
-    def __init__(self, batch: mjbatch.Batch, rows: np.ndarray, blocks: dict[int, tuple[np.ndarray, Optional[slice]]]):
-        self.batch, self.blocks = batch, blocks
-        self.all, self._ids = len(rows) == batch.nsim, rows
-
-    def __call__(self, name: str, index: np.ndarray, values: np.ndarray) -> None:
+    def put(self, name: str, index: np.ndarray, values: np.ndarray) -> None:
         field = self.batch.expand(name)
         if not self.all:
-            field[self._ids.reshape((-1,) + (1,) * index.ndim), index] = values
+            field[self._select(index)] = values
             return
         block = _block(index, self.blocks)
         if block is None:
