@@ -1,7 +1,8 @@
 """Helpers shared by the functors: env ids, per-env sampling, parameter errors.
 
 Every random draw goes through :func:`uniform` (or :func:`randint`) with
-``env.generator``, one row per env in ``env_ids``, so each env draws its own
+``env.np_random`` (the numpy generator the env seeds from its seed, next to the
+torch ``env.generator``), one row per env in ``env_ids``, so each env draws its own
 value and a run is reproducible from the env seed.
 """
 
@@ -103,9 +104,9 @@ def uniform(env: Any, low: Any, high: Any, n: int) -> torch.Tensor:
 
 
 def uniform_np(env: Any, low: Any, high: Any, n: int) -> np.ndarray:
-    """:func:`uniform` as a numpy array (the same draws from ``env.generator``)."""
+    """:func:`uniform` as a numpy array (the same draws from ``env.np_random``)."""
     low_np, span = _bounds(low, high)
-    draw = torch.rand((n,) + low_np.shape, generator=env.generator, dtype=torch.float64).numpy()
+    draw = env.np_random.random((n,) + low_np.shape)
     draw *= span
     draw += low_np
     return draw
@@ -133,8 +134,8 @@ def _bounds(low: Any, high: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def randint(env: Any, high: int, shape: Sequence[int]) -> torch.Tensor:
-    """Integers in ``[0, high)`` drawn from ``env.generator``."""
-    return torch.randint(0, int(high), tuple(shape), generator=env.generator)
+    """Integers in ``[0, high)`` drawn from ``env.np_random`` (an int64 tensor)."""
+    return torch.from_numpy(env.np_random.integers(0, int(high), tuple(shape), dtype=np.int64))
 
 
 _RANGES: dict[tuple[int, Optional[int]], tuple[Any, torch.Tensor, torch.Tensor]] = {}

@@ -40,11 +40,12 @@ def test_ranges_are_checked_and_cached() -> None:
 
 def test_uniform_draws_per_env_from_the_env_generator() -> None:
     class Env:
-        generator = torch.Generator().manual_seed(0)
+        np_random = np.random.default_rng(0)
 
     draws = uniform(Env(), torch.zeros(3), torch.ones(3), 8)
     assert draws.shape == (8, 3) and len(set(draws[:, 0].tolist())) == 8
-    Env.generator = torch.Generator().manual_seed(0)
+    assert not torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
+    Env.np_random = np.random.default_rng(0)
     assert torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
 
 

@@ -3,6 +3,7 @@ solver: the robots plugin provides real ones), root poses, virtual targets."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import torch
 from functors_testlib import CUBE_POS, apply, event, others, toy_ik_arm_cfg
@@ -147,11 +148,11 @@ def test_target_pose_relative_to_a_reference_entity(build) -> None:
 
 def test_get_random_pose_is_reproducible() -> None:
     class Env:
-        generator = torch.Generator().manual_seed(3)
+        np_random = np.random.default_rng(3)
 
     init = torch.tensor([[0.0, 0, 0, 1, 0, 0, 0]]).expand(5, 7)
     a = rand.get_random_pose(Env(), init, [[-1, -1, -1], [1, 1, 1]], [[0, 0, -180], [0, 0, 180]])
-    Env.generator = torch.Generator().manual_seed(3)
+    Env.np_random = np.random.default_rng(3)
     b = rand.get_random_pose(Env(), init, [[-1, -1, -1], [1, 1, 1]], [[0, 0, -180], [0, 0, 180]])
     assert torch.equal(a, b) and torch.allclose(a[:, 3:].norm(dim=-1), torch.ones(5, dtype=torch.float64))
 

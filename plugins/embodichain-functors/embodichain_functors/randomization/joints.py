@@ -1,6 +1,6 @@
 """Joint randomization: passive damping and stiffness, and drive gains, per env and joint.
 
-Values are drawn from ``env.generator`` and written into the per-env model fields of
+Values are drawn from ``env.np_random`` and written into the per-env model fields of
 ``env_ids`` only (``dof_damping``, ``jnt_stiffness``, the drive actuators' gains).
 """
 

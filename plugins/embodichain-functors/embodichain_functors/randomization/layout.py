@@ -61,7 +61,7 @@ class planner_grid_cell_sampler(CheckedFunctor):
         ids = env_ids_of(env, env_ids)
         low, high = as_range(position_range, type(self).__name__, "position_range", 2)
         cols, rows = int(grid_size[0]), int(grid_size[1])
-        cells = torch.rand(len(ids), cols * rows, generator=env.generator).argsort(dim=1)
+        cells = torch.from_numpy(env.np_random.random((len(ids), cols * rows)).argsort(axis=1))
         cell_size = (high - low) / torch.tensor([cols, rows], dtype=torch.float64)
         for k, uid in enumerate(object_uid_list):
             cell = cells[:, k]

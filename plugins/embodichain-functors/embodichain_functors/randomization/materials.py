@@ -188,7 +188,7 @@ class randomize_visual_material(CheckedFunctor):
             color = uniform_np(env, low, high, n * parts).reshape(n, parts, 3)
             rgba[..., :3], texid[:] = color[:, self._part], -1
         if len(self.textures) and random_texture_prob > 0:
-            use = (torch.rand(n, parts, generator=env.generator) < random_texture_prob).numpy()[:, self._part]
+            use = (env.np_random.random((n, parts)) < random_texture_prob)[:, self._part]
             pick = self.textures[randint(env, len(self.textures), (n, parts)).numpy()][:, self._part]
             texid = np.where(use, pick, texid)
             rgba = np.where(use[..., None], 1.0, rgba)

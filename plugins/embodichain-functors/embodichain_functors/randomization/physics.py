@@ -1,6 +1,6 @@
 """Physics randomization: masses, centres of mass, friction; joint damping, stiffness and
 drive gains live in :mod:`.joints` (re-exported here). Every value is drawn per env from
-``env.generator`` and written into the per-env model fields of ``env_ids`` only."""
+``env.np_random`` and written into the per-env model fields of ``env_ids`` only."""
 
 from __future__ import annotations
 
