@@ -18,7 +18,7 @@ all envs (raw MuJoCo, the batch of a third, plain env) is timed in the same
 interleaved rounds; ``extra / raw forward`` is the extra cost in units of it.
 
 Usage:
-    python benchmarks/reset_randomization.py [--num-envs 64] [--repeats 40]
+    python benchmarks/reset_randomization.py [--num-envs 64] [--repeats 200]
         [--cpu-num 0] [--out benchmarks/results/reset_randomization.json] [--quick]
 """
 
@@ -190,7 +190,7 @@ def measure(num_envs: int, repeats: int) -> tuple[dict[str, Any], list[dict[str,
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--num-envs", type=int, nargs="+", default=[64])
-    parser.add_argument("--repeats", type=int, default=40)
+    parser.add_argument("--repeats", type=int, default=200)
     parser.add_argument("--out", default=DEFAULT_OUT, help="JSON output ('' writes none)")
     parser.add_argument("--quick", action="store_true", help="2 envs, 2 repeats: checks the script runs")
     parser.add_argument("--cpu-num", type=int, default=0, help="simulation threads (0: one per core)")
