@@ -4,7 +4,6 @@ demo rounds (data generation with retries), the preview and the end-of-run summa
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, Optional
 

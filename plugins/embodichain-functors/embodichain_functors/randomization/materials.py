@@ -15,7 +15,6 @@ from typing import Any, Optional
 
 import mujoco
 import numpy as np
-import torch
 
 from embodichain_core.sim.builder import GROUND_UID
 from embodichain_core.sim.data import get_data_path
