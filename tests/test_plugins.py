@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -16,7 +17,8 @@ import pytest
 
 from embodichain_core.plugins import (
     CORE_PLUGIN_NAME,
-    DuplicateRegistrationError,
+    AmbiguousNameError,
+    NameClashWarning,
     PluginLoadWarning,
     failed_plugins,
     get_asset_root,
@@ -144,13 +146,41 @@ def test_raising_hook_rolls_back_and_others_load(monkeypatch: pytest.MonkeyPatch
             assert pm.get_plugin("raising") is None
 
 
-def test_duplicate_across_plugins_names_both(monkeypatch: pytest.MonkeyPatch) -> None:
-    eps = FakeEntryPoint("plugin-a", FunctorPlugin), FakeEntryPoint("plugin-b", OtherFunctorPlugin)
-    with pytest.warns(PluginLoadWarning, match="'plugin-a' and by 'plugin-b'"):
-        with _load_with(monkeypatch, *eps) as pm:
+@pytest.mark.parametrize("reverse", [False, True])
+def test_clash_across_plugins_keeps_both(monkeypatch: pytest.MonkeyPatch, reverse: bool) -> None:
+    monkeypatch.delenv("EMBODICHAIN_PLUGIN_PRIORITY", raising=False)
+    eps = [FakeEntryPoint("plugin-a", FunctorPlugin), FakeEntryPoint("plugin-b", OtherFunctorPlugin)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a clash is no load failure
+        with _load_with(monkeypatch, *(eps[::-1] if reverse else eps)) as pm:
             functors = pm.registry("functors")
-            assert functors.entry("randomize_light").provider == "plugin-a"
-            assert "reach_reward" not in functors  # plugin-b contributes nothing
+            assert {i.name: i.status for i in list_plugins()} == {
+                CORE_PLUGIN_NAME: "loaded", "plugin-a": "loaded", "plugin-b": "loaded"}
+            assert functors.get("plugin-a:randomize_light") is json.dumps
+            assert functors.get("plugin-b:randomize_light") is json.loads
+            assert functors.get("reach_reward") is json.dumps and functors.get("joint_pos") is json.loads
+            with pytest.raises(AmbiguousNameError, match="'plugin-a' and 'plugin-b'"):
+                functors.get("randomize_light")
+            assert [str(c) for c in pm.name_clashes()] == [
+                "functor 'randomize_light' is provided by 'plugin-a' and 'plugin-b' "
+                "(use 'plugin-a:randomize_light' or 'plugin-b:randomize_light')"]
+            assert not is_visual_randomization("randomize_light")  # ambiguous: decided at resolution
+
+
+def test_plugins_are_named_after_their_distribution_and_load_sorted(monkeypatch: pytest.MonkeyPatch) -> None:
+    def dist(name: str) -> Any:
+        return types.SimpleNamespace(name=name, version="2.0")
+
+    eps = [FakeEntryPoint("zeta", FunctorPlugin, dist=dist("Zeta_Plugin")),
+           FakeEntryPoint("alpha-main", OtherFunctorPlugin, dist=dist("Alpha.Plugin")),
+           FakeEntryPoint("alpha-plugin", TaskPlugin, dist=dist("Alpha.Plugin"))]
+    with _load_with(monkeypatch, *eps) as pm:
+        infos = list_plugins()
+        assert [(i.name, i.entry_point) for i in infos] == [
+            (CORE_PLUGIN_NAME, ""), ("alpha-plugin", "alpha-plugin"), ("alpha-plugin.alpha-main", "alpha-main"),
+            ("zeta-plugin", "zeta")]
+        assert pm.registry("functors").get("zeta-plugin:joint_pos") is json.loads
+        assert "alpha-plugin/EcTestTask-v0" in pm.registry("tasks")
 
 
 def test_block_env_var(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -242,7 +272,27 @@ def test_isolation_removes_gym_ids_and_restores_state() -> None:
     assert get_plugin_manager() is outer
 
 
-def test_gym_id_same_entry_point_ok_other_is_duplicate(plugin_manager: Any) -> None:  # noqa: F811
+def test_nested_isolation_shadows_and_restores_the_outer_gym_ids() -> None:
+    import gymnasium
+
+    class OtherTaskPlugin:
+        @hookimpl
+        def embodichain_register_tasks(self, register: Any) -> None:
+            register("EcTestTask-v0", "other_pkg:OtherEnv")
+
+    with isolated_plugins():
+        register_plugin(TaskPlugin(), name="outer")
+        outer_spec = gymnasium.registry["EcTestTask-v0"]
+        with isolated_plugins():
+            assert gymnasium.registry["EcTestTask-v0"] is outer_spec  # visible until shadowed
+            register_plugin(OtherTaskPlugin(), name="inner")
+            assert gymnasium.registry["EcTestTask-v0"].entry_point == "other_pkg:OtherEnv"
+        assert gymnasium.registry["EcTestTask-v0"] is outer_spec
+        assert "inner/EcTestTask-v0" not in gymnasium.registry and "outer/EcTestTask-v0" in gymnasium.registry
+    assert "EcTestTask-v0" not in gymnasium.registry
+
+
+def test_gym_id_from_outside_the_plugins_is_left_alone(plugin_manager: Any) -> None:  # noqa: F811
     import gymnasium
 
     gymnasium.register("EcTestTask-v0", entry_point="ec_test_tasks:TestEnv")
@@ -257,8 +307,11 @@ def test_gym_id_same_entry_point_ok_other_is_duplicate(plugin_manager: Any) -> N
             def embodichain_register_tasks(self, register: Any) -> None:
                 register("EcTestTask-v0", "other_pkg:OtherEnv")
 
-        with pytest.raises(DuplicateRegistrationError, match="gymnasium registry(.|\n)*'clash'"):
-            register_plugin(Clash(), name="clash")
+        with pytest.warns(NameClashWarning, match="'EcTestTask-v0' is already registered outside(.|\n)*"
+                                                  "'ec_test_tasks:TestEnv'(.|\n)*'clash/EcTestTask-v0'"):
+            register_plugin(Clash(), name="clash")  # the plugin still loads, under its namespace
+        assert gymnasium.registry["EcTestTask-v0"].entry_point == "ec_test_tasks:TestEnv"
+        assert gymnasium.registry["clash/EcTestTask-v0"].entry_point == "other_pkg:OtherEnv"
     finally:
         gymnasium.registry.pop("EcTestTask-v0", None)
 

@@ -1,4 +1,4 @@
-"""Registries: duplicates, unknown names, lazy targets, typed register objects."""
+"""Registries: clashes and qualified names, unknown names, lazy targets, typed register objects."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from embodichain_core.plugins.hookspecs import (
     SensorRegister,
 )
 from embodichain_core.plugins.registry import (
+    AmbiguousNameError,
     DuplicateRegistrationError,
     Registry,
     TargetImportError,
@@ -47,13 +48,55 @@ def test_add_get_and_queries() -> None:
     assert len(reg) == 1 and list(reg) == ["randomize_light"]
 
 
-def test_duplicate_names_both_providers() -> None:
+def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("EMBODICHAIN_PLUGIN_PRIORITY", raising=False)
+    reg = Registry("functors")
+    reg.add("randomize_light", "json:dumps", provider="plugin-b")
+    reg.add("randomize_light", "json:loads", provider="plugin-a")
+    reg.add("joint_pos", "json:JSONDecoder", provider="plugin-b")
+    assert reg.get("plugin-a:randomize_light") is json.loads
+    assert reg.get("plugin-b:randomize_light") is json.dumps
+    assert reg.get("joint_pos") is json.JSONDecoder  # unique bare names still resolve
+    assert reg.names() == ["joint_pos", "randomize_light"] and len(reg) == 3
+    assert reg.clashes() == {"randomize_light": ["plugin-a", "plugin-b"]}
+    assert "randomize_light" in reg and "plugin-a:randomize_light" in reg and "plugin-a:joint_pos" not in reg
+    with pytest.raises(AmbiguousNameError) as info:
+        reg.get("randomize_light")
+    assert str(info.value) == (
+        "functor 'randomize_light' is ambiguous: it is provided by 'plugin-a' and 'plugin-b'. Use a "
+        "qualified name: 'plugin-a:randomize_light' or 'plugin-b:randomize_light'; or prefer one provider "
+        "with EMBODICHAIN_PLUGIN_PRIORITY=plugin-a,plugin-b (first listed wins).")
+    assert info.value.providers == ["plugin-a", "plugin-b"] and not isinstance(info.value, KeyError)
+    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated, plugin-b,plugin-a")
+    assert reg.get("randomize_light") is json.dumps
+    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated")  # lists neither: still ambiguous
+    with pytest.raises(AmbiguousNameError):
+        reg.find("randomize_light")
+    assert reg.remove("randomize_light", provider="plugin-b").target == "json:dumps"
+    assert reg.get("randomize_light") is json.loads  # one provider left: the bare name resolves
+
+
+def test_same_provider_twice_with_another_target_is_an_error() -> None:
     reg = Registry("functors")
     reg.add("randomize_light", "json:dumps", provider="plugin-a")
     with pytest.raises(DuplicateRegistrationError) as info:
-        reg.add("randomize_light", "json:loads", provider="plugin-b")
-    assert "'plugin-a'" in str(info.value) and "'plugin-b'" in str(info.value)
-    assert info.value.first_provider == "plugin-a" and info.value.second_provider == "plugin-b"
+        reg.add("randomize_light", "json:loads", provider="plugin-a")
+    assert "'randomize_light' is registered twice" in str(info.value) and "'plugin-a'" in str(info.value)
+
+
+def test_qualified_lookups_of_unknown_names_suggest() -> None:
+    reg = Registry("functors")
+    reg.add("randomize_light", "json:dumps", provider="plugin-a")
+    with pytest.raises(UnknownNameError, match="'plugin-a' provides no functor 'randomize_ligth'. "
+                                               "Did you mean 'plugin-a:randomize_light'"):
+        reg.get("plugin-a:randomize_ligth")
+    with pytest.raises(UnknownNameError, match="no plugin named 'plugin-b' provides functors. Did you mean 'plugin-a'"):
+        reg.get("plugin-b:randomize_light")
+
+
+def test_names_cannot_contain_the_separator() -> None:
+    with pytest.raises(ValueError, match="cannot contain ':'"):
+        Registry("functors").add("a:b", "json:dumps", provider="p")
 
 
 def test_identical_reregistration_is_a_noop() -> None:
@@ -139,8 +182,10 @@ def test_robot_lookup_ignores_case_and_cfg_suffix(registries: dict[str, Registry
     for name in ("DexforceW1", "dexforcew1", "DexforceW1Cfg", "DEXFORCEW1CFG"):
         assert robots.get(name) is DexforceW1Cfg
     assert robots.names() == ["DexforceW1"]
-    with pytest.raises(DuplicateRegistrationError):
-        RobotRegister(robots, "other")("dexforcew1cfg", "json:dumps")
+    RobotRegister(robots, "other")("dexforcew1cfg", "json:dumps")
+    assert robots.get("other:DexforceW1") is json.dumps and robots.get("robots:dexforcew1Cfg") is DexforceW1Cfg
+    with pytest.raises(AmbiguousNameError, match="'other:dexforcew1cfg' or 'robots:DexforceW1'"):
+        robots.get("DexforceW1Cfg")
 
 
 def test_sensor_register_keeps_both_classes(registries: dict[str, Registry]) -> None:

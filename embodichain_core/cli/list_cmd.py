@@ -1,8 +1,14 @@
 """``embodichain list {plugins,tasks,functors,robots,sensors,assets,commands}``.
 
 Prints an aligned table (or JSON with ``--json``) of what the installed plugins
-registered. Lazy targets are shown as ``"module:attr"`` text and are not imported,
-unless ``--resolve`` asks to fill in missing descriptions from docstrings.
+registered, with the provider of every row. Lazy targets are shown as ``"module:attr"``
+text and are not imported, unless ``--resolve`` asks to fill in missing descriptions
+from docstrings.
+
+Names several plugins register (clashes) are kept once per provider; their rows are
+marked with ``*`` and a footer lists the qualified names to use. ``list plugins`` ends
+with every clash: registered names and entry point names declared by several
+distributions. JSON rows carry ``qualified_name`` and ``ambiguous``.
 
 Example:
     $ embodichain list functors --provider embodichain-functors
@@ -21,7 +27,8 @@ WHAT = ("plugins", "tasks", "functors", "robots", "sensors", "assets", "commands
 
 #: (header, key) of the table columns of every listing.
 COLUMNS: dict[str, list[tuple[str, str]]] = {
-    "plugins": [("NAME", "name"), ("VERSION", "version"), ("STATUS", "status"), ("REGISTERED", "summary")],
+    "plugins": [("NAME", "name"), ("VERSION", "version"), ("STATUS", "status"), ("REGISTERED", "summary"),
+                ("CLASHES", "clash_count")],
     "tasks": [("ID", "name"), ("ENTRY POINT", "entry_point"), ("MAX STEPS", "max_episode_steps"),
               ("PROVIDER", "provider"), ("DESCRIPTION", "description")],
     "functors": [("NAME", "name"), ("KIND", "kind"), ("CATEGORY", "category"), ("PROVIDER", "provider"),
@@ -34,9 +41,33 @@ COLUMNS: dict[str, list[tuple[str, str]]] = {
 }
 
 
+EPILOG = """\
+**Output.** One row per registered entry, with the plugin that provides it (`PROVIDER`).
+Two plugins may register the same name; both stay loaded, and the bare name is then
+ambiguous: its rows are marked `*`, and a footer lists the qualified names that always
+resolve (`<plugin>:<name>`; for tasks the gymnasium id `<plugin>/<id>`):
+
+```text
+NAME            KIND   CATEGORY  PROVIDER              DESCRIPTION
+shared_event *  event  -         embodichain-functors  ...
+shared_event *  event  -         my-plugin             ...
+
+* provided by several plugins: the bare name is ambiguous; use the qualified name:
+  embodichain-functors:shared_event  (embodichain-functors)
+  my-plugin:shared_event  (my-plugin)
+```
+
+`list plugins` shows each plugin's version, status, what it registered and its number of
+clashes, then the failed plugins, every name clash (names, providers, qualified names) and
+the entry point names declared by several distributions. With `--json`, entry rows carry
+`qualified_name` and `ambiguous`; plugin rows carry `entry_point` and `clashes`.
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``embodichain list`` parser."""
-    parser = argparse.ArgumentParser(prog="embodichain list", description="List what the installed plugins provide.")
+    parser = argparse.ArgumentParser(prog="embodichain list", description="List what the installed plugins provide.",
+                                     epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("what", nargs="?", default="plugins", choices=WHAT, help="what to list (default: plugins)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--provider", metavar="NAME", help="only entries registered by this plugin")
@@ -56,10 +87,43 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not rows:
         print(f"no {args.what} registered" + (f" by {args.provider!r}" if args.provider else ""))
     else:
-        print(format_table(COLUMNS[args.what], rows))
+        print(format_table(COLUMNS[args.what], [_marked(r) for r in rows]))
     if args.what == "plugins":
         _print_failures(rows, verbose=args.verbose)
+        _print_plugin_clashes(args.provider)
+    else:
+        _print_row_clashes(rows)
     return 0
+
+
+def _marked(row: dict[str, Any]) -> dict[str, Any]:
+    """The row with ``*`` after an ambiguous name."""
+    return {**row, "name": f"{row['name']} *"} if row.get("ambiguous") else row
+
+
+def _print_row_clashes(rows: list[dict[str, Any]]) -> None:
+    ambiguous = [r for r in rows if r.get("ambiguous")]
+    if ambiguous:
+        print("\n* provided by several plugins: the bare name is ambiguous; use the qualified name:")
+        for row in ambiguous:
+            print(f"  {row['qualified_name']}  ({row['provider']})")
+
+
+def _print_plugin_clashes(provider: str | None) -> None:
+    from embodichain_core.plugins import PRIORITY_ENV, load_plugins, name_clashes, plugin_priority
+
+    clashes = name_clashes(provider)
+    if clashes:
+        print("\nname clashes (both plugins stay loaded; use the qualified names):")
+        for clash in clashes:
+            print(f"  {clash}")
+    eps = load_plugins().entry_point_clashes
+    if eps:
+        print("\nentry point names declared by several distributions (each loads under its own name):")
+        for ep_name, plugins in eps.items():
+            print(f"  {ep_name}: {', '.join(plugins)}")
+    if clashes and plugin_priority():
+        print(f"\n{PRIORITY_ENV}={','.join(plugin_priority())} picks the provider of ambiguous bare names")
 
 
 def collect(what: str, *, provider: str | None = None, resolve: bool = False) -> list[dict[str, Any]]:
@@ -69,9 +133,11 @@ def collect(what: str, *, provider: str | None = None, resolve: bool = False) ->
     if what == "plugins":
         rows = [_plugin_row(info) for info in list_plugins()]
         return [r for r in rows if provider in (None, r["name"])]
-    entries = get_registry(what).entries()
-    entries = [e for e in entries if provider in (None, e.provider)]
-    return [_ROWS[what](e, resolve) for e in entries]
+    registry = get_registry(what)
+    clashes = registry.clashes()
+    entries = [e for e in registry.entries() if provider in (None, e.provider)]
+    return [{**_ROWS[what](e, resolve), "qualified_name": registry.qualified_name(e),
+             "ambiguous": e.name in clashes} for e in entries]
 
 
 def format_table(columns: list[tuple[str, str]], rows: list[dict[str, Any]]) -> str:
@@ -87,9 +153,14 @@ def _cell(value: Any) -> str:
 
 
 def _plugin_row(info: Any) -> dict[str, Any]:
+    from embodichain_core.plugins import name_clashes
+
     summary = " ".join(f"{k}={len(v)}" for k, v in sorted(info.registered.items()))
+    clashes = [{"kind": c.kind, "name": c.name, "providers": list(c.providers), "qualified": list(c.qualified)}
+               for c in name_clashes(info.name)]
     return {"name": info.name, "version": info.version, "status": info.status, "module": info.module,
-            "registered": info.registered, "summary": summary, "error": info.error_summary,
+            "entry_point": info.entry_point, "registered": info.registered, "summary": summary,
+            "clashes": clashes, "clash_count": len(clashes) or None, "error": info.error_summary,
             "traceback": info.error}
 
 

@@ -6,6 +6,11 @@ Subcommands are ``"module:function"`` targets from the ``commands`` registry
 ``embodichain <command> ...`` forwards the rest of the arguments verbatim, so
 ``embodichain <command> --help`` reaches the command's own parser.
 
+A command is named by its bare name (``dataset``) or its qualified name
+(``embodichain-lerobot:dataset``). A bare name that several plugins register is an
+error naming every provider and the qualified forms, unless
+``EMBODICHAIN_PLUGIN_PRIORITY`` prefers one of them.
+
 Example:
     $ embodichain list tasks
     $ embodichain run-env --help
@@ -17,7 +22,7 @@ import argparse
 import sys
 from typing import Any, Callable, Sequence
 
-from embodichain_core.plugins.registry import Registry, TargetImportError
+from embodichain_core.plugins.registry import AmbiguousNameError, Registry, TargetImportError
 from embodichain_core.utils.suggest import did_you_mean
 
 PROG = "embodichain"
@@ -34,8 +39,14 @@ def build_parser(commands: Registry) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"embodichain-core {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="<command>", title="commands")
+    clashes = commands.clashes()
+    listed = {name: f"(ambiguous: provided by {', '.join(providers)}; use a qualified name)"
+              for name, providers in clashes.items()}
     for entry in commands.entries():
-        sub.add_parser(entry.name, help=entry.meta.get("help") or entry.description, add_help=False)
+        name = commands.qualified_name(entry) if entry.name in clashes else entry.name
+        listed[name] = entry.meta.get("help") or entry.description
+    for name in sorted(listed):
+        sub.add_parser(name, help=listed[name], add_help=False)
     return parser
 
 
@@ -51,11 +62,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if args[0].startswith("-"):
         return _run(lambda: _top_level(parser, args))
-    entry = commands.find(args[0])
+    try:
+        entry = commands.find(args[0])
+    except AmbiguousNameError as err:
+        print(f"{PROG}: error: {err}", file=sys.stderr)
+        return 2
     if entry is None:
         parser.print_usage(sys.stderr)
-        hint = did_you_mean(args[0], commands.names())
-        print(f"{PROG}: error: unknown command {args[0]!r}.{hint}", file=sys.stderr)
+        print(f"{PROG}: error: {_unknown(commands, args[0])}", file=sys.stderr)
         return 2
     try:
         command = entry.resolve()
@@ -63,6 +77,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {err}", file=sys.stderr)
         return 1
     return _run(lambda: command(args[1:]))
+
+
+def _unknown(commands: Registry, name: str) -> str:
+    """``unknown command 'x'. Did you mean ...?`` (qualified names get the registry's message)."""
+    if ":" in name:
+        return str(commands.unknown(name))
+    return f"unknown command {name!r}.{did_you_mean(name, commands.names())}"
 
 
 def _top_level(parser: argparse.ArgumentParser, args: list[str]) -> int:

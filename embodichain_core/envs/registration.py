@@ -43,13 +43,33 @@ def _entry(cls: type) -> str:
     return f"{cls.__module__}:{cls.__qualname__}"
 
 
+def _provided_by_plugins(uid: str, cls: type, kwargs: dict, max_episode_steps: Optional[int]) -> bool:
+    """True when plugins manage ``uid`` in gymnasium: their spec stays (a warning when
+    ``cls`` is none of theirs)."""
+    from embodichain_core.plugins.gym_tasks import managed_entry_points
+
+    providers = managed_entry_points(uid)
+    if providers is None:
+        return False
+    if _entry(cls) in providers:
+        REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
+    else:
+        warnings.warn(f"env id {uid!r} is provided by installed plugins ({', '.join(providers)}); "
+                      f"register_env keeps theirs and ignores {_entry(cls)}", stacklevel=3)
+    return True
+
+
 def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bool = False,
                  **kwargs: Any) -> Callable[[type], type]:
     """Class decorator registering ``uid`` with gymnasium.
 
     Re-registering the same class (its module being imported again by gymnasium)
     is a no-op; another class under a taken id warns and keeps the first unless
-    ``override=True``. ``kwargs`` must be JSON-serialisable default constructor args.
+    ``override=True``. An id that installed plugins provide (see
+    :mod:`embodichain_core.plugins.gym_tasks`) is never replaced, even with
+    ``override=True``: its bare id may be shared by several plugins, and their
+    namespaced ids (``<plugin>/<id>``) are what picks one. ``kwargs`` must be
+    JSON-serialisable default constructor args.
     """
     try:
         json.dumps(kwargs)
@@ -61,6 +81,8 @@ def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bo
 
         if not (isinstance(cls, type) and issubclass(cls, BaseEnv)):
             raise TypeError(f"register_env({uid!r}) decorates BaseEnv subclasses, got {cls!r}")
+        if _provided_by_plugins(uid, cls, kwargs, max_episode_steps):
+            return cls
         existing = gym.envs.registry.get(uid)
         if existing is not None and existing.entry_point == _entry(cls) and not override:
             # gymnasium imported the module of a plugin-registered task: same class

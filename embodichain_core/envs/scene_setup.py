@@ -51,12 +51,12 @@ def _indirect_light(scene: Scene, indirect: Any) -> None:
 
 
 def _make_sensor(sensor_cfg: Any, scene: Scene, path: str) -> Any:
-    from embodichain_core.plugins import get_sensor_classes
+    from embodichain_core.plugins import AmbiguousNameError, get_sensor_classes
 
     name = getattr(sensor_cfg, "sensor_type", "") or type(sensor_cfg).__name__.removesuffix("Cfg")
     try:
         _, sensor_cls = get_sensor_classes(name)
-    except KeyError as err:
+    except (KeyError, AmbiguousNameError) as err:
         raise ConfigError(f"{path}.sensor_type", str(err).strip("\"'")) from None
     return sensor_cls(sensor_cfg, scene)
 
@@ -90,7 +90,9 @@ def filter_functors(cfg: Any, section: str) -> Any:
 def is_visual_randomization(func: Any, given: Any) -> bool:
     """``randomize_*`` functors of the visual randomization category."""
     name = getattr(func, "__name__", "")
-    if isinstance(given, str) and ":" not in given:
+    from embodichain_core.plugins.manager import is_qualified_name
+
+    if isinstance(given, str) and (":" not in given or is_qualified_name(given)):
         from embodichain_core.plugins import is_visual_randomization as registered
 
         return registered(given)

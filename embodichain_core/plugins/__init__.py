@@ -2,11 +2,15 @@
 
 Plugin authors need :data:`hookimpl` (and the register objects' types for
 annotations); the env and CLI use the registry accessors below, which load the
-installed plugins on first use.
+installed plugins on first use. Every accessor takes a bare name (``"randomize_light"``)
+or a qualified one (``"embodichain-functors:randomize_light"``); a bare name that
+several plugins register raises :class:`AmbiguousNameError` (see
+:mod:`embodichain_core.plugins.names`).
 
 Example:
     >>> from embodichain_core.plugins import functor_registry
     >>> fn = functor_registry().get("randomize_light")  # doctest: +SKIP
+    >>> fn = functor_registry().get("embodichain-functors:randomize_light")  # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from embodichain_core.plugins.hookspecs import (
     hookimpl,
     hookspec,
 )
+from embodichain_core.plugins.clashes import NameClash
 from embodichain_core.plugins.manager import (
     CORE_PLUGIN_NAME,
     EmbodichainPluginManager,
@@ -35,13 +40,16 @@ from embodichain_core.plugins.manager import (
     get_plugin_manager,
     get_registry,
     isolated_plugins,
+    known_providers,
     list_plugins,
     load_plugins,
     register_plugin,
     unregister_plugin,
 )
+from embodichain_core.plugins.names import PRIORITY_ENV, NameClashWarning, plugin_priority
 from embodichain_core.plugins.registry import (
     KINDS,
+    AmbiguousNameError,
     DuplicateRegistrationError,
     Entry,
     Registry,
@@ -54,7 +62,8 @@ __all__ = [
     "hookimpl", "hookspec", "FUNCTOR_KINDS", "VISUAL_RANDOMIZATION", "KINDS",
     "FunctorRegister", "RobotRegister", "SensorRegister", "AssetRegister", "TaskRegister",
     "CommandRegister", "Entry", "Registry", "RegistryError", "DuplicateRegistrationError",
-    "UnknownNameError", "TargetImportError", "EmbodichainPluginManager", "PluginInfo",
+    "UnknownNameError", "TargetImportError", "AmbiguousNameError", "NameClash", "NameClashWarning",
+    "PRIORITY_ENV", "plugin_priority", "known_providers", "name_clashes", "EmbodichainPluginManager", "PluginInfo",
     "PluginLoadWarning", "CORE_PLUGIN_NAME", "get_plugin_manager", "load_plugins",
     "register_plugin", "unregister_plugin", "isolated_plugins", "list_plugins",
     "failed_plugins", "get_registry", "functor_registry", "robot_registry", "sensor_registry",
@@ -119,13 +128,29 @@ def get_asset_root(name: str) -> Path:
 
 
 def asset_roots() -> dict[str, Path]:
-    """Every registered data root, by name (in name order)."""
-    return {name: get_asset_root(name) for name in asset_registry().names()}
+    """Every registered data root by name (in name order); a name several plugins
+    register appears once per plugin, under its qualified name ``<plugin>:<name>``."""
+    registry = asset_registry()
+    clashing = registry.clashes()
+    return {(registry.qualified_name(e) if e.name in clashing else e.name): _root(e) for e in registry.entries()}
+
+
+def _root(entry: Entry) -> Path:
+    return get_asset_root(asset_registry().qualified_name(entry))
 
 
 def is_visual_randomization(name: str) -> bool:
     """True for functors ``filter_visual_rand`` removes: ``randomize_*`` names whose
-    category is ``"randomization.visual"``. Unknown names are not visual."""
-    entry = functor_registry().find(name)
-    return (entry is not None and name.startswith("randomize_")
+    category is ``"randomization.visual"``. Unknown and ambiguous names are not visual
+    (an ambiguous name fails when the functor is resolved)."""
+    try:
+        entry = functor_registry().find(name)
+    except AmbiguousNameError:
+        return False
+    return (entry is not None and entry.name.startswith("randomize_")
             and entry.meta.get("category") == VISUAL_RANDOMIZATION)
+
+
+def name_clashes(provider: str | None = None) -> list[NameClash]:
+    """Bare names several installed plugins register (only ``provider``'s when given)."""
+    return load_plugins().name_clashes(provider)

@@ -1,8 +1,9 @@
 """Hook specifications of the embodichain plugin host.
 
 Every hook receives a typed ``register`` object and returns nothing (the style of
-tox 4 and ``llm``): the register object records *who* registered *what*, so that
-duplicates can name both plugins. Implement hooks with :data:`hookimpl`:
+tox 4 and ``llm``): the register object records *who* registered *what*: every
+entry is owned by its plugin and keeps the qualified name ``<plugin>:<name>``, so two
+plugins may use the same name without disabling each other. Implement hooks with :data:`hookimpl`:
 
 Example:
     >>> from embodichain_core.plugins import hookimpl
@@ -63,7 +64,7 @@ class BaseRegister:
 
     def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None,
              *, lazy: bool | None = None) -> Entry:
-        before = self.registry.find(name) if isinstance(name, str) else None
+        before = self.registry.find_own(self.provider, name)
         entry = self.registry.add(name, target, self.provider, meta, lazy=lazy)
         if entry is not before and self._on_add is not None:
             self._on_add(entry)

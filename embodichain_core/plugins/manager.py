@@ -2,15 +2,21 @@
 
 ``load_plugins()`` is lazy and idempotent. It registers the core's own defaults
 (:mod:`embodichain_core.plugins.builtin`), loads the setuptools entry points of the
-group ``"embodichain"`` one by one, checks every plugin for misspelled hooks, and
-calls each plugin's register hooks. A plugin that fails (import error, unknown hook,
-bad hook signature, a hook raising, a duplicate name) is reported by name with its
-traceback as a :class:`PluginLoadWarning`, contributes nothing (its registrations
-are rolled back) and does not take the others down.
+group ``"embodichain"`` sorted by plugin name (so the outcome never depends on the
+install or discovery order), checks every plugin for misspelled hooks, and calls each
+plugin's register hooks. A plugin is named after its distribution (see
+:mod:`embodichain_core.plugins.clashes`). A plugin that fails (import error, unknown
+hook, bad hook signature, a hook raising, registering one name twice with different
+targets) is reported by name with its traceback as a :class:`PluginLoadWarning`,
+contributes nothing (its registrations are rolled back) and does not take the others
+down. A name another plugin registered too is *not* a failure: both entries stay,
+under their qualified names ``<plugin>:<name>`` (see :mod:`embodichain_core.plugins.names`).
 
 Environment variables:
-    ``EMBODICHAIN_BLOCK_PLUGINS``: comma-separated entry point names to skip
-        (``*`` skips all entry points).
+    ``EMBODICHAIN_BLOCK_PLUGINS``: comma-separated plugin (distribution) or entry point
+        names to skip (``*`` skips all entry points).
+    ``EMBODICHAIN_PLUGIN_PRIORITY``: comma-separated plugin names; the first listed
+        provider of an ambiguous bare name wins.
     ``EMBODICHAIN_TRACE_PLUGINS=1``: trace hook calls to stderr.
 """
 
@@ -25,12 +31,14 @@ import types
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any, Iterable, Iterator
 
 import pluggy
 
 from embodichain_core.plugins import hookspecs
+from embodichain_core.plugins.clashes import NameClash, entry_point_clashes, name_clashes, name_entry_points
 from embodichain_core.plugins.hookspecs import PROJECT_NAME, REGISTER_CLASSES, REGISTER_HOOKS
+from embodichain_core.plugins.names import NameClashWarning, join_names
 from embodichain_core.plugins.registry import KINDS, Entry, Registry, new_registries
 from embodichain_core.utils.suggest import did_you_mean
 
@@ -53,12 +61,14 @@ class PluginInfo:
     """What ``list_plugins()`` reports about one plugin.
 
     Attributes:
-        name: plugin name (entry point name = distribution name).
+        name: plugin name: the distribution name (PEP 503-normalized) for an entry
+            point, the given name for a runtime plugin. Qualified names use it.
         version: the distribution's version, ``""`` when unknown.
         status: ``"loaded"``, ``"failed"`` or ``"blocked"``.
         module: the entry point value or the plugin object's module.
         error: the failure's traceback (``""`` unless failed).
         registered: names registered per kind (``{"functors": [...], ...}``).
+        entry_point: the entry point's name (``""`` for runtime plugins).
     """
 
     name: str
@@ -67,6 +77,7 @@ class PluginInfo:
     module: str = ""
     error: str = ""
     registered: dict[str, list[str]] = field(default_factory=dict)
+    entry_point: str = ""
 
     @property
     def error_summary(self) -> str:
@@ -87,6 +98,8 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         self.add_hookspecs(hookspecs)
         self.registries: dict[str, Registry] = new_registries()
         self.infos: dict[str, PluginInfo] = {}
+        #: entry point names declared by several distributions -> their plugin names.
+        self.entry_point_clashes: dict[str, list[str]] = {}
         self.loaded = False
         self.lock = threading.RLock()
         if os.environ.get(TRACE_ENV, "").strip() not in ("", "0"):
@@ -110,6 +123,10 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         """``(name, traceback)`` of every plugin that failed to load."""
         return [(i.name, i.error) for i in self.infos.values() if i.status == "failed"]
 
+    def name_clashes(self, provider: str | None = None) -> list[NameClash]:
+        """Bare names registered by several plugins (only ``provider``'s when given)."""
+        return name_clashes(self.registries, provider)
+
 
 def _is_function(plugin: Any, name: str) -> bool:
     static = inspect.getattr_static(plugin, name, None)
@@ -129,11 +146,12 @@ def get_plugin_manager() -> EmbodichainPluginManager:
         return _PM
 
 
-def load_plugins(*, entry_points: bool = True) -> EmbodichainPluginManager:
+def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozenset()) -> EmbodichainPluginManager:
     """Load the built-ins and the installed plugins once; later calls are no-ops.
 
     Args:
         entry_points: also load the ``"embodichain"`` entry points (the default).
+        exclude: plugin names not to load (``isolated_plugins`` uses it).
 
     Returns:
         The plugin manager, with its registries filled.
@@ -149,7 +167,7 @@ def load_plugins(*, entry_points: bool = True) -> EmbodichainPluginManager:
         pm.register(builtin, name=CORE_PLUGIN_NAME)
         pm.infos[CORE_PLUGIN_NAME] = PluginInfo(CORE_PLUGIN_NAME, __version__, module=builtin.__name__)
         if entry_points:
-            _load_entry_points(pm)
+            _load_entry_points(pm, exclude)
         for info in list(pm.infos.values()):
             if info.status == "loaded":
                 _activate(pm, info)
@@ -158,38 +176,49 @@ def load_plugins(*, entry_points: bool = True) -> EmbodichainPluginManager:
 
 
 def _iter_entry_points() -> list[EntryPoint]:
-    """The ``"embodichain"`` entry points, first of each name (test seam)."""
+    """Every ``"embodichain"`` entry point, duplicates of a name included (test seam)."""
     import importlib.metadata
 
-    seen: dict[str, EntryPoint] = {}
-    for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
-        seen.setdefault(ep.name, ep)
-    return list(seen.values())
+    return list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
 
 
 def blocked_plugins() -> set[str]:
-    """Entry point names listed in ``EMBODICHAIN_BLOCK_PLUGINS``."""
+    """Plugin or entry point names listed in ``EMBODICHAIN_BLOCK_PLUGINS``."""
     return {n.strip() for n in os.environ.get(BLOCK_ENV, "").split(",") if n.strip()}
 
 
-def _load_entry_points(pm: EmbodichainPluginManager) -> None:
+def _load_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str] = frozenset()) -> None:
     blocked = blocked_plugins()
-    for ep in _iter_entry_points():
-        if ep.name in pm.infos:
+    named = [(n, ep) for n, ep in name_entry_points(_iter_entry_points()) if n not in exclude]
+    _report_entry_point_clashes(pm, entry_point_clashes(named))
+    for name, ep in named:
+        if name in pm.infos:
             continue
         dist = getattr(ep, "dist", None)
-        info = pm.infos[ep.name] = PluginInfo(ep.name, getattr(dist, "version", "") or "", module=ep.value)
-        if ep.name in blocked or "*" in blocked:
+        info = pm.infos[name] = PluginInfo(name, getattr(dist, "version", "") or "", module=ep.value,
+                                           entry_point=ep.name)
+        if blocked & {name, ep.name, "*"}:
             info.status = "blocked"
-            pm.set_blocked(ep.name)
+            pm.set_blocked(name)
             continue
         try:
             plugin = ep.load()
             if plugin is None:
                 raise TypeError(f"entry point {ep.name!r} = {ep.value!r} loaded None")
-            pm.register(plugin, name=ep.name)
+            pm.register(plugin, name=name)
         except Exception:
             _fail(pm, info)
+
+
+def _report_entry_point_clashes(pm: EmbodichainPluginManager, clashes: dict[str, list[str]]) -> None:
+    """Warn about entry point names several distributions declare (all of them still load)."""
+    pm.entry_point_clashes = clashes
+    for ep_name, plugins in clashes.items():
+        warnings.warn(
+            f"the embodichain entry point {ep_name!r} is declared by {len(plugins)} distributions: "
+            f"{join_names([repr(p) for p in plugins])}. All of them are loaded, each under its "
+            f"distribution name; name the entry point after its distribution to silence this.",
+            NameClashWarning, stacklevel=4)
 
 
 def _activate(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
@@ -222,7 +251,8 @@ def _check_hooks(pm: EmbodichainPluginManager, name: str) -> None:
 
 
 def _run_register_hooks(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
-    """Call plugin ``name``'s register hooks; all-or-nothing. Returns names per kind."""
+    """Call plugin ``name``'s register hooks; all-or-nothing (only its own entries are
+    rolled back when it raises). Returns names per kind."""
     plugin = pm.get_plugin(name)
     added: list[tuple[Registry, Entry]] = []
     try:
@@ -236,7 +266,7 @@ def _run_register_hooks(pm: EmbodichainPluginManager, name: str) -> dict[str, li
             pm.subset_hook_caller(hook_name, others)(register=register)
     except BaseException:
         for registry, entry in reversed(added):
-            registry.remove(entry.name)
+            registry.remove(entry.name, provider=entry.provider)
         raise
     registered: dict[str, list[str]] = {}
     for registry, entry in added:
@@ -278,7 +308,7 @@ def unregister_plugin(name: str) -> None:
     with pm.lock:
         for registry in pm.registries.values():
             for entry in registry.by_provider(name):
-                registry.remove(entry.name)
+                registry.remove(entry.name, provider=name)
         if pm.get_plugin(name) is not None:
             pm.unregister(name=name)
         pm.infos.pop(name, None)
@@ -292,11 +322,13 @@ def _default_name(obj: Any) -> str:
 
 
 @contextmanager
-def isolated_plugins(*, load_entry_points: bool = False) -> Iterator[EmbodichainPluginManager]:
+def isolated_plugins(*, load_entry_points: bool = False,
+                     exclude: Iterable[str] = ()) -> Iterator[EmbodichainPluginManager]:
     """Swap in a fresh manager and empty registries; restore everything on exit.
 
-    Only the built-ins are loaded (entry points too when ``load_entry_points``).
-    gymnasium ids registered inside the block are removed on exit.
+    Only the built-ins are loaded (entry points too when ``load_entry_points``, except
+    the plugins named in ``exclude``). gymnasium ids the block's plugins registered are
+    removed on exit; an id of the outer manager they replaced meanwhile is restored.
 
     Example:
         >>> with isolated_plugins() as pm:  # doctest: +SKIP
@@ -307,13 +339,12 @@ def isolated_plugins(*, load_entry_points: bool = False) -> Iterator[Embodichain
     with _GLOBAL_LOCK:
         saved, _PM = _PM, EmbodichainPluginManager()
     try:
-        yield load_plugins(entry_points=load_entry_points)
+        yield load_plugins(entry_points=load_entry_points, exclude=frozenset(exclude))
     finally:
         with _GLOBAL_LOCK:
             pm, _PM = _PM, saved
         if pm is not None:
-            for entry in pm.registries["tasks"].entries():
-                pm.registries["tasks"].remove(entry.name)
+            pm.registries["tasks"].release_gym()  # type: ignore[attr-defined]
 
 
 def list_plugins() -> list[PluginInfo]:
@@ -326,9 +357,25 @@ def failed_plugins() -> list[tuple[str, str]]:
     return load_plugins().failed()
 
 
+def known_providers() -> set[str]:
+    """Names of every known plugin (loaded, failed or blocked): the prefixes of qualified names."""
+    return set(load_plugins().infos)
+
+
 def get_registry(kind: str) -> Registry:
     """The registry of ``kind`` (loads plugins first).
 
     Kinds: ``functors``, ``robots``, ``sensors``, ``assets``, ``tasks``, ``commands``.
     """
     return load_plugins().registry(kind)
+
+
+def is_qualified_name(name: Any) -> bool:
+    """True for ``"<plugin>:<name>"`` whose prefix is a known plugin's name.
+
+    This is how a qualified name is told from a ``"module:attr"`` import path (which
+    also has a colon): a prefix naming a known plugin wins; anything else is a path.
+    """
+    if not isinstance(name, str) or ":" not in name:
+        return False
+    return name.partition(":")[0] in known_providers()

@@ -2,9 +2,11 @@
 
 A :class:`Registry` maps names to :class:`Entry` objects. An entry's target is an
 object or a lazy ``"module:attr"`` string imported on first :meth:`Registry.get`.
-Names are unique: a second registration raises :class:`DuplicateRegistrationError`
-naming both providers; an unknown name raises :class:`UnknownNameError` listing the
-closest matches.
+Names are owned by their providers: two plugins may register the same name, and each
+entry keeps its qualified name ``"<provider>:<name>"`` (see
+:mod:`embodichain_core.plugins.names`). A bare name provided by several plugins is
+ambiguous (:class:`AmbiguousNameError`, naming every provider and the qualified
+forms); an unknown name raises :class:`UnknownNameError` listing the closest matches.
 
 Example:
     >>> reg = Registry("functors", noun="functor")
@@ -12,25 +14,39 @@ Example:
     >>> reg.get("randomise_light")
     Traceback (most recent call last):
     ...
-    embodichain_core.plugins.registry.UnknownNameError: unknown functor 'randomise_light'. Did you mean 'randomize_light'?
+    embodichain_core.plugins.entries.UnknownNameError: unknown functor 'randomise_light'. Did you mean 'randomize_light'?
 
 The typed register objects handed to the hooks wrap these registries; they live
-with the hook specifications in :mod:`embodichain_core.plugins.hookspecs`.
+with the hook specifications in :mod:`embodichain_core.plugins.hookspecs`; the task
+registry, which mirrors tasks into gymnasium, lives in
+:mod:`embodichain_core.plugins.gym_tasks`.
 """
 
 from __future__ import annotations
 
-import importlib
-import inspect
 from typing import Any, Callable, Iterator
 
+from embodichain_core.plugins.entries import (
+    AmbiguousNameError,
+    DuplicateRegistrationError,
+    Entry,
+    RegistryError,
+    TargetImportError,
+    UnknownNameError,
+    check_target_string,
+    describe_target,
+    first_doc_line,
+    import_target,
+    is_lazy_target,
+)
+from embodichain_core.plugins.names import SEPARATOR, pick_by_priority, qualified, split_qualified
 from embodichain_core.utils.suggest import closest, did_you_mean
 
 __all__ = [
     "Entry",
     "Registry",
-    "TaskRegistry",
     "RegistryError",
+    "AmbiguousNameError",
     "DuplicateRegistrationError",
     "UnknownNameError",
     "TargetImportError",
@@ -45,156 +61,6 @@ __all__ = [
 ]
 
 
-class RegistryError(Exception):
-    """Base class of registry errors."""
-
-
-class DuplicateRegistrationError(RegistryError, ValueError):
-    """A name was registered twice; the message names both providers."""
-
-    def __init__(self, noun: str, name: str, first: str, second: str, detail: str = ""):
-        self.name, self.first_provider, self.second_provider = name, first, second
-        msg = f"{noun} {name!r} is registered twice: by {first!r} and by {second!r}"
-        super().__init__(msg + (f" ({detail})" if detail else ""))
-
-
-class UnknownNameError(RegistryError, KeyError, ValueError):
-    """An unknown name was looked up; ``matches`` holds the closest known names."""
-
-    def __init__(self, message: str, name: str = "", matches: list[str] | None = None):
-        super().__init__(message)
-        self.name = name
-        self.matches = list(matches or [])
-
-    def __str__(self) -> str:  # KeyError would repr() the message
-        return str(self.args[0])
-
-
-class TargetImportError(RegistryError, ImportError):
-    """A lazy ``"module:attr"`` target could not be imported."""
-
-
-def is_lazy_target(value: Any) -> bool:
-    """True for ``"module:attr"`` strings."""
-    return isinstance(value, str) and ":" in value
-
-
-def check_target_string(spec: str, what: str) -> None:
-    """Raise ``ValueError`` unless ``spec`` looks like ``"package.module:attr.sub"``."""
-    module, sep, attr = spec.partition(":")
-    parts = module.split(".") + attr.split(".")
-    if not sep or not all(p.isidentifier() for p in parts):
-        raise ValueError(f"{what}: expected a 'module:attr' string, got {spec!r}")
-
-
-def import_target(spec: str) -> Any:
-    """Import ``"module:attr.sub"`` and return the attribute."""
-    module_name, _, attr = spec.partition(":")
-    obj: Any = importlib.import_module(module_name)
-    for part in attr.split("."):
-        obj = getattr(obj, part)
-    return obj
-
-
-def describe_target(target: Any) -> str:
-    """``"module:qualname"`` for objects, the string itself for lazy targets."""
-    if isinstance(target, str):
-        return target
-    module = getattr(target, "__module__", None)
-    qualname = getattr(target, "__qualname__", None)
-    if module and qualname:
-        return f"{module}:{qualname}"
-    return repr(target)
-
-
-def first_doc_line(obj: Any) -> str:
-    """The first non-empty docstring line of ``obj``, or ``""``."""
-    doc = inspect.getdoc(obj) if obj is not None else None
-    for line in (doc or "").splitlines():
-        if line.strip():
-            return line.strip()
-    return ""
-
-
-_UNSET: Any = object()
-
-
-class Entry:
-    """One registration: ``name`` -> ``target`` provided by ``provider``.
-
-    Attributes:
-        name: the registered name (as spelled by the provider).
-        target: the object, or a lazy ``"module:attr"`` string.
-        provider: the plugin name (for entry points: the distribution name).
-        meta: extra data of the kind (``kind``/``category``/``description`` for functors...).
-        lazy: whether ``target`` is imported on first :meth:`resolve`.
-    """
-
-    __slots__ = ("name", "target", "provider", "meta", "lazy", "noun", "_value", "_signature")
-
-    def __init__(self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None,
-                 *, lazy: bool | None = None, noun: str = "entry"):
-        self.name, self.target, self.provider = name, target, provider
-        self.meta: dict[str, Any] = dict(meta or {})
-        self.lazy = is_lazy_target(target) if lazy is None else lazy
-        self.noun = noun
-        self._value = _UNSET if self.lazy else target
-        self._signature = (provider, describe_target(target), repr(self.meta))
-
-    @property
-    def resolved(self) -> bool:
-        """Whether the target has been imported (always True for eager targets)."""
-        return self._value is not _UNSET
-
-    def resolve(self) -> Any:
-        """The target object, importing a lazy target on first call.
-
-        Raises:
-            TargetImportError: naming the entry and its provider.
-        """
-        if self._value is _UNSET:
-            self._value = self._import(self.target)
-            if "description" in self.meta and not self.meta["description"]:
-                self.meta["description"] = first_doc_line(self._value)
-        return self._value
-
-    def resolve_meta(self, key: str) -> Any:
-        """A meta value, importing it when it is a ``"module:attr"`` string."""
-        value = self.meta[key]
-        if is_lazy_target(value):
-            value = self.meta[key] = self._import(value)
-        return value
-
-    def _import(self, spec: str) -> Any:
-        try:
-            return import_target(spec)
-        except Exception as err:
-            raise TargetImportError(
-                f"cannot load {self.noun} {self.name!r} provided by {self.provider!r}: "
-                f"importing {spec!r} failed with {type(err).__name__}: {err}"
-            ) from err
-
-    @property
-    def target_repr(self) -> str:
-        """The target as ``"module:attr"`` text."""
-        return describe_target(self.target)
-
-    @property
-    def description(self) -> str:
-        """``meta["description"]``, else the resolved target's first docstring line."""
-        text = self.meta.get("description") or ""
-        if not text and self.resolved and callable(self._value):
-            text = first_doc_line(self._value)
-        return str(text)
-
-    def same_as(self, other: Entry) -> bool:
-        """Same provider, target and meta (a harmless re-registration)."""
-        return self._signature == other._signature
-
-    def __repr__(self) -> str:
-        return f"Entry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
-
-
 def _identity(name: str) -> str:
     return name
 
@@ -206,7 +72,12 @@ def class_name_key(name: str) -> str:
 
 
 class Registry:
-    """Names -> :class:`Entry` of one kind.
+    """Names -> :class:`Entry` of one kind, owned by their providers.
+
+    Two providers may register the same name: both entries are kept, each under its
+    qualified name ``"<provider>:<name>"``. A bare name resolves when one provider
+    registered it, or when ``EMBODICHAIN_PLUGIN_PRIORITY`` lists one of its providers;
+    otherwise it is ambiguous (:class:`AmbiguousNameError`).
 
     Args:
         kind: registry kind (``"functors"``, ``"robots"`` ...).
@@ -218,39 +89,107 @@ class Registry:
         self.kind = kind
         self.noun = noun or (kind[:-1] if kind.endswith("s") else kind)
         self._key = key or _identity
-        self._entries: dict[str, Entry] = {}
+        #: (provider, key) -> entry, in registration order.
+        self._entries: dict[tuple[str, str], Entry] = {}
 
     def add(self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None,
             *, lazy: bool | None = None) -> Entry:
         """Add an entry; re-adding an identical entry is a no-op.
 
         Raises:
-            DuplicateRegistrationError: ``name`` exists from another provider or target.
-            ValueError: empty name or malformed lazy target.
+            DuplicateRegistrationError: ``provider`` already registered ``name`` with
+                another target (another provider's entry of that name is no conflict).
+            ValueError: empty name, a name with ``":"``, or a malformed lazy target.
         """
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"{self.noun} names must be non-empty strings, got {name!r} from {provider!r}")
+        self._check_name(name, provider)
         entry = Entry(name, target, provider, meta, lazy=lazy, noun=self.noun)
         if entry.lazy:
             check_target_string(target, f"{self.noun} {name!r} from {provider!r}")
-        old = self._entries.get(self._key(name))
+        old = self._entries.get((provider, self._key(name)))
         if old is not None:
             if old.same_as(entry):
                 return old
-            raise DuplicateRegistrationError(self.noun, name, old.provider, provider)
+            raise DuplicateRegistrationError(self.noun, name, old.provider, provider,
+                                             "one provider cannot register a name twice")
         self._store(entry)
         return entry
 
+    def _check_name(self, name: Any, provider: str) -> None:
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{self.noun} names must be non-empty strings, got {name!r} from {provider!r}")
+        if SEPARATOR in name:
+            raise ValueError(f"{self.noun} {name!r} from {provider!r}: names cannot contain {SEPARATOR!r} "
+                             f"(it separates the provider in qualified names)")
+
     def _store(self, entry: Entry) -> None:
-        self._entries[self._key(entry.name)] = entry
+        self._entries[(entry.provider, self._key(entry.name))] = entry
 
-    def remove(self, name: str) -> Entry | None:
-        """Remove and return the entry for ``name`` (``None`` when absent)."""
-        return self._entries.pop(self._key(name), None)
+    def _unstore(self, entry: Entry) -> None:
+        del self._entries[(entry.provider, self._key(entry.name))]
 
-    def find(self, name: str) -> Entry | None:
-        """The entry for ``name`` or ``None``."""
-        return self._entries.get(self._key(name)) if isinstance(name, str) else None
+    def remove(self, name: str, provider: str | None = None) -> Entry | None:
+        """Remove and return an entry (``None`` when absent).
+
+        ``name`` may be qualified; a bare name provided by several plugins needs
+        ``provider`` (else :class:`AmbiguousNameError`).
+        """
+        split = self._split(name)
+        if split is not None:
+            provider, name = split
+        found = self.find(name, use_priority=False) if provider is None else self.find_own(provider, name)
+        if found is not None:
+            self._unstore(found)
+        return found
+
+    def find_own(self, provider: str, name: str) -> Entry | None:
+        """``provider``'s entry named ``name`` (bare), or ``None``; never ambiguous."""
+        return self._entries.get((provider, self._key(name))) if isinstance(name, str) else None
+
+    def providers(self) -> list[str]:
+        """Every provider with at least one entry, sorted."""
+        return sorted({provider for provider, _ in self._entries})
+
+    def providers_of(self, name: str) -> list[str]:
+        """The providers of the bare ``name``, sorted."""
+        return sorted(e.provider for e in self._candidates(name))
+
+    def _candidates(self, name: str) -> list[Entry]:
+        key = self._key(name)
+        return [e for (_, k), e in self._entries.items() if k == key]
+
+    def _split(self, name: str) -> tuple[str, str] | None:
+        """``(provider, bare)`` for a qualified ``name`` of a provider of this registry."""
+        return split_qualified(name, self.providers())
+
+    def find(self, name: str, *, use_priority: bool = True) -> Entry | None:
+        """The entry for ``name`` (bare or qualified), or ``None``.
+
+        Raises:
+            AmbiguousNameError: a bare name provided by several plugins, none of
+                them preferred by ``EMBODICHAIN_PLUGIN_PRIORITY``.
+        """
+        if not isinstance(name, str):
+            return None
+        split = self._split(name)
+        if split is not None:
+            return self.find_own(*split)
+        candidates = self._candidates(name)
+        if len(candidates) <= 1:
+            return candidates[0] if candidates else None
+        chosen = pick_by_priority([e.provider for e in candidates]) if use_priority else None
+        if chosen is None:
+            raise self.ambiguous(name, candidates)
+        return next(e for e in candidates if e.provider == chosen)
+
+    def ambiguous(self, name: str, candidates: list[Entry] | None = None) -> AmbiguousNameError:
+        """The error for a bare ``name`` provided by several plugins."""
+        entries = sorted(candidates or self._candidates(name), key=lambda e: e.provider)
+        return AmbiguousNameError(self.noun, name, [e.provider for e in entries],
+                                  [self.qualified_name(e) for e in entries])
+
+    def qualified_name(self, entry: Entry) -> str:
+        """The name that always resolves to ``entry`` (``"<provider>:<name>"``)."""
+        return qualified(entry.provider, entry.name)
 
     def entry(self, name: str) -> Entry:
         """The entry for ``name``; raises :class:`UnknownNameError` with suggestions."""
@@ -270,23 +209,58 @@ class Registry:
             msg = (f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin "
                    f"providing them (see `embodichain list plugins`)")
             return UnknownNameError(msg, name, [])
+        split = self._split(name) if isinstance(name, str) else None
+        if split is not None:
+            own = [self.qualified_name(e) for e in self.by_provider(split[0])]
+            hint = did_you_mean(name, own) or f" See `embodichain list {self.kind} --provider {split[0]}`."
+            return UnknownNameError(f"{split[0]!r} provides no {self.noun} {split[1]!r}.{hint}", name,
+                                    closest(name, own))
+        provider, sep, _ = str(name).partition(SEPARATOR)
+        if sep and provider:
+            hint = did_you_mean(provider, self.providers()) or f" Providers: {', '.join(self.providers())}."
+            return UnknownNameError(f"unknown {self.noun} {name!r}: no plugin named {provider!r} "
+                                    f"provides {self.kind}.{hint}", name, closest(provider, self.providers()))
         hint = did_you_mean(name, names) or f" See `embodichain list {self.kind}`."
         return UnknownNameError(f"unknown {self.noun} {name!r}.{hint}", name, closest(name, names))
 
     def names(self) -> list[str]:
-        """Registered names, sorted."""
-        return sorted(e.name for e in self._entries.values())
+        """Registered bare names, sorted, each once (however many providers)."""
+        first: dict[str, str] = {}
+        for (_, key), entry in self._entries.items():
+            first.setdefault(key, entry.name)
+        return sorted(first.values())
+
+    def qualified_names(self) -> list[str]:
+        """The qualified name of every entry, sorted."""
+        return sorted(self.qualified_name(e) for e in self._entries.values())
 
     def entries(self) -> list[Entry]:
-        """Entries sorted by name."""
-        return sorted(self._entries.values(), key=lambda e: e.name)
+        """Entries sorted by name, then provider."""
+        return sorted(self._entries.values(), key=lambda e: (e.name, e.provider))
+
+    def ordered_entries(self) -> list[Entry]:
+        """Entries in registration order (deterministic: plugins load sorted by name)."""
+        return list(self._entries.values())
 
     def by_provider(self, provider: str) -> list[Entry]:
         """Entries registered by ``provider``."""
         return [e for e in self.entries() if e.provider == provider]
 
+    def clashes(self) -> dict[str, list[str]]:
+        """Bare names provided by several plugins -> their providers (sorted)."""
+        providers: dict[str, list[Entry]] = {}
+        for (_, key), entry in self._entries.items():
+            providers.setdefault(key, []).append(entry)
+        return {group[0].name: sorted(e.provider for e in group)
+                for group in sorted(providers.values(), key=lambda g: g[0].name) if len(group) > 1}
+
     def __contains__(self, name: object) -> bool:
-        return isinstance(name, str) and self._key(name) in self._entries
+        if not isinstance(name, str):
+            return False
+        split = self._split(name)
+        if split is not None:
+            return (split[0], self._key(split[1])) in self._entries
+        return bool(self._candidates(name))
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names())
@@ -298,55 +272,19 @@ class Registry:
         return f"<Registry {self.kind}: {len(self)} entries>"
 
 
-class TaskRegistry(Registry):
-    """Task registry that mirrors every task into gymnasium's registry.
-
-    gymnasium gets the string entry point (imported only by ``gymnasium.make``),
-    ``disable_env_checker=True``, ``order_enforce=False`` and never
-    ``max_episode_steps`` (the episode limit lives inside the env, as a kwarg).
-    """
-
-    def _store(self, entry: Entry) -> None:
-        import gymnasium
-
-        spec = gymnasium.registry.get(entry.name)
-        if spec is None:
-            import functools
-
-            from embodichain_core.gym_vector import make_vec_env
-
-            gymnasium.register(
-                entry.name, entry_point=entry.target, disable_env_checker=True,
-                order_enforce=False, max_episode_steps=None, kwargs=entry.meta["kwargs"],
-                vector_entry_point=functools.partial(make_vec_env, entry.target),
-            )
-            entry.meta["gym_registered"] = True
-        elif describe_target(spec.entry_point) != entry.target_repr:
-            detail = f"gymnasium already has it with entry point {describe_target(spec.entry_point)!r}"
-            raise DuplicateRegistrationError("task", entry.name, "gymnasium registry", entry.provider, detail)
-        super()._store(entry)
-
-    def remove(self, name: str) -> Entry | None:
-        """Remove the entry and the gymnasium id this registry added for it."""
-        entry = super().remove(name)
-        if entry is not None and entry.meta.get("gym_registered"):
-            import gymnasium
-
-            gymnasium.registry.pop(entry.name, None)
-        return entry
-
-
 #: Registry kinds, in the order their hooks are called.
 KINDS = ("commands", "assets", "robots", "sensors", "functors", "tasks")
 
 
 def new_registries() -> dict[str, Registry]:
     """A fresh, empty registry of every kind."""
+    from embodichain_core.plugins.gym_tasks import TaskRegistry
+
     return {
         "functors": Registry("functors"),
         "robots": Registry("robots", key=class_name_key),
         "sensors": Registry("sensors", key=class_name_key),
         "assets": Registry("assets", noun="asset root"),
-        "tasks": TaskRegistry("tasks"),
+        "tasks": TaskRegistry("tasks", noun="task"),
         "commands": Registry("commands"),
     }

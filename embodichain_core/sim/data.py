@@ -5,7 +5,14 @@ Search order of :func:`get_data_path`:
 1. an absolute path (``~`` expanded) is returned unchanged when it exists;
 2. ``$EMBODICHAIN_DATA_ROOT/<name>`` (default root ``~/.cache/embodichain_data``);
 3. roots added at runtime with :func:`register_data_root`, newest last;
-4. data roots that plugins registered in the ``assets`` registry, in registration order.
+4. data roots that plugins registered in the ``assets`` registry: the plugins listed in
+   ``EMBODICHAIN_PLUGIN_PRIORITY`` first, then in load order (plugins load sorted by name,
+   so the order never depends on how they were installed).
+
+A name qualified by a plugin, ``"<plugin>:<relative path>"`` (``"embodichain-assets:
+CircleTableSimple/circle_table_simple.ply"``), is searched only in the roots that plugin
+registered. The prefix must be the name of a plugin that registered a data root; any other
+text before a ``:`` is part of an ordinary name.
 
 A name that is found nowhere raises :class:`DataPathNotFoundError`, whose message lists the roots
 searched and the closest existing names. A trailing slash is kept, so folder names resolve to
@@ -111,7 +118,8 @@ def get_data_path(name: str | os.PathLike[str]) -> str:
             name, [], [os.path.join(parent, h) for h in hint], f"Absolute path {name!r} does not exist."
         )
     relative = name[2:] if name.startswith("./") else name
-    roots = data_roots()
+    provider, relative = _split_provider(relative)
+    roots = data_roots() if provider is None else _plugin_roots(provider)
     for root in roots:
         candidate = os.path.join(root, relative)
         if os.path.exists(candidate):
@@ -147,12 +155,26 @@ def _walk_names(root: str, max_depth: int) -> list[str]:
     return out
 
 
-def _plugin_roots() -> list[str]:
-    """Data roots registered by plugins in the ``assets`` registry (empty when unavailable)."""
+def _split_provider(name: str) -> tuple[str | None, str]:
+    """``(plugin, relative)`` for ``"<plugin>:<relative>"`` naming a plugin with data roots."""
+    prefix, sep, rest = name.partition(":")
+    registry = _asset_registry() if sep else None
+    if registry is None or prefix not in registry.providers():
+        return None, name
+    return prefix, rest
+
+
+def _plugin_roots(provider: str | None = None) -> list[str]:
+    """Data roots registered by plugins (only ``provider``'s when given), priority plugins first."""
     registry = _asset_registry()
     if registry is None:
         return []
-    roots = [_entry_root(entry) for entry in _registry_entries(registry)]
+    from embodichain_core.plugins.names import plugin_priority
+
+    rank = {name: i for i, name in enumerate(plugin_priority())}
+    entries = [e for e in _registry_entries(registry) if provider in (None, e.provider)]
+    entries.sort(key=lambda e: rank.get(e.provider, len(rank)))  # stable: load order otherwise
+    roots = [_entry_root(entry) for entry in entries]
     return [os.path.abspath(os.path.expanduser(os.fspath(r))) for r in roots if r]
 
 
@@ -190,9 +212,11 @@ def _asset_registry() -> Any:
 def _registry_entries(registry: Any) -> list[Any]:
     """Entries of a registry in registration order, whatever its container shape.
 
-    ``Registry.entries()`` sorts by name, so the insertion-ordered mapping behind it is read
-    when there is one.
+    ``Registry.entries()`` sorts by name, so ``ordered_entries()`` (or the insertion-ordered
+    mapping behind it) is read when there is one.
     """
+    if callable(getattr(registry, "ordered_entries", None)):
+        return list(registry.ordered_entries())
     ordered = getattr(registry, "_entries", None)
     if isinstance(ordered, dict):
         return list(ordered.values())

@@ -5,6 +5,9 @@ Public helpers (imported lazily, so ``import embodichain_core.testing`` is cheap
 * :func:`isolated_plugins`: context manager with a fresh plugin manager and empty
   registries (built-ins only), restoring the global state afterwards.
 * :func:`register_plugin`: register a plugin object or module at runtime.
+* :func:`check_name_clashes`: register a plugin next to the *installed* plugins and
+  report (raise :class:`NameClashError`) every name it shares with them, e.g.
+  ``check_name_clashes(my_plugin, name="embodichain-myplugin")``.
 * ``make_env`` / ``check_batched_env``: env checks from
   :mod:`embodichain_core.testing.env_checks`, when that module is available.
 
@@ -21,6 +24,8 @@ _PLUGIN_HELPERS = {
     "isolated_plugins": "embodichain_core.plugins.manager",
     "register_plugin": "embodichain_core.plugins.manager",
     "unregister_plugin": "embodichain_core.plugins.manager",
+    "check_name_clashes": "embodichain_core.testing.clashes",
+    "NameClashError": "embodichain_core.testing.clashes",
 }
 _ENV_HELPERS = ("make_env", "check_batched_env")
 

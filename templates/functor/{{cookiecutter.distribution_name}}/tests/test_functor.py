@@ -95,3 +95,11 @@ def test_env_uses_the_randomization(registered, make_env, check_batched_env):
     mass = env.scene["cube"].get_mass()
     assert ((mass >= 0.2 - 1e-6) & (mass <= 0.4 + 1e-6)).all() and mass[0] != mass[1]
 {% endif -%}
+
+
+def test_names_do_not_clash_with_the_installed_plugins():
+    """A bare name that another installed plugin registers too becomes ambiguous for users
+    (they must then write '{{ cookiecutter.distribution_name }}:<name>'); rename it."""
+    from embodichain_core.testing import check_name_clashes
+
+    check_name_clashes(plugin, name="{{ cookiecutter.distribution_name }}")

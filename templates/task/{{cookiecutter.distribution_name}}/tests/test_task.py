@@ -53,3 +53,11 @@ def test_json_config_builds_the_same_env(make_env, check_batched_env):
     reference = make_env(TASK_ID, num_envs=2)
     assert env.single_observation_space == reference.single_observation_space
     assert env.single_action_space == reference.single_action_space
+
+
+def test_names_do_not_clash_with_the_installed_plugins():
+    """A bare name that another installed plugin registers too becomes ambiguous for users
+    (they must then write '{{ cookiecutter.distribution_name }}:<name>'); rename it."""
+    from embodichain_core.testing import check_name_clashes
+
+    check_name_clashes(plugin, name="{{ cookiecutter.distribution_name }}")
