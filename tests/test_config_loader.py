@@ -98,6 +98,7 @@ def test_cfg_from_file_builds_an_env() -> None:
 
 #: A value for every non-scene field of EmbodiedEnvCfg, and where it goes in the file.
 ENV_FIELDS: dict[str, Any] = {
+    "custom_event_modes": ["attach"],
     "num_envs": 3, "seed": 7, "sim_steps_per_control": 2, "target_control_frequency": 50.0,
     "ignore_terminations": True, "max_episode_steps": 9, "verbose": False, "control_parts": ["arm"],
     "active_joint_ids": [0, 1], "filter_visual_rand": True, "filter_dataset_saving": True,

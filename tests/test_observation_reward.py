@@ -76,7 +76,9 @@ def test_modify_in_place_and_declaration_order(make_env) -> None:
 
 
 def test_modify_missing_key_names_the_functor(make_env) -> None:
-    with pytest.raises(KeyError, match=r"env\.observations\.norm") as err:
+    from embodichain_core.config.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"env\.observations\.norm") as err:
         make_env(observations={"norm": ObservationCfg(func=plus_ten, mode="modify", name="robot/joint_pos")})
     assert "joint_pos" in str(err.value)
 

@@ -60,6 +60,9 @@ def _convert_union(value: Any, members: tuple, path: str) -> Any:
             errors.append(err)
     if len(errors) == 1:
         raise errors[0]
+    deepest = max(errors, key=lambda err: len(err.path))
+    if len(deepest.path) > len(path):  # a member matched the structure; an item inside it is wrong
+        raise deepest
     names = ", ".join(getattr(m, "__name__", str(m)) for m in members)
     raise ConfigError(path, f"value {value!r} does not match any of: {names}")
 
@@ -94,7 +97,13 @@ def _convert_class(value: Any, hint: type, path: str) -> Any:
     if getattr(hint, "__configclass__", False):
         if isinstance(value, hint):
             return value
-        return hint.from_dict(value, path)
+        try:
+            return hint.from_dict(value, path)
+        except ConfigError as err:
+            # a check inside the class (``__post_init__``) names its field only: add the path
+            if path and not _within(err.path, path):
+                raise err.under(path) from None
+            raise
     if issubclass(hint, enum.Enum):
         return _convert_enum(value, hint, path)
     if hint is bool:
@@ -118,6 +127,11 @@ def _convert_class(value: Any, hint: type, path: str) -> Any:
             raise ConfigError(path, f"expected a list of values, got {type(value).__name__} {value!r}")
         return hint(value)
     return value
+
+
+def _within(path: str, prefix: str) -> bool:
+    """``path`` is ``prefix`` or lies below it."""
+    return path == prefix or path.startswith((f"{prefix}.", f"{prefix}["))
 
 
 def _convert_enum(value: Any, hint: type[enum.Enum], path: str) -> Any:

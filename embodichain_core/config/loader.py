@@ -27,8 +27,10 @@ import json
 import os
 from typing import Any, Mapping, Optional, Union
 
+from embodichain_core.config.checks import check_int
 from embodichain_core.config.convert import convert_value
 from embodichain_core.config.errors import ConfigError, join_path, unknown_key
+from embodichain_core.config.resources import MAX_NUM_ENVS
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
 from embodichain_core.managers.cfg import FUNCTOR_CFG_TYPES, DatasetFunctorCfg
 from embodichain_core.utils.configclass import _type_hints, is_configclass
@@ -49,6 +51,8 @@ SIM_KEYS: dict[str, str] = {"headless": "headless", "device": "sim_device", "gpu
 #: Cfg fields that may be given at the top level as well as inside ``env`` (not both).
 TOP_CFG_FIELDS = ("num_envs", "max_episode_steps", "sim_cfg")
 _RELATIVE_PATH_KEYS = ("fpath", "folder_path", "mesh_path")
+#: Keys of a functor entry: a dataset entry with one of them but no ``func`` is a recorder missing its ``func``.
+_FUNCTOR_KEYS = {"mode", "params", "save_failed_episodes", "extra"}
 
 
 def load_config_file(path: Union[str, os.PathLike]) -> dict:
@@ -244,7 +248,7 @@ def _functor_section(value: Any, cfg_type: type, path: str) -> Optional[dict]:
             out[name] = item
         elif not isinstance(item, Mapping):
             raise ConfigError(where, f"expected a mapping with 'func', got {type(item).__name__} {item!r}")
-        elif "func" not in item and cfg_type is DatasetFunctorCfg:
+        elif "func" not in item and cfg_type is DatasetFunctorCfg and not _FUNCTOR_KEYS & set(item):
             out[name] = copy.deepcopy(dict(item))  # plain metadata (e.g. robot_meta)
         elif "func" not in item:
             raise ConfigError(join_path(where, "func"), "missing 'func' (a registered functor name or 'module:attr')")
@@ -308,4 +312,7 @@ def load_gym_config(path_or_dict: Union[str, os.PathLike, Mapping[str, Any]],
         data["id"] = overrides["id"]
     cfg, extras = gym_config_to_cfg(data, cfg_cls)
     apply_overrides(cfg, extras, overrides)
+    # the env allocates per-env counters before it validates the rest: bound the count now
+    for value, path in ((cfg.num_envs, "num_envs"), (cfg.sim_cfg.num_envs, "sim_cfg.num_envs")):
+        check_int(value, path, low=1, high=MAX_NUM_ENVS, hint=" (each env is a separate MuJoCo simulation)")
     return extras["id"], cfg, extras

@@ -48,7 +48,10 @@ class EmbodiedEnvCfg(EnvCfg):
     """The whole scene and its behaviour (see docs/embodied_env.md).
 
     ``articulation_cfg`` is accepted as an alias of ``articulation`` (the seed
-    tutorial uses that name).
+    tutorial uses that name). ``custom_event_modes`` declares the event modes
+    besides ``startup``/``reset``/``interval`` that task code applies
+    (``env.event_manager.apply("attach", ids)``); an undeclared mode close to a
+    known one (``"rset"``) is an error.
     """
 
     @configclass
@@ -75,9 +78,29 @@ class EmbodiedEnvCfg(EnvCfg):
     actions: Optional[Any] = None
     dataset: Optional[Any] = None
     extensions: Optional[Dict[str, Any]] = None
+    custom_event_modes: List[str] = []
     filter_visual_rand: bool = False
     filter_dataset_saving: bool = False
     init_rollout_buffer: bool = False
+
+    def validate(self, prefix: str = "", *, memory: bool = True) -> List[str]:
+        """Check the config before the env builds anything.
+
+        With a ``prefix`` (as the gym-config loader calls it) only the still-missing
+        required fields are listed. Without one, a missing field raises, then every
+        value is checked (run settings, simulation, physical values of the scene,
+        manager sections, the memory estimate unless ``memory=False``); see
+        :func:`embodichain_core.config.validate.validate_env_cfg`.
+
+        Raises:
+            ConfigError: a missing field or a bad value, at its config path.
+        """
+        missing = super().validate(prefix)
+        if not prefix:
+            from embodichain_core.config.validate import validate_env_cfg
+
+            validate_env_cfg(self, memory=memory)
+        return missing
 
     def all_articulations(self) -> List[ArticulationCfg]:
         """``articulation`` plus the ``articulation_cfg`` alias."""

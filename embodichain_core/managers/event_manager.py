@@ -1,5 +1,9 @@
 """Event manager: startup, reset, interval and custom-mode event functors.
 
+Custom modes are declared in ``env.custom_event_modes`` (or by a functor's
+``event_modes`` attribute); a mode that looks like a typo of a known one is a
+``ConfigError`` with the suggestion (see :func:`~embodichain_core.config.sections.check_event_mode`).
+
 Interval counters are per env and restart with each env's episode, so an
 ``interval_step=5`` event fires on steps 5, 10, ... of every episode of every env
 (``is_global=True`` keeps one counter and fires for all envs at once).
@@ -11,9 +15,10 @@ from typing import Any
 
 import torch
 
-from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.config.sections import check_event_mode, check_interval
 from embodichain_core.managers.cfg import EventCfg
 from embodichain_core.managers.manager_base import FunctorEntry, ManagerBase
+from embodichain_core.managers.param_rules import check_param_types
 
 
 class EventManager(ManagerBase):
@@ -36,8 +41,11 @@ class EventManager(ManagerBase):
 
     def _check(self, func: Any, cfg: EventCfg, where: str) -> None:
         super()._check(func, cfg, where)
-        if cfg.mode == "interval" and (isinstance(cfg.interval_step, bool) or int(cfg.interval_step) < 1):
-            raise ConfigError(join_path(where, "interval_step"), f"must be an int >= 1, got {cfg.interval_step!r}")
+        env_cfg = getattr(self._env, "cfg", None)
+        declared = [*(getattr(env_cfg, "custom_event_modes", None) or []), *getattr(func, "event_modes", ())]
+        check_event_mode(cfg.mode, where, declared)
+        check_interval(cfg, where, getattr(env_cfg, "max_episode_steps", None))
+        check_param_types(func, cfg.params, where, self.min_argc)
 
     @property
     def available_modes(self) -> list[str]:

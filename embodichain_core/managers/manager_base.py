@@ -31,7 +31,37 @@ class FunctorEntry:
     path: str
 
     def __call__(self, *args: Any) -> Any:
-        return self.func(*args, **self.cfg.params)
+        try:
+            return self.func(*args, **self.cfg.params)
+        except Exception as err:
+            tag_functor_error(err, self.path, self.func)
+            raise
+
+
+#: Attribute set on an exception raised inside a functor: the functor's config path.
+FUNCTOR_PATH_ATTR = "embodichain_functor_path"
+
+
+def tag_functor_error(err: BaseException, path: str, func: Any) -> None:
+    """Mark ``err`` (raised inside a functor) with the functor's config path.
+
+    The innermost functor wins: an event functor calling another functor keeps the
+    inner path. The exception's type is unchanged; a note names the functor, so a
+    printed traceback ends with ``raised in functor env.events.drive_damping (...)``.
+    """
+    if functor_path_of(err) is not None:
+        return
+    try:
+        setattr(err, FUNCTOR_PATH_ATTR, path)
+    except AttributeError:  # exceptions with __slots__
+        return
+    name = getattr(func, "__name__", None) or type(func).__name__
+    err.add_note(f"raised in functor {path} ({name})")
+
+
+def functor_path_of(err: BaseException) -> Optional[str]:
+    """The config path of the functor that raised ``err`` (``None`` when none did)."""
+    return getattr(err, FUNCTOR_PATH_ATTR, None)
 
 
 def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str, FunctorCfg]]:
@@ -58,36 +88,53 @@ def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str,
 
 
 def resolve_func(func: Any, kind: str, path: str) -> Any:
-    """A functor from a callable, a ``"module:attr"`` string or a registered name."""
+    """A functor from a callable, a registered name or a ``"module:attr"`` import path.
+
+    A string is read by one rule: ``"<plugin>:<name>"`` whose prefix names a known plugin
+    (``"embodichain-functors:randomize_light"``) is a qualified registered name; any
+    other string with a ``:`` is a ``"module:attr"`` import path; a string without
+    ``:`` is a bare registered name (an error naming every provider when several
+    plugins register it, unless ``EMBODICHAIN_PLUGIN_PRIORITY`` prefers one).
+    """
     if func is None or isinstance(func, type(MISSING)):  # a deep-copied cfg holds a copy of MISSING
         raise ConfigError(f"{path}.func", "no 'func' given")
     if not isinstance(func, str):
         if not callable(func):
             raise ConfigError(f"{path}.func", f"{func!r} is not callable")
         return func
-    if ":" in func:
-        module, _, attr = func.partition(":")
-        try:
-            obj = importlib.import_module(module)
-            for part in attr.split("."):
-                obj = getattr(obj, part)
-            return obj
-        except (ImportError, AttributeError) as err:
-            raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}") from err
-    return _from_registry(func, kind, path)
+    from embodichain_core.plugins.manager import is_qualified_name, known_providers
+
+    if ":" not in func or is_qualified_name(func):
+        return _from_registry(func, kind, path)
+    module, _, attr = func.partition(":")
+    try:
+        obj = importlib.import_module(module)
+        for part in attr.split("."):
+            obj = getattr(obj, part)
+        return obj
+    except (ImportError, AttributeError) as err:
+        hint = did_you_mean(module, sorted(known_providers()))
+        hint = f" (not a known plugin either.{hint})" if hint else ""
+        raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}{hint}") from err
 
 
 def _from_registry(name: str, kind: str, path: str) -> Any:
-    from embodichain_core.plugins.manager import load_plugins
-    from embodichain_core.plugins import get_registry
+    """The functor registered as ``name`` (bare or ``"<plugin>:<name>"``); errors name
+    the config path, and suggest functors of the same ``kind``."""
+    from embodichain_core.plugins import AmbiguousNameError, get_registry
 
-    load_plugins()
     registry = get_registry("functors")
-    if name not in registry:
-        same_kind = [e.name for e in registry.entries() if e.meta.get("kind") == kind] or registry.names()
-        hint = did_you_mean(name, same_kind) or " No functor plugin registers it (is the plugin installed?)."
-        raise ConfigError(f"{path}.func", f"unknown {kind} functor {name!r}.{hint}")
-    return registry.get(name)
+    try:
+        entry = registry.find(name)
+    except AmbiguousNameError as err:
+        raise ConfigError(f"{path}.func", str(err)) from None
+    if entry is not None:
+        return entry.resolve()
+    if ":" in name:
+        raise ConfigError(f"{path}.func", str(registry.unknown(name)))
+    same_kind = [e.name for e in registry.entries() if e.meta.get("kind") == kind] or registry.names()
+    hint = did_you_mean(name, same_kind) or " No functor plugin registers it (is the plugin installed?)."
+    raise ConfigError(f"{path}.func", f"unknown {kind} functor {name!r}.{hint}")
 
 
 def check_params(func: Any, params: dict, min_argc: int, path: str) -> None:
@@ -116,19 +163,11 @@ def check_params(func: Any, params: dict, min_argc: int, path: str) -> None:
 
 
 def check_ranges(params: dict, path: str, name: str) -> None:
-    """A ``*_range`` param given as ``[low, high]`` must have low <= high everywhere."""
-    import numpy as np
+    """Params checked by naming convention (``*_range`` pairs with low <= high, colour
+    ranges in [0, 1], ``*_prob`` in [0, 1], ...): see :mod:`.param_rules`."""
+    from embodichain_core.managers.param_rules import check_named_params
 
-    for key, value in params.items():
-        if not key.endswith("_range") or not isinstance(value, (list, tuple)) or len(value) != 2:
-            continue
-        try:
-            low, high = np.asarray(value[0], dtype=float), np.asarray(value[1], dtype=float)
-        except (TypeError, ValueError):
-            continue
-        if low.shape == high.shape and (low > high).any():
-            raise ConfigError(join_path(path, "params", key),
-                              f"functor {name!r}: low {value[0]!r} is above high {value[1]!r}")
+    check_named_params(params, path, name)
 
 
 def resolve_entities(value: Any, scene: Any, path: str, key: str = "") -> Any:
@@ -178,7 +217,9 @@ class ManagerBase:
         if is_class:
             try:
                 func = func(cfg=cfg, env=self._env)
-            except ConfigError:
+            except ConfigError as err:  # a path relative to the functor ("params.x") gets its entry's
+                if err.path == "params" or err.path.startswith(("params.", "params[")):
+                    raise err.under(where) from err
                 raise
             except Exception as err:
                 raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
-
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ObservationCfg
 from embodichain_core.managers.manager_base import ManagerBase
+from embodichain_core.managers.param_rules import check_param_types
 
 
 def get_nested(obs: dict, name: str) -> Any:
@@ -48,9 +48,16 @@ class ObservationManager(ManagerBase):
         if cfg.mode not in ("add", "modify"):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'modify', got {cfg.mode!r}")
         super()._check(func, cfg, where)
+        check_param_types(func, cfg.params, where, self.min_argc)
 
     def compute(self, obs: dict) -> dict:
-        """Apply every functor to ``obs`` (in place) and return it."""
+        """Apply every functor to ``obs`` (in place) and return it.
+
+        Raises:
+            ConfigError: a ``modify`` functor names an observation that does not
+                exist. The env computes its first observation when it is built (for
+                the observation space), so this is a build-time error.
+        """
         for entry in self.entries.values():
             name = entry.cfg.name
             if entry.cfg.mode == "add":
@@ -59,7 +66,9 @@ class ObservationManager(ManagerBase):
             try:
                 data = get_nested(obs, name)
             except KeyError as err:
-                raise KeyError(f"{entry.path}: {err.args[0]}") from None
+                raise ConfigError(join_path(entry.path, "name"),
+                                  f"{err.args[0]}; mode 'modify' changes an existing observation "
+                                  f"(use mode 'add' to create one)") from None
             out = entry(self._env, data)
             if out is not None and out is not data:
                 set_nested(obs, name, out)

@@ -197,10 +197,12 @@ class RobotCfg(ArticulationCfg):
         name = data.get("class_type") or data.get("robot_type")
         if cls is not RobotCfg or not name:
             return cls
-        from embodichain_core.plugins import get_robot_cfg_class, robot_registry
+        from embodichain_core.plugins import AmbiguousNameError, get_robot_cfg_class, robot_registry
 
         try:
             return get_robot_cfg_class(str(name))
+        except AmbiguousNameError as err:  # several plugins register the name: no silent choice
+            raise ConfigError(f"{path}.class_type" if path else "class_type", str(err)) from None
         except KeyError:
             if data.get("fpath") or data.get("mjcf"):
                 return cls
@@ -252,10 +254,12 @@ class SensorCfg(ObjectBaseCfg):
             if cls is SensorCfg:
                 raise ConfigError(path, "a sensor needs a 'sensor_type'")
             return cls
-        from embodichain_core.plugins import get_sensor_classes, sensor_registry
+        from embodichain_core.plugins import AmbiguousNameError, get_sensor_classes, sensor_registry
 
         try:
             return get_sensor_classes(str(name))[0]
+        except AmbiguousNameError as err:  # several plugins register the name: no silent choice
+            raise ConfigError(f"{path}.sensor_type" if path else "sensor_type", str(err)) from None
         except KeyError:
             where = f"{path}.sensor_type" if path else "sensor_type"
             reason = f"unknown sensor type {name!r}.{did_you_mean(str(name), sensor_registry().names())}"

@@ -37,6 +37,7 @@ def scene_cfg(**overrides: Any) -> EmbodiedEnvCfg:
     """The small test scene (see the module docstring) with ``overrides`` applied."""
     cfg = EmbodiedEnvCfg(
         num_envs=N, seed=0, verbose=False, robot=arm_cfg(), control_parts=["arm"],
+        custom_event_modes=["test", "custom", "attach", "detach"],  # the modes the tests apply by hand
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=CUBE_POS),
                       RigidObjectCfg(uid="ball", shape=SphereCfg(radius=0.03), init_pos=BALL_POS)],
         background=[RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_POS,

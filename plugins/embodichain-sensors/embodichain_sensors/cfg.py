@@ -22,6 +22,11 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.cfg import SensorCfg
 from embodichain_core.utils.configclass import MISSING, configclass
 
+#: Largest image side accepted (pixels): MuJoCo's offscreen buffer is an OpenGL framebuffer.
+MAX_IMAGE_SIDE = 16384
+#: Bytes per pixel of each camera output (colour is RGBA uint8; depth/mask 4 bytes; normal/position 3 float32).
+_BYTES_PER_PIXEL = {"color": 4, "depth": 4, "mask": 4, "normal": 12, "position": 12}
+
 
 def _check_vector(value: object, n: int, name: str) -> None:
     try:
@@ -97,9 +102,28 @@ class CameraCfg(SensorCfg):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
                 raise ConfigError(name, f"must be a positive int, got {value!r}")
+            if value > MAX_IMAGE_SIDE:
+                raise ConfigError(name, f"must be at most {MAX_IMAGE_SIDE} pixels (an OpenGL framebuffer side), "
+                                        f"got {value}")
         if not (0.0 < float(self.near) < float(self.far)):
             raise ConfigError("near", f"need 0 < near < far, got near={self.near!r}, far={self.far!r}")
         _check_intrinsics(self.intrinsics, "intrinsics")
+
+    def buffer_bytes_per_env(self) -> int:
+        """Bytes of one env's images of one update: every enabled output of every view,
+        plus the depth buffer the derived outputs are computed from (used by the
+        core's memory estimate before the scene is built)."""
+        wants = {"color": self.enable_color, "mask": self.enable_mask, "normal": self.enable_normal,
+                 "position": self.enable_position,
+                 "depth": self.enable_depth or self.enable_normal or self.enable_position
+                 or bool(getattr(self, "enable_disparity", False))}
+        per_pixel = sum(size for key, size in _BYTES_PER_PIXEL.items() if wants[key])
+        per_pixel += 4 * bool(getattr(self, "enable_disparity", False))
+        return int(self.width) * int(self.height) * per_pixel * self._views()
+
+    def _views(self) -> int:
+        """Images rendered per env (a stereo pair: 2)."""
+        return 1
 
     @property
     def fx(self) -> float:
@@ -145,6 +169,9 @@ class StereoCameraCfg(CameraCfg):
         _check_vector(self.left_to_right_rot, 3, "left_to_right_rot")
         if self.enable_disparity and not self.enable_depth:
             raise ConfigError("enable_disparity", "disparity is computed from depth: set enable_depth=True")
+
+    def _views(self) -> int:
+        return 2
 
     def right_intrinsics(self) -> tuple:
         """The right camera's intrinsics (``intrinsics`` when not set)."""

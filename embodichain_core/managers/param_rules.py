@@ -1,0 +1,161 @@
+"""Functor params checked by naming convention, for every functor of every plugin.
+
+A functor's own ``check_params`` hook knows its params best; these rules catch what
+any functor would get wrong with the same names, so plugins need not repeat them:
+
+=====================================================  ==========================================
+param name                                             rule
+=====================================================  ==========================================
+``*_range``                                            ``[low, high]``: finite numbers or lists of
+                                                       numbers of one length, ``low <= high``; a
+                                                       mapping of such pairs (per link); ``None``
+                                                       means "not randomized"
+``*color*_range``, ``metallic_range``,                 every bound in ``[0, 1]`` (colour bounds: 1, 3
+                                                       or 4 values)
+``roughness_range``, ``*_prob_range``
+``mass_range``                                         bounds > 0 (unless ``relative`` is true)
+``friction_range``, ``damping_range``,                 bounds >= 0 (unless ``relative`` is true)
+``stiffness_range``, ``max_effort_range``
+``*scale*_range``                                      bounds > 0 (scale factors)
+``*_prob``, ``prob``, ``probability``                  a number in ``[0, 1]``
+any number, anywhere in the params                     not NaN
+a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: or ``None``)
+=====================================================  ==========================================
+
+Example:
+    >>> check_named_params({"mass_range": [2.0, 1.0]}, "env.events.m", "randomize_rigid_object_mass")
+    Traceback (most recent call last):
+    ...
+    embodichain_core.config.errors.ConfigError: env.events.m.params.mass_range: ...
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from typing import Any, Optional
+
+from embodichain_core.config.checks import check_number, check_range
+from embodichain_core.config.errors import ConfigError, join_path
+
+__all__ = ["check_named_params", "check_param_types", "range_bounds"]
+
+_UNIT = (0.0, 1.0, False)
+_POSITIVE = (0.0, None, True)
+_NON_NEGATIVE = (0.0, None, False)
+_RELATIVE_NAMES = {"mass_range": _POSITIVE, "friction_range": _NON_NEGATIVE, "damping_range": _NON_NEGATIVE,
+                   "stiffness_range": _NON_NEGATIVE, "max_effort_range": _NON_NEGATIVE}
+
+
+def range_bounds(key: str, params: dict) -> tuple[Optional[float], Optional[float], bool]:
+    """``(low, high, low_open)`` allowed for the bounds of the range param ``key``."""
+    if "color" in key or key in ("metallic_range", "roughness_range") or key.endswith("_prob_range"):
+        return _UNIT
+    if key in _RELATIVE_NAMES:
+        return (None, None, False) if params.get("relative") is True else _RELATIVE_NAMES[key]
+    if "scale" in key:
+        return _POSITIVE
+    return None, None, False
+
+
+def _is_range_key(key: str) -> bool:
+    return key.endswith("_range")
+
+
+def _is_prob_key(key: str) -> bool:
+    return key in ("prob", "probability") or key.endswith("_prob")
+
+
+def check_named_params(params: Any, path: str, name: str) -> None:
+    """Check ``params`` (of the functor ``name`` at config ``path``) by naming convention.
+
+    Raises:
+        ConfigError: at ``<path>.params.<key>``, naming the functor and the rule.
+    """
+    if not isinstance(params, dict):
+        raise ConfigError(join_path(path, "params"), f"expected a mapping of params, got {type(params).__name__}")
+    for key, value in params.items():
+        where = join_path(path, "params", str(key))
+        try:
+            _check_nan(value, where)
+            if value is None:
+                continue
+            if _is_range_key(str(key)):
+                _check_range_param(str(key), value, params, where)
+            elif _is_prob_key(str(key)):
+                check_number(value, where, low=0.0, high=1.0, what="a probability")
+        except ConfigError as err:
+            raise ConfigError(err.path, f"functor {name!r}: {err.reason}") from None
+
+
+def _check_range_param(key: str, value: Any, params: dict, where: str) -> None:
+    low, high, low_open = range_bounds(key, params)
+    if "color" in key and isinstance(value, (list, tuple)):
+        for i, bound in enumerate(value):
+            if isinstance(bound, (list, tuple)) and len(bound) not in (1, 3, 4):
+                raise ConfigError(f"{where}[{i}]", f"a colour bound has 1, 3 (RGB) or 4 (RGBA) values, "
+                                                   f"got {len(bound)}: {bound!r}")
+    if isinstance(value, dict):
+        if not value:
+            raise ConfigError(where, "an empty mapping of ranges sets nothing; give [low, high]")
+        for sub, pair in value.items():
+            check_range(pair, join_path(where, str(sub)), low=low, high=high, low_open=low_open)
+        return
+    check_range(value, where, low=low, high=high, low_open=low_open)
+
+
+def _check_nan(value: Any, where: str, depth: int = 0) -> None:
+    """No NaN anywhere in (nested lists/dicts of) a param value."""
+    if isinstance(value, float) and math.isnan(value):
+        raise ConfigError(where, "NaN is not a valid value")
+    if depth > 6:
+        return
+    if isinstance(value, (list, tuple)):
+        for i, item in enumerate(value):
+            _check_nan(item, f"{where}[{i}]", depth + 1)
+    elif isinstance(value, dict):
+        for key, item in value.items():
+            _check_nan(item, join_path(where, str(key)), depth + 1)
+
+
+#: Annotations checked by :func:`check_param_types` -> (accepted types, description).
+_SIMPLE_TYPES: dict[str, tuple[tuple[type, ...], str]] = {
+    "bool": ((bool,), "true/false"), "int": ((int,), "an int"), "float": ((int, float), "a number"),
+    "str": ((str,), "a string"),
+}
+
+
+def _annotation_name(annotation: Any) -> tuple[str, bool]:
+    """``("bool", optional)`` for ``bool``/``"bool"``/``Optional[bool]``; ``("", ...)`` otherwise."""
+    text = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", str(annotation))
+    text = text.replace("typing.", "").strip()
+    for wrapper in ("Optional[", "Union[None, "):
+        if text.startswith(wrapper) and text.endswith("]"):
+            return text[len(wrapper):-1].strip(), True
+    if text.endswith("| None") or text.startswith("None |"):
+        return text.replace("| None", "").replace("None |", "").strip(), True
+    return text, False
+
+
+def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None:
+    """Params annotated ``bool``, ``int``, ``float`` or ``str`` (or ``Optional`` of one)
+    in the functor's signature must have that type (``"yes"`` is not a bool)."""
+    target = func.__call__ if inspect.isclass(func) else func
+    try:
+        sig = inspect.signature(target)
+    except (TypeError, ValueError):
+        return
+    args = [p for p in sig.parameters.values() if p.name != "self"][min_argc:]
+    name = getattr(func, "__name__", repr(func))
+    for param in args:
+        if param.name not in params or param.annotation is param.empty:
+            continue
+        kind, optional = _annotation_name(param.annotation)
+        value = params[param.name]
+        if kind not in _SIMPLE_TYPES or (value is None and optional):
+            continue
+        types, text = _SIMPLE_TYPES[kind]
+        if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
+            raise ConfigError(join_path(path, "params", param.name),
+                              f"functor {name!r}: expected {text}, got {type(value).__name__} {value!r}")
+
