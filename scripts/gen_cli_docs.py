@@ -3,7 +3,8 @@
 
 Every built-in ``embodichain`` command (``embodichain_core.plugins.builtin.BUILTIN_COMMANDS``)
 whose module has ``build_parser()`` is documented from that parser: description, usage,
-and a table of its arguments (subcommands such as ``new task`` get their own section).
+and a table of its arguments, then its epilog, if any, as Markdown (subcommands such as
+``new task`` get their own section).
 The page is rendered from the parsers' actions, not from argparse's help text, so it
 does not depend on the terminal width or the Python version.
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import textwrap
 from pathlib import Path
 from typing import Iterator
 
@@ -120,6 +122,8 @@ def render_parser(prog: str, parser: argparse.ArgumentParser, level: int = 2) ->
     subs = list(_subparsers(parser))
     if rows:
         lines += ["| Argument | Meaning |", "|---|---|", *rows, ""]
+    if parser.epilog:  # prose written as Markdown (the parser keeps its line breaks in --help)
+        lines += [textwrap.dedent(parser.epilog).strip(), ""]
     if subs:
         lines += ["| Subcommand | What |", "|---|---|"]
         lines += [f"| [`{n}`](#{_slug(prog + ' ' + n)}) | {_escape(h)} |" for n, _, h in subs] + [""]

@@ -11,6 +11,7 @@ import torch
 from core_testlib import FlagEnv, zero_action
 
 from embodichain_core.managers import DatasetFunctor, DatasetFunctorCfg
+from embodichain_core.managers.manager_base import functor_path_of
 
 
 class EpisodeRecorder(DatasetFunctor):
@@ -148,18 +149,27 @@ def test_finalize_is_idempotent_and_never_commits_partial_episodes(make_env, mak
     assert rec.finalized == 1
 
 
-def test_finalize_attempts_every_recorder_and_aggregates_errors(make_env, make_cfg) -> None:
+def test_finalize_attempts_every_recorder_and_reraises_one_error_marked(make_env, make_cfg) -> None:
     cfg = make_cfg(dataset={
         "broken": DatasetFunctorCfg(func=BrokenFinalize),
         "ok": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "ok"}),
     })
     env = make_env(cfg, env_cls=FlagEnv)
     broken, ok = env.dataset_manager.get_functor("broken"), env.dataset_manager.get_functor("ok")
-    with pytest.raises(RuntimeError, match="broken.*disk full"):
+    with pytest.raises(OSError, match="disk full") as err:  # the recorder's own error, as it is
         env.close()
-    assert broken.finalized == 1 and ok.finalized == 1
+    assert functor_path_of(err.value) == "env.dataset.broken"
+    assert broken.finalized == 1
+    assert ok.finalized == 1
     env.close()  # idempotent: no second attempt
     assert broken.finalized == 1
+
+
+def test_finalize_errors_of_several_recorders_are_raised_together(make_env, make_cfg) -> None:
+    cfg = make_cfg(dataset={"a": DatasetFunctorCfg(func=BrokenFinalize), "b": DatasetFunctorCfg(func=BrokenFinalize)})
+    env = make_env(cfg, env_cls=FlagEnv)
+    with pytest.raises(RuntimeError, match=r"2 recorders: env\.dataset\.a: OSError: disk full; env\.dataset\.b"):
+        env.close()
 
 
 def test_dataset_params_are_checked(make_env, make_cfg) -> None:
@@ -183,3 +193,19 @@ def test_filter_dataset_saving_disables_the_manager(make_env, make_cfg) -> None:
     env.success_flags[:] = True
     env.step(zero_action(env))  # finished episodes with no manager: nothing to do
     env.close()
+
+
+class PickyRecorder(EpisodeRecorder):
+    def __init__(self, cfg: Any, env: Any) -> None:
+        from embodichain_core.config.errors import ConfigError
+
+        raise ConfigError("params.tag", "must name a writable place")
+
+
+def test_a_constructor_error_relative_to_the_params_gets_the_entry_path(make_env, make_cfg) -> None:
+    from embodichain_core.config.errors import ConfigError
+
+    with pytest.raises(ConfigError) as err:
+        make_env(make_cfg(dataset={"rec": DatasetFunctorCfg(func=PickyRecorder, params={"tag": "t"})}))
+    assert err.value.path == "env.dataset.rec.params.tag"
+    assert "must name a writable place" in str(err.value)

@@ -3,8 +3,11 @@
 With neither a task id nor ``--gym_config`` it runs the built-in demo scene
 (:mod:`embodichain_core.demo`). CLI values override the config only when given.
 Episodes run with random actions, or, when the env has ``create_demo_action_list``,
-by replaying the demo action list (data generation). The run ends with a summary.
-Exit codes: 0 success, 2 configuration error.
+by replaying the demo action list (data generation). Dataset outputs are checked
+before the env is built (:func:`~embodichain_core.cli.run_errors.preflight_outputs`).
+An error while running prints its traceback and the config path of the functor that
+raised it; the env is closed (datasets finalized) and the summary printed either way.
+Exit codes: 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted.
 
 Example:
     $ embodichain run-env --num_envs 4 --max_episodes 8 --headless
@@ -19,14 +22,17 @@ import sys
 import time
 from typing import Any, Optional, Sequence
 
+from embodichain_core.cli.run_errors import RunError, describe_error, preflight_outputs, report_error
 from embodichain_core.cli.run_loops import (  # noqa: F401  (re-exported)
     RunPlan,
     RunStats,
     describe_space,
     make_env,
+    output_paths,
     preview,
     print_summary,
     run_episodes,
+    written_episodes,
 )
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.suggest import did_you_mean
@@ -35,9 +41,32 @@ PROG = "embodichain run-env"
 _CONFIG_EXTS = (".json", ".yaml", ".yml")
 
 
+EPILOG = """
+**Errors.** A configuration error (a bad key or value, an unknown task id, an unusable
+dataset folder) prints one line naming the config key and exits with 2 before anything is
+built. An exception raised while building or running prints its traceback, then one line
+naming the functor that raised it by its config path, for example
+`ValueError in functor env.events.drive_damping: ...`, and exits with 1; Ctrl-C exits with
+130. Either way the env is closed, so dataset recorders finalize (the episodes saved so far
+stay loadable), and the summary is printed with a `stopped` line saying why.
+
+**Dataset outputs.** Before the env is built, each dataset functor class that defines
+`preflight(params, path)` checks its output. The LeRobot recorder needs its
+`params.save_path` (default `$EMBODICHAIN_DEFAULT_DATASET_ROOT`, else `./outputs/datasets`)
+to be a writable folder on a filesystem with at least `params.min_free_mb` MB free
+(default 256); otherwise the run stops with a config error naming
+`env.dataset.<name>.params.save_path`. `--filter_dataset_saving` records nothing and skips
+the check. A disk that fills up later ends the run with a `DiskFullError`, the saved
+episodes intact (see datasets.md).
+
+**Exit codes.** 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted.
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``run-env`` argument parser; every override defaults to ``None`` (not given)."""
-    p = argparse.ArgumentParser(prog=PROG, description="Run a task or a gym config with random or demo actions.")
+    p = argparse.ArgumentParser(prog=PROG, description="Run a task or a gym config with random or demo actions.",
+                                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("task", nargs="?", metavar="TASK_ID", help="gym task id (or a .json/.yaml config file)")
     p.add_argument("--gym_config", metavar="FILE", help="JSON/YAML gym config (EmbodiChain layout)")
     p.add_argument("--num_envs", type=int, help="parallel environments")
@@ -78,30 +107,74 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 def _main(args: argparse.Namespace) -> int:
     plan = prepare(args)
-    stats, env = RunStats(), None
+    if not args.preview:
+        preflight_outputs(plan.cfg)  # an unusable dataset folder fails before the build
+    stats = RunStats()
     started = time.perf_counter()
     try:
         env = make_env(plan)
-        stats.build_s = time.perf_counter() - started
-        if args.preview:
-            preview(env)
-            return 0
-        run_episodes(env, plan.extras, stats, show_bar=not args.quiet and sys.stderr.isatty())
-        code = 0
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted while building the env", file=sys.stderr)
+        return 130
+    except ConfigError:
+        raise
+    except Exception as err:
+        return report_error(PROG, err, "building the env")
+    stats.build_s = time.perf_counter() - started
+    if args.preview:
+        return _preview(env)
+    code = _run(env, plan, stats, show_bar=not args.quiet and sys.stderr.isatty())
+    closed = _close(env, stats)  # always: the dataset is finalized whatever stopped the run
+    code = code or closed
+    print_summary(plan.task_id, env, stats)
+    return code
+
+
+def _run(env: Any, plan: RunPlan, stats: RunStats, show_bar: bool) -> int:
+    """Run the episodes; an error is reported (traceback, functor path) and ends the run."""
+    try:
+        run_episodes(env, plan.extras, stats, show_bar=show_bar)
+        return 0
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; closing (committed episodes are kept)", file=sys.stderr)
-        code = 130
-    except RuntimeError as err:
+        stats.error = "interrupted (Ctrl-C)"
+        return 130
+    except RunError as err:
         print(f"{PROG}: {err}", file=sys.stderr)
-        code = 1
-    finally:
-        if env is not None:
-            env.close()
-    manager = getattr(env.unwrapped, "dataset_manager", None) if env is not None else None
-    stats.data_paths = [p for p in manager.finalize()] if manager is not None else None
-    if env is not None:
-        print_summary(plan.task_id, env, stats)
+        stats.error = str(err)
+        return 1
+    except Exception as err:
+        stats.error = describe_error(err)
+        return report_error(PROG, err, "running episodes")
+
+
+def _close(env: Any, stats: RunStats) -> int:
+    """Close the env, which finalizes the dataset (saved episodes stay loadable); 0 or 1."""
+    manager = getattr(env.unwrapped, "dataset_manager", None)
+    code = 0
+    try:
+        env.close()
+    except Exception as err:  # e.g. a recorder that failed to finalize
+        code = report_error(PROG, err, "closing the env")
+        stats.error = stats.error or describe_error(err)
+    if manager is not None:
+        try:
+            finalized = list(manager.finalize())  # idempotent: what close() finalized
+        except Exception:  # reported above
+            finalized = []
+        stats.data_paths = output_paths(env.unwrapped, finalized)
+        stats.saved = written_episodes(env.unwrapped)
     return code
+
+
+def _preview(env: Any) -> int:
+    try:
+        preview(env)
+        return 0
+    except Exception as err:
+        return report_error(PROG, err, "previewing")
+    finally:
+        env.close()
 
 
 # -- what to run -------------------------------------------------------------------------------------
@@ -188,7 +261,12 @@ def _task_default_config(task_id: Optional[str]) -> Any:
         return None
     if task_id == DEMO_TASK_ID:
         return str(DEMO_CONFIG)
-    entry = task_registry().find(task_id)
+    from embodichain_core.plugins import AmbiguousNameError
+
+    try:
+        entry = task_registry().find(task_id)
+    except AmbiguousNameError as err:  # several plugins provide the bare id: no silent choice
+        raise ConfigError("id", str(err)) from None
     return entry.meta.get("config") if entry is not None else None
 
 

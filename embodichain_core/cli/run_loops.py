@@ -7,6 +7,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
+from embodichain_core.cli.run_errors import RunError
+
 @dataclass
 class RunPlan:
     """What to build: the task id, its cfg (``None``: the task's own default), the
@@ -32,6 +34,7 @@ class RunStats:
     build_s: float = 0.0
     run_s: float = 0.0
     data_paths: Optional[list] = None
+    error: Optional[str] = None  # what stopped the run early
 
 
 def make_env(plan: RunPlan) -> Any:
@@ -89,6 +92,31 @@ def _saved(base: Any) -> Optional[int]:
     return None if manager is None else int(manager.committed_episodes)
 
 
+def written_episodes(base: Any) -> Optional[int]:
+    """Episodes the recorders report as written (``saved_episodes``; after ``finalize`` that
+    includes queued ones), else the episodes committed to them; ``None`` without recorders."""
+    manager = getattr(base, "dataset_manager", None)
+    if manager is None:
+        return None
+    counts = [getattr(e.func, "saved_episodes", None) for e in manager.entries.values()]
+    counts = [c for c in counts if isinstance(c, int) and not isinstance(c, bool)]
+    return max(counts) if counts else int(manager.committed_episodes)
+
+
+def output_paths(base: Any, finalized: list) -> list:
+    """What ``finalize`` returned, plus the existing ``dataset_path`` of recorders whose
+    ``finalize`` failed (their saved episodes are still there)."""
+    import os
+
+    manager = getattr(base, "dataset_manager", None)
+    paths = [p for p in finalized if p]
+    for entry in manager.entries.values() if manager is not None else ():
+        path = getattr(entry.func, "dataset_path", None)
+        if path is not None and os.path.isdir(path) and str(path) not in {str(p) for p in paths}:
+            paths.append(path)
+    return paths
+
+
 def _progress(base: Any, stats: RunStats) -> int:
     """Saved episodes when recording, else finished episodes."""
     saved = _saved(base)
@@ -134,7 +162,7 @@ def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
         env.reset(options={"save_data": False})
         stats.discarded += n
         stats.failed += n
-    raise RuntimeError(f"the scripted demo failed in every env in {max_attempts} attempt(s) in a row")
+    raise RunError(f"the scripted demo failed in every env in {max_attempts} attempt(s) in a row")
 
 
 def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
@@ -186,7 +214,8 @@ def preview(env: Any) -> None:
 
 
 def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
-    """The end-of-run summary: episodes, saved, success rate, throughput, time, data."""
+    """The end-of-run summary: episodes, saved, success rate, throughput, time, data, and
+    what stopped the run when an error did."""
     rate = 100.0 * stats.successes / stats.episodes if stats.episodes else 0.0
     speed = stats.env_steps / stats.run_s if stats.run_s > 0 else 0.0
     paths = [str(p) for p in stats.data_paths or [] if p]
@@ -205,4 +234,6 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
         lines += ["  data         " + paths[0], *("               " + p for p in paths[1:])]
     else:
         lines.append("  data         " + ("none (no dataset recorder)" if stats.data_paths is None else "nothing saved"))
+    if stats.error:
+        lines.append(f"  stopped      early: {stats.error}")
     print("\n".join(lines))

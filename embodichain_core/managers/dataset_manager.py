@@ -13,7 +13,7 @@ from typing import Any, Optional
 import torch
 
 from embodichain_core.managers.cfg import DatasetFunctorCfg
-from embodichain_core.managers.manager_base import ManagerBase
+from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
 
 
 class DatasetManager(ManagerBase):
@@ -37,12 +37,20 @@ class DatasetManager(ManagerBase):
                     truncated: torch.Tensor, info: dict) -> None:
         for e in self.entries.values():
             if hasattr(e.func, "record_step"):
-                e.func.record_step(obs, action, reward, terminated, truncated, info)
+                try:
+                    e.func.record_step(obs, action, reward, terminated, truncated, info)
+                except Exception as err:
+                    tag_functor_error(err, e.path, e.func)
+                    raise
 
     def record_reset(self, obs: Any, env_ids: torch.Tensor) -> None:
         for e in self.entries.values():
             if hasattr(e.func, "record_reset"):
-                e.func.record_reset(obs, env_ids)
+                try:
+                    e.func.record_reset(obs, env_ids)
+                except Exception as err:
+                    tag_functor_error(err, e.path, e.func)
+                    raise
 
     def commit(self, env_ids: torch.Tensor) -> None:
         """Save the finished episodes of ``env_ids``."""
@@ -60,17 +68,26 @@ class DatasetManager(ManagerBase):
                 e.func.discard(env_ids)
 
     def finalize(self) -> list:
-        """Finalize every recorder once (idempotent); errors are collected and raised together."""
+        """Finalize every recorder once (idempotent), the others still when one fails.
+
+        One failure is re-raised as it is, marked with the recorder's config path
+        (:func:`~embodichain_core.managers.manager_base.functor_path_of`); several are
+        raised together as one ``RuntimeError`` naming each recorder.
+        """
         if self._finalized is not None:
             return self._finalized
         paths, errors = [], []
-        for name, e in self.entries.items():
+        for e in self.entries.values():
             try:
                 if hasattr(e.func, "finalize"):
                     paths.append(e.func.finalize())
             except Exception as err:  # keep finalizing the others
-                errors.append(f"{name}: {err!r}")
+                tag_functor_error(err, e.path, e.func)
+                errors.append((e.path, err))
         self._finalized = paths
+        if len(errors) == 1:
+            raise errors[0][1]
         if errors:
-            raise RuntimeError("dataset finalize failed: " + "; ".join(errors))
+            text = "; ".join(f"{path}: {type(err).__name__}: {err}" for path, err in errors)
+            raise RuntimeError(f"dataset finalize failed in {len(errors)} recorders: {text}") from errors[0][1]
         return paths

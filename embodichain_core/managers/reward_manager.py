@@ -8,7 +8,7 @@ import torch
 
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import RewardCfg
-from embodichain_core.managers.manager_base import ManagerBase
+from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
 
 
 class RewardManager(ManagerBase):
@@ -30,7 +30,11 @@ class RewardManager(ManagerBase):
         terms: dict[str, torch.Tensor] = {}
         n = self._env.num_envs
         for name, entry in self.entries.items():
-            value = entry.func(self._env, obs, action, info, **entry.cfg.params)
+            try:
+                value = entry.func(self._env, obs, action, info, **entry.cfg.params)
+            except Exception as err:
+                tag_functor_error(err, entry.path, entry.func)
+                raise
             value = torch.as_tensor(value, dtype=torch.float32)
             if value.dim() == 0:
                 value = value.expand(n)

@@ -4,7 +4,8 @@ A commit hands the episode (already an owned numpy copy, so later buffer changes
 cannot touch it) to one daemon worker thread, which does ``add_frame``,
 ``save_episode`` (PNG/video encoding) and the crash-safe publish in commit
 order. Stepping waits only when ``max_pending_episodes`` episodes are queued
-(0: never). A worker error is raised at the next commit, step or ``finalize()``;
+(0: never). A worker error is raised at the next commit, step or ``finalize()`` (a
+:class:`~embodichain_lerobot.storage.DiskFullError` as itself, others wrapped);
 ``finalize()`` drains the queue first, so every committed episode is written
 (a ``SIGKILL`` loses the queued ones), and rejects later commits.
 """
@@ -17,6 +18,7 @@ from typing import Any, Optional
 
 from embodichain_lerobot.episodes import Episode
 from embodichain_lerobot.recorder import LeRobotRecorder, log
+from embodichain_lerobot.storage import DiskFullError
 
 _STOP = object()
 
@@ -68,6 +70,8 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
             self._reported = len(self._errors)
         if not new:
             return
+        if isinstance(new[0], DiskFullError):  # its message says what happened and what to do
+            raise new[0]
         detail = "; ".join(repr(e) for e in new[:5]) + (f"; ... ({len(new)} errors)" if len(new) > 5 else "")
         raise RuntimeError(f"{type(self).__name__}: writing {len(new)} episode(s) failed: {detail}") from new[0]
 

@@ -1,8 +1,11 @@
 """``embodichain dataset``: inspect recorded LeRobot datasets (offline).
 
 Commands:
-    info PATH [--json]
-        episodes, frames, fps, tasks and features of a dataset folder.
+    info PATH [--json] [--episodes]
+        episodes, frames, fps, tasks and features of a dataset folder; with
+        ``--episodes`` one line per episode (length, success, env, episode seed).
+        A folder left by a recording that saved no episode is reported as
+        incomplete (exit 2), never read as a dataset.
     preview PATH --episode N [--out DIR] [--format png|mp4] [--frames K]
         a contact sheet PNG (or an mp4) of the episode's camera streams and a
         plot of its state and action over time.
@@ -20,6 +23,7 @@ import argparse
 import json
 import os
 import sys
+from pathlib import Path
 from typing import Optional, Sequence
 
 PROG = "embodichain dataset"
@@ -32,6 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="episodes, frames, features, fps and tasks of a dataset")
     info.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     info.add_argument("--json", action="store_true", help="print the summary as JSON")
+    info.add_argument("--episodes", action="store_true",
+                      help="also list every episode: length, success, env id and episode seed")
     prev = sub.add_parser("preview", help="camera contact sheet (or mp4) and state/action plot of an episode")
     prev.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     prev.add_argument("--episode", type=int, required=True, metavar="N", help="episode index")
@@ -68,10 +74,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
-    from embodichain_lerobot.reading import dataset_summary, format_summary
+    from embodichain_lerobot.reading import dataset_summary, format_episodes, format_summary, read_sidecar
 
     summary = dataset_summary(args.path)
-    print(json.dumps(summary, indent=2) if args.json else format_summary(summary))
+    if args.json:
+        if args.episodes:
+            summary["episode_records"] = read_sidecar(Path(summary["path"]), summary["episodes"])
+        print(json.dumps(summary, indent=2))
+    else:
+        print(format_summary(summary) + ("\n" + format_episodes(summary) if args.episodes else ""))
     return 0
 
 

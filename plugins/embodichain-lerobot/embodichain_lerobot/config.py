@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB
 
 #: Environment variable naming the default dataset root (``save_path`` not given).
 ENV_DATASET_ROOT = "EMBODICHAIN_DEFAULT_DATASET_ROOT"
@@ -47,6 +48,9 @@ class RecorderParams:
         vcodec: lerobot video codec (``libsvtav1``, ``h264``, ``hevc``, ``auto``).
         image_writer_threads, image_writer_processes: lerobot's async PNG writer.
         max_pending_episodes: async recorder queue bound (0: unbounded).
+        min_free_mb: megabytes that must stay free on the dataset's filesystem: checked
+            before the env is built and before each episode is saved (see
+            :mod:`embodichain_lerobot.storage`).
     """
 
     save_path: str = ""
@@ -58,6 +62,7 @@ class RecorderParams:
     image_writer_threads: int = 0
     image_writer_processes: int = 0
     max_pending_episodes: int = 64
+    min_free_mb: int = DEFAULT_MIN_FREE_MB
 
     @property
     def task(self) -> str:
@@ -92,7 +97,7 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     p.vcodec = str(params.get("vcodec", p.vcodec))
     if p.vcodec not in VIDEO_CODECS:
         raise ConfigError("vcodec", f"must be one of {VIDEO_CODECS}, got {p.vcodec!r}")
-    for name in ("image_writer_threads", "image_writer_processes", "max_pending_episodes"):
+    for name in ("image_writer_threads", "image_writer_processes", "max_pending_episodes", "min_free_mb"):
         setattr(p, name, _non_negative_int(params.get(name, getattr(p, name)), name))
     return p
 

@@ -36,13 +36,24 @@ class StepData:
 
 @dataclass
 class Episode:
-    """A finished episode of env ``env_id``: its (observation, step) pairs."""
+    """A finished episode of env ``env_id``: its (observation, step) pairs.
+
+    ``seed`` is the env's episode seed (``env.episode_seeds[env_id]`` at commit
+    time), ``None`` when the env does not expose one.
+    """
 
     env_id: int
     steps: list = field(default_factory=list)
+    seed: Optional[int] = None
 
     def __len__(self) -> int:
         return len(self.steps)
+
+    def nbytes(self) -> int:
+        """Raw size of the episode's frames (its observation rows and step values)."""
+        row = self.env_id
+        return sum(sum(arr[row].nbytes for arr in snap.values()) + step.action[row].nbytes + 16
+                   for snap, step in self.steps)
 
     @property
     def success(self) -> bool:

@@ -17,7 +17,14 @@ import os
 from pathlib import Path
 from typing import Any, Optional
 
-from embodichain_lerobot.writer import SIDECAR, STAGING
+from embodichain_lerobot.folders import (
+    STAGING,
+    IncompleteDatasetError,
+    folder_status,
+    incomplete_message,
+    looks_like_recording,
+)
+from embodichain_lerobot.writer import SIDECAR
 
 
 def go_offline() -> None:
@@ -38,15 +45,22 @@ def video_backend() -> str:
 
 
 def check_dataset_dir(path: str | os.PathLike) -> Path:
-    """``path`` as a dataset folder (it must hold ``meta/info.json``).
+    """``path`` as a dataset folder: its ``meta/info.json`` counts at least one episode.
 
     Raises:
+        IncompleteDatasetError: a recording left the folder before saving its first
+            episode (see :mod:`embodichain_lerobot.folders`).
         FileNotFoundError: not a LeRobot dataset folder.
     """
     root = Path(path).expanduser()
-    if not (root / "meta" / "info.json").is_file():
-        raise FileNotFoundError(f"{root} is not a LeRobot dataset (no meta/info.json)")
-    return root
+    if not root.is_dir():
+        raise FileNotFoundError(f"{root} is not a LeRobot dataset (no such folder)")
+    status = folder_status(root)
+    if status.complete:
+        return root
+    if looks_like_recording(root):  # meta/info.json counting 0 episodes, or staging, marker or data only
+        raise IncompleteDatasetError(incomplete_message(status))
+    raise FileNotFoundError(f"{root} is not a LeRobot dataset (no meta/info.json)")
 
 
 def load_dataset(path: str | os.PathLike, episodes: Optional[list[int]] = None) -> Any:
@@ -58,13 +72,32 @@ def load_dataset(path: str | os.PathLike, episodes: Optional[list[int]] = None) 
     return LeRobotDataset(f"local/{root.name}", root=root, episodes=episodes, video_backend=video_backend())
 
 
-def read_sidecar(root: Path) -> list[dict]:
-    """The per-episode lines of ``meta/embodichain_episodes.jsonl`` (empty when absent)."""
+def read_sidecar(root: Path, total: Optional[int] = None) -> list[dict]:
+    """The lines of ``meta/embodichain_episodes.jsonl`` of the published episodes, in order.
+
+    A line is written just before its episode is published, so lines of episodes
+    ``meta/info.json`` does not count (a save that failed or was killed), and a torn
+    last line, are skipped.
+
+    Args:
+        root: the dataset folder.
+        total: the published episodes (default: ``total_episodes`` of ``meta/info.json``).
+    """
     path = root / SIDECAR
     if not path.is_file():
         return []
-    lines = path.read_text(encoding="utf-8").splitlines()
-    return [json.loads(line) for line in lines if line.strip()]
+    if total is None:
+        total = int(json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))["total_episodes"])
+    records: dict[int, dict] = {}
+    for position, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines()):
+        try:
+            record = json.loads(line)
+        except ValueError:
+            continue
+        index = record.get("lerobot_episode_index", position) if isinstance(record, dict) else None
+        if isinstance(index, int) and 0 <= index < total:
+            records[index] = record
+    return [records[i] for i in sorted(records)]
 
 
 def _episode_lengths(root: Path, total: int) -> list[int]:
@@ -91,7 +124,8 @@ def dataset_summary(path: str | os.PathLike) -> dict:
     root = check_dataset_dir(path)
     info = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))
     total = int(info.get("total_episodes", 0))
-    sidecar = read_sidecar(root)[:total]
+    sidecar = read_sidecar(root, total)
+    seeds = [r.get("episode_seed") for r in sidecar]
     features = {name: {"dtype": ft["dtype"], "shape": list(ft["shape"]), "names": ft.get("names")}
                 for name, ft in info.get("features", {}).items()}
     return {
@@ -101,7 +135,8 @@ def dataset_summary(path: str | os.PathLike) -> dict:
         "cameras": [n for n, f in features.items() if f["dtype"] in ("image", "video")],
         "episode_lengths": _episode_lengths(root, total),
         "successes": sum(1 for r in sidecar if r.get("success")) if sidecar else None,
-        "unfinished": (root / STAGING).exists(),
+        "episode_seeds": seeds if any(s is not None for s in seeds) else None,
+        "unfinished": folder_status(root).unfinished,
     }
 
 
@@ -118,11 +153,30 @@ def format_summary(summary: dict) -> str:
     ]
     if summary["successes"] is not None:
         lines.append(f"success   {summary['successes']}/{summary['episodes']} (embodichain episode metadata)")
+    seeds = summary.get("episode_seeds")
+    if seeds is not None:
+        known = [s for s in seeds if s is not None]
+        shown = ", ".join(str(s) for s in known[:3]) + (", ..." if len(known) > 3 else "")
+        lines.append(f"seeds     {len(known)}/{summary['episodes']} episodes have an episode_seed ({shown})")
     if summary["unfinished"]:
-        lines.append(f"note      the recording was not finalized ({STAGING}/ is left): the run stopped early; "
-                     "every episode listed here is complete")
+        lines.append(f"note      the recording was not finalized ({STAGING}/ or the recording marker is left): "
+                     "the run stopped early or is still running; every episode listed here is complete")
     lines.append(f"features  {len(summary['features'])}:")
     width = max((len(n) for n in summary["features"]), default=0)
     for name, ft in summary["features"].items():
         lines.append(f"  {name:<{width}}  {ft['dtype']:<8} {tuple(ft['shape'])}")
+    return "\n".join(lines)
+
+
+def format_episodes(summary: dict) -> str:
+    """One line per episode: index, length, and the embodichain metadata (success, env, seed)."""
+    records = read_sidecar(Path(summary["path"]), summary["episodes"])
+    by_index = {r.get("lerobot_episode_index"): r for r in records}
+    lines = [f"{'episode':>7}  {'length':>6}  {'success':<7}  {'env':>3}  episode_seed"]
+    for index, length in enumerate(summary["episode_lengths"]):
+        record = by_index.get(index, {})
+        success = {True: "yes", False: "no"}.get(record.get("success"), "-")
+        seed = record.get("episode_seed")
+        lines.append(f"{index:>7}  {length:>6}  {success:<7}  {record.get('env_id', '-'):>3}  "
+                     f"{'-' if seed is None else seed}")
     return "\n".join(lines)

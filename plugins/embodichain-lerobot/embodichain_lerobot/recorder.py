@@ -8,6 +8,13 @@ finished episode with ``save_failed_episodes``) and discards it otherwise or on
 :mod:`embodichain_lerobot.writer`). ``finalize()`` (from ``env.close()``) drops
 live partial episodes and returns the dataset folder.
 
+The output folder is checked before the env is built (``run-env`` calls
+:meth:`LeRobotRecorder.preflight`; the constructor checks again), folders of
+earlier recordings that were killed before saving an episode are removed
+(:func:`~embodichain_lerobot.folders.clean_incomplete`), free space is checked
+before each save, and each episode's seed (``env.episode_seeds``, when the env has
+it) goes into ``meta/embodichain_episodes.jsonl``.
+
 Config (a gym config's ``dataset`` section)::
 
     "dataset": {"lerobot": {"func": "LeRobotRecorder", "params": {
@@ -22,10 +29,11 @@ import logging
 import os
 import shutil
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
+from embodichain_core.config.errors import ConfigError
 from embodichain_core.managers.functor import DatasetFunctor
 from embodichain_lerobot.config import (
     dataset_fps,
@@ -37,6 +45,8 @@ from embodichain_lerobot.config import (
 )
 from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
 from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
+from embodichain_lerobot.folders import clean_incomplete
+from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB, check_output_dir, ensure_space
 from embodichain_lerobot.writer import DatasetWriter
 
 log = logging.getLogger("embodichain_lerobot")
@@ -62,28 +72,48 @@ class LeRobotRecorder(DatasetFunctor):
     Params (read at construction; see :class:`~embodichain_lerobot.config.RecorderParams`):
     ``save_path``, ``robot_meta``, ``instruction``, ``extra``, ``use_videos``,
     ``vcodec``, ``image_writer_threads``, ``image_writer_processes``,
-    ``max_pending_episodes`` (async variant only).
+    ``max_pending_episodes`` (async variant only), ``min_free_mb``.
 
     Raises:
         ValueError: the env control frequency is not a whole number of Hz.
+        ConfigError: ``save_path`` is not writable or its filesystem has less than ``min_free_mb`` free.
     """
 
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
         self.params = parse_params(cfg.params or {})
         self.fps = dataset_fps(env.control_frequency)
+        check_output_dir(self.params.save_path, self.params.min_free_mb, "params.save_path")
         import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: import now, not at the first commit)
 
         if self.params.use_videos:
             os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its banner at every encoder start otherwise
         self.step_dt = float(env.step_dt)
         self._robot_uid = str(getattr(env.robot, "uid", "") or "")
+        clean_incomplete(self.params.save_path, dataset_prefix(*naming_parts(self.params, self._robot_uid)))
         self._spec: Optional[FeatureSpec] = None
         self._buffers = EpisodeBuffers(env.num_envs)
         self._writer: Optional[DatasetWriter] = None
         self._finalized = False
         self._path: Optional[str] = None
         self.discarded_episodes = 0
+
+    @classmethod
+    def preflight(cls, params: Mapping[str, Any], path: str) -> None:
+        """Check the params and the output folder before the env is built (``run-env`` calls it).
+
+        Args:
+            params: the functor's ``params``.
+            path: the functor's config path (``env.dataset.lerobot``), for the errors.
+
+        Raises:
+            ConfigError: a bad param, or an unusable ``save_path`` (named by its config key).
+        """
+        try:
+            p = parse_params(params or {})
+        except ConfigError as err:
+            raise err.under(f"{path}.params") from None
+        check_output_dir(p.save_path, p.min_free_mb, f"{path}.params.save_path")
 
     # -- status ----------------------------------------------------------------------------------
     @property
@@ -132,13 +162,18 @@ class LeRobotRecorder(DatasetFunctor):
     def __call__(self, env: Any, env_ids: Any, save_path: Any = None, robot_meta: Any = None,
                  instruction: Any = None, extra: Any = None, use_videos: bool = False,
                  vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0,
-                 max_pending_episodes: int = 64) -> None:
-        """Commit the finished episodes of ``env_ids`` (the params were read at construction)."""
+                 max_pending_episodes: int = 64, min_free_mb: int = DEFAULT_MIN_FREE_MB) -> None:
+        """Commit the finished episodes of ``env_ids`` (the params were read at construction).
+
+        Each episode keeps its seed, ``env.episode_seeds[i]`` now (before the next episode draws its seed).
+        """
         if self._finalized:
             raise RuntimeError(f"{type(self).__name__} is finalized; it accepts no more episodes")
+        seeds = getattr(env, "episode_seeds", None)
         for i in env_id_list(env_ids, self.num_envs):
             episode = self._buffers.take(i)
             if len(episode):  # zero-length episodes (the first reset) are skipped
+                episode.seed = int(seeds[i]) if seeds is not None else None
                 self._write(episode)
 
     def discard(self, env_ids: Any) -> None:
@@ -156,6 +191,9 @@ class LeRobotRecorder(DatasetFunctor):
         self._write_now(episode)
 
     def _write_now(self, episode: Episode) -> None:
+        where = self._writer.root if self._writer is not None else self.params.save_path
+        ensure_space(where, episode.nbytes(), self.params.min_free_mb,
+                     f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}")
         writer = self._ensure_writer()
         task = self.params.task
         subtask = writer.subtask_index(task)
@@ -184,6 +222,7 @@ class LeRobotRecorder(DatasetFunctor):
             "env_id": episode.env_id, "success": episode.success, "total_time": n * self.step_dt,
             "instruction": self.params.instruction, "robot_meta": self.params.robot_meta, "extra": self.params.extra,
             "segments": [{"name": "legacy", "start": 0, "end": n, "instruction": task, "subtask_index": subtask}],
+            **({"episode_seed": episode.seed} if episode.seed is not None else {}),
         }
 
     # -- closing ---------------------------------------------------------------------------------

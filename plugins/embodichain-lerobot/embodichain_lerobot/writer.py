@@ -13,15 +13,22 @@ after every ``save_episode``:
    ``stats.json`` are replaced atomically, and ``meta/info.json`` last: its
    ``total_episodes`` is the commit point.
 
+The episode's line of ``meta/embodichain_episodes.jsonl`` is appended just before
+``meta/info.json`` is replaced (readers ignore lines of unpublished episodes).
+
 A ``SIGKILL`` at any moment leaves a dataset that ``LeRobotDataset(repo_id, root)``
 loads with every episode whose ``info.json`` was published (an episode caught
-mid-publish leaves complete, unreferenced files that loaders ignore). The price
-is one data file (and one video file per camera) per episode.
+mid-publish leaves complete, unreferenced files that loaders ignore); a kill before
+the first episode is published leaves an *incomplete* folder
+(:mod:`embodichain_lerobot.folders`). A full disk during a save raises
+:class:`~embodichain_lerobot.storage.DiskFullError`; the episodes published before
+stay intact. The price is one data file (and one video file per camera) per episode.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import shutil
@@ -33,7 +40,9 @@ from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
-STAGING = ".embodichain_staging"
+from embodichain_lerobot.folders import STAGING
+from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full
+
 SIDECAR = "meta/embodichain_episodes.jsonl"
 SUBTASKS = "meta/subtasks.parquet"
 SCHEMA_VERSION = 2
@@ -90,6 +99,9 @@ def _json_default(value: Any) -> Any:
 class DatasetWriter:
     """Writes episodes into the (already reserved, empty) dataset folder ``root``.
 
+    The folder's recording marker (:class:`~embodichain_lerobot.storage.RecordingLock`)
+    is taken before lerobot writes anything and released by :meth:`finalize`.
+
     Args:
         root: the dataset folder (created by :func:`~embodichain_lerobot.config.reserve_dataset_dir`).
         fps: frames per second.
@@ -105,11 +117,16 @@ class DatasetWriter:
         self.root = Path(root)
         self.staging = self.root / STAGING
         self.repo_id = f"local/{self.root.name}"
-        self.dataset = LeRobotDataset.create(
-            repo_id=self.repo_id, fps=fps, features=features, root=self.staging, robot_type=robot_type,
-            use_videos=use_videos, vcodec=vcodec, image_writer_threads=image_writer_threads,
-            image_writer_processes=image_writer_processes)
-        atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
+        self._lock = RecordingLock(self.root)
+        try:
+            self.dataset = LeRobotDataset.create(
+                repo_id=self.repo_id, fps=fps, features=features, root=self.staging, robot_type=robot_type,
+                use_videos=use_videos, vcodec=vcodec, image_writer_threads=image_writer_threads,
+                image_writer_processes=image_writer_processes)
+            atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
+        except BaseException:
+            self._lock.release()
+            raise
         self.num_episodes = 0
         self.num_frames = 0
         self._subtasks: dict[str, int] = {}
@@ -128,6 +145,7 @@ class DatasetWriter:
         ``record`` (JSON-able) becomes the episode's line in ``meta/embodichain_episodes.jsonl``.
 
         Raises:
+            DiskFullError: the disk filled up while saving; the episodes before are intact.
             RuntimeError: the writer is finalized, or broken by an earlier failed save.
         """
         self._check_usable()
@@ -137,18 +155,19 @@ class DatasetWriter:
             for frame in frames:
                 ds.add_frame(frame)
                 length += 1
-        except BaseException:
-            ds.clear_episode_buffer()  # nothing was written: the writer stays usable
+        except BaseException as err:
+            ds.clear_episode_buffer()  # nothing was published: the writer stays usable
+            if is_disk_full(err):  # lerobot writes image frames to disk as they are added
+                raise self._disk_full_error(err) from err
             raise
         if length == 0:
             return -1
+        index = self.num_episodes
+        line = {**record, "lerobot_episode_index": index, "length": length, "schema_version": SCHEMA_VERSION}
         with deferred_sigint():  # a Ctrl-C lands after this episode is saved and counted
-            self._save_and_publish()
-            index = self.num_episodes
+            self._save_and_publish(line)
             self.num_episodes += 1
             self.num_frames += length
-            self._append_sidecar({**record, "lerobot_episode_index": index, "length": length,
-                                  "schema_version": SCHEMA_VERSION})
         return index
 
     def _check_usable(self) -> None:
@@ -158,17 +177,25 @@ class DatasetWriter:
             raise RuntimeError(f"dataset {self.root} stopped accepting episodes after an earlier failed save "
                                f"({self._broken!r}); the episodes saved before it are intact")
 
-    def _save_and_publish(self) -> None:
+    def _save_and_publish(self, line: dict) -> None:
         from lerobot.utils.utils import SuppressProgressBars
 
         try:
             with SuppressProgressBars():
                 self.dataset.save_episode(parallel_encoding=False)
             self._continue_in_new_files()
-            self._publish()
+            self._publish(line)
         except BaseException as err:
             self._broken = err
+            if is_disk_full(err):
+                raise self._disk_full_error(err) from err
             raise
+
+    def _disk_full_error(self, err: BaseException) -> DiskFullError:
+        n = self.num_episodes
+        return DiskFullError(errno.ENOSPC, f"no space left on device while saving episode {n} to {self.root} "
+                                           f"({err}); the {n} episode(s) saved before it are intact; free disk "
+                                           "space or choose another params.save_path")
 
     def _continue_in_new_files(self) -> None:
         """Close lerobot's writers; its next episode starts new files (lerobot's resume path)."""
@@ -180,7 +207,7 @@ class DatasetWriter:
         ds.meta.latest_episode = None
         ds.latest_episode = None
 
-    def _publish(self) -> None:
+    def _publish(self, line: dict) -> None:
         """Move the episode's files into the dataset; ``meta/info.json`` goes last."""
         for sub in _MOVED_DIRS:
             src_root = self.staging / sub
@@ -194,6 +221,7 @@ class DatasetWriter:
             if (self.staging / name).exists():
                 atomic_copy(self.staging / name, self.root / name)
         self._write_subtasks()
+        self._append_sidecar(line)
         atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
 
     def _write_subtasks(self) -> None:
@@ -206,17 +234,20 @@ class DatasetWriter:
         frame.to_parquet(tmp)
         os.replace(tmp, dest)
 
-    def _append_sidecar(self, record: dict) -> None:
+    def _append_sidecar(self, line: dict) -> None:
+        """One ``write`` of one line, flushed to disk before ``meta/info.json`` counts the episode."""
+        data = (json.dumps(line, default=_json_default) + "\n").encode("utf-8")
+        fd = os.open(self.root / SIDECAR, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
-            with open(self.root / SIDECAR, "a", encoding="utf-8") as f:
-                f.write(json.dumps(record, default=_json_default) + "\n")
-        except OSError as err:
-            raise RuntimeError(f"episode {record['lerobot_episode_index']} was saved to {self.root}, but its "
-                               f"metadata line could not be written to {SIDECAR}: {err}") from err
+            if os.write(fd, data) != len(data):
+                raise OSError(errno.ENOSPC, f"short write to {SIDECAR}")
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
     # -- closing ---------------------------------------------------------------------------------
     def finalize(self) -> Optional[Path]:
-        """Close lerobot's writers and remove the staging folder (idempotent).
+        """Close lerobot's writers, remove the staging folder and the marker (idempotent).
 
         Returns:
             The dataset folder, or ``None`` (and the folder removed) when no episode was saved.
@@ -231,6 +262,7 @@ class DatasetWriter:
         except Exception as err:  # a broken writer may fail to close; its published episodes are intact
             error = err
         shutil.rmtree(self.staging, ignore_errors=True)
+        self._lock.release()
         if self.num_episodes == 0:
             shutil.rmtree(self.root, ignore_errors=True)
         self._result = self.root if self.num_episodes else None

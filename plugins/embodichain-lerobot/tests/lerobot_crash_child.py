@@ -3,7 +3,10 @@
 Prints ``COMMITTED <n>`` (flushed) each time the recorder has saved its n-th
 episode. Modes: ``hang`` (3 episodes, then steps forever inside a 4th),
 ``churn`` (an episode every 2 steps, forever), ``die_in_save`` / ``die_in_publish``
-(SIGKILL itself while saving / publishing the 3rd episode). The test kills it.
+(SIGKILL itself while saving / publishing the 3rd episode), ``die_in_first_save`` /
+``die_in_first_publish`` (the same for the 1st episode), ``die_in_create`` (SIGKILL
+right after lerobot created the dataset, before ``meta/info.json`` is published).
+The test kills it, or it kills itself.
 """
 
 from __future__ import annotations
@@ -19,31 +22,51 @@ import torch  # noqa: E402
 from lerobot_helpers import arm_cfg, have_sensors, recorder_cfg, reset, stereo_camera  # noqa: E402
 
 
-def _die_on_third(cls: type, name: str) -> None:
+def _die_on_episode(cls: type, name: str, saved_before: int) -> None:
     original = getattr(cls, name)
 
     def wrapper(self, *args, **kwargs):
-        if self.num_episodes == 2:
+        if self.num_episodes == saved_before:
             os.kill(os.getpid(), signal.SIGKILL)
         return original(self, *args, **kwargs)
 
     setattr(cls, name, wrapper)
 
 
+def _die_in_publish(data_files: int) -> None:
+    from embodichain_lerobot import writer
+
+    original = writer.atomic_copy
+
+    def copy(src, dest):
+        if dest.name == "info.json" and (dest.parent.parent / "data").exists() and _files(dest) == data_files:
+            os.kill(os.getpid(), signal.SIGKILL)
+        original(src, dest)
+
+    writer.atomic_copy = copy
+
+
+def _die_after_create() -> None:
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    original = LeRobotDataset.create.__func__
+
+    def create(cls, *args, **kwargs):
+        original(cls, *args, **kwargs)
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    LeRobotDataset.create = classmethod(create)
+
+
 def _install_fault(mode: str) -> None:
     from embodichain_lerobot import writer
 
-    if mode == "die_in_save":  # lerobot has written the episode; its writers are still open
-        _die_on_third(writer.DatasetWriter, "_continue_in_new_files")
-    elif mode == "die_in_publish":  # data and metadata files moved, info.json not yet replaced
-        original = writer.atomic_copy
-
-        def copy(src, dest):
-            if dest.name == "info.json" and (dest.parent.parent / "data").exists() and _files(dest) == 3:
-                os.kill(os.getpid(), signal.SIGKILL)
-            original(src, dest)
-
-        writer.atomic_copy = copy
+    if mode in ("die_in_save", "die_in_first_save"):  # lerobot wrote the episode; its writers are open
+        _die_on_episode(writer.DatasetWriter, "_continue_in_new_files", 2 if mode == "die_in_save" else 0)
+    elif mode in ("die_in_publish", "die_in_first_publish"):  # files moved, info.json not yet replaced
+        _die_in_publish(3 if mode == "die_in_publish" else 1)
+    elif mode == "die_in_create":
+        _die_after_create()
 
 
 def _files(info_path) -> int:

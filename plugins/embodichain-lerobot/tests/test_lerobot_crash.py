@@ -124,3 +124,38 @@ def test_ctrl_c_during_a_save_lands_after_the_episode_is_saved(make_env, tmp_pat
     env.close()
     path = the_dataset(tmp_path)
     assert check_loads(path, 2, 2) == 2 and not (path / ".embodichain_staging").exists()
+
+
+@pytest.mark.parametrize("mode", ["die_in_create", "die_in_first_save", "die_in_first_publish"])
+def test_a_kill_before_the_first_episode_is_saved_leaves_an_incomplete_folder(
+        make_env, tmp_path: Path, mode: str, caplog: pytest.LogCaptureFixture,
+        capsys: pytest.CaptureFixture) -> None:
+    import logging
+
+    from lerobot_helpers import arm_cfg, recorder_cfg, reset, run_script
+
+    from embodichain_lerobot.cli import main as dataset_cli
+    from embodichain_lerobot.folders import IncompleteDatasetError, folder_status
+
+    rec = Recording(mode, tmp_path)
+    out = rec.finish(sig=None)
+    assert rec.proc.returncode == -signal.SIGKILL and "COMMITTED" not in out
+    path = the_dataset(tmp_path)
+    has_info = (path / "meta" / "info.json").is_file()
+    assert has_info == (mode != "die_in_create") and (path / ".embodichain_staging").is_dir()
+    assert (path / "data").is_dir() == (mode == "die_in_first_publish")  # partial data of the 1st episode
+    assert folder_status(path).removable
+    # `embodichain dataset info` and the loaders refuse it: it is never handed to lerobot
+    assert dataset_cli(["info", str(path)]) == 2
+    assert f"{path} is an incomplete recording, not a dataset" in capsys.readouterr().err
+    with pytest.raises(IncompleteDatasetError, match="holds no episode"):
+        load(path)
+    # the next run of the recorder with the same save_path removes it, naming it, and records afresh
+    with caplog.at_level(logging.WARNING, logger="embodichain_lerobot"):
+        env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
+    assert f"removed incomplete dataset folder {path}" in caplog.text and not path.exists()
+    reset(env)
+    run_script(env, [["."], ["s"]])
+    env.close()
+    assert the_dataset(tmp_path) == path and check_loads(path, 1, 1) == 1
+    assert not (path / ".embodichain_recording").exists()

@@ -1,0 +1,198 @@
+"""Output folders and full disks: ``run-env`` refuses a read-only or full dataset folder
+before the env is built; a disk that fills up mid-run ends the run with a clear error,
+the saved episodes finalized and loadable, and the summary printed."""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+import tempfile
+import uuid
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import gymnasium as gym
+import pytest
+
+from lerobot_helpers import arm_cfg, datasets_under, load, recorder_cfg, reset, run_script
+from test_lerobot_run_env import DemoPush, write_config
+
+from embodichain_core.cli import run_env
+from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+from embodichain_lerobot import storage
+from embodichain_lerobot.folders import clean_incomplete, folder_status
+from embodichain_lerobot.reading import check_dataset_dir
+from embodichain_lerobot.storage import DiskFullError
+
+KEY = "env.dataset.lerobot.params.save_path"
+
+
+@pytest.fixture
+def task_id() -> Iterator[str]:
+    uid = f"LeRobotStorage{uuid.uuid4().hex[:8]}-v0"
+    register_env(uid)(DemoPush)
+    yield uid
+    gym.registry.pop(uid, None)
+    REGISTERED_ENVS.pop(uid, None)
+
+
+@pytest.fixture
+def read_only_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    """A folder nobody can write into. Root ignores mode bits, so for root a read-only
+    filesystem is simulated: creating a file in it fails with ``EROFS``."""
+    path = tmp_path / "ro"
+    path.mkdir()
+    path.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    if os.geteuid() == 0:
+        original = tempfile.mkstemp
+
+        def mkstemp(*args: Any, **kwargs: Any) -> Any:
+            if Path(kwargs.get("dir") or "").resolve() == path.resolve():
+                raise OSError(errno.EROFS, "Read-only file system")
+            return original(*args, **kwargs)
+
+        monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    yield path
+    path.chmod(stat.S_IRWXU)
+
+
+def run(config: Path, capsys: pytest.CaptureFixture) -> tuple[int, str, str]:
+    code = run_env.main(["--gym_config", str(config), "--quiet"])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_a_read_only_dataset_folder_fails_before_the_build(tmp_path: Path, task_id: str, read_only_dir: Path,
+                                                           capsys: pytest.CaptureFixture) -> None:
+    save_path = read_only_dir / "datasets"
+    code, out, err = run(write_config(tmp_path / "c.json", task_id, save_path, "LeRobotRecorder"), capsys)
+    assert code == 2 and "Traceback" not in err and "run-env summary" not in out
+    assert f"{KEY}: dataset folder {save_path} is not writable (it would be created in {read_only_dir})" in err
+    assert "--filter_dataset_saving" in err and list(read_only_dir.iterdir()) == []
+
+
+def test_too_little_free_space_fails_before_the_build(tmp_path: Path, task_id: str,
+                                                      monkeypatch: pytest.MonkeyPatch,
+                                                      capsys: pytest.CaptureFixture) -> None:
+    monkeypatch.setattr(storage, "free_mb", lambda path: 40.0)
+    code, _, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", "LeRobotRecorder"), capsys)
+    assert code == 2
+    assert f"{KEY}: only 40 MB free on the filesystem of the dataset folder {tmp_path / 'data'}" in err
+    assert "at least 256 MB (its params.min_free_mb)" in err and not (tmp_path / "data").exists()
+
+
+def test_a_save_path_below_a_file_is_refused(tmp_path: Path) -> None:
+    from embodichain_core.config.errors import ConfigError
+    from embodichain_lerobot.recorder import LeRobotRecorder
+
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ConfigError, match=r"env.dataset.x.params.save_path: .* is not a directory"):
+        LeRobotRecorder.preflight({"save_path": str(tmp_path / "file" / "data")}, "env.dataset.x")
+
+
+def fail_third_save(monkeypatch: pytest.MonkeyPatch) -> None:
+    """lerobot's 3rd ``save_episode`` writes its files, then the disk is full."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    original, calls = LeRobotDataset.save_episode, []
+
+    def save_episode(self: Any, *args: Any, **kwargs: Any) -> None:
+        calls.append(1)
+        original(self, *args, **kwargs)
+        if len(calls) == 3:
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(LeRobotDataset, "save_episode", save_episode)
+
+
+@pytest.mark.parametrize("func", ["LeRobotRecorder", "AsyncLeRobotRecorder"])
+def test_a_disk_full_mid_run_keeps_the_saved_episodes(tmp_path: Path, task_id: str, func: str,
+                                                      monkeypatch: pytest.MonkeyPatch,
+                                                      capsys: pytest.CaptureFixture) -> None:
+    fail_third_save(monkeypatch)
+    code, out, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", func), capsys)
+    path = tmp_path / "data" / "arm7_empty_reach_000"
+    assert code == 1
+    last = err.strip().splitlines()[-1]
+    if func == "LeRobotRecorder":  # raised by the commit inside env.reset
+        assert "while running episodes: DiskFullError in functor env.dataset.lerobot: [Errno 28]" in last
+    else:  # the worker's error surfaces when the recorder is finalized
+        assert "while closing the env: DiskFullError in functor env.dataset.lerobot:" in last
+    assert f"no space left on device while saving episode 2 to {path}" in last
+    assert "the 2 episode(s) saved before it are intact" in last
+    assert "saved        2 episode(s)" in out and f"data         {path}" in out and "stopped      early" in out
+    ds = load(path)
+    assert ds.num_episodes == 2 and len(ds) == 8
+    assert not (path / ".embodichain_staging").exists() and not (path / ".embodichain_recording").exists()
+
+
+def full_while_adding_frames(monkeypatch: pytest.MonkeyPatch) -> None:
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    def add_frame(self: Any, frame: dict) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(LeRobotDataset, "add_frame", add_frame)
+
+
+@pytest.mark.parametrize("fault, message", [
+    ("low_space", "not enough disk space to save episode 2 .* 100 MB free"),
+    ("add_frame", "no space left on device while saving episode 2 .* the 2 episode.s. saved before it are intact"),
+])
+def test_a_full_disk_stops_between_episodes(make_env: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                            fault: str, message: str) -> None:
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
+    rec = env.dataset_manager.get_functor("rec")
+    reset(env)
+    run_script(env, [["s"], ["s"]])
+    if fault == "low_space":
+        monkeypatch.setattr(storage, "free_mb", lambda path: 100.0)
+    else:
+        full_while_adding_frames(monkeypatch)
+    with pytest.raises(DiskFullError, match=message) as info:
+        run_script(env, [["s"]])
+    assert "raised in functor env.dataset.rec (LeRobotRecorder)" in info.value.__notes__
+    env.close()
+    (path,) = datasets_under(tmp_path)
+    assert rec.saved_episodes == 2 and load(path).num_episodes == 2
+
+
+def test_a_failed_publish_leaves_no_metadata_line_behind(make_env: Callable, tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    from embodichain_lerobot import writer
+    from embodichain_lerobot.reading import dataset_summary, read_sidecar
+
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
+    reset(env)
+    run_script(env, [["s"], ["s"]])
+    original = writer.atomic_copy
+
+    def copy(src: Path, dest: Path) -> None:
+        if dest.name == "info.json":  # the commit point of the 3rd episode
+            raise OSError(errno.ENOSPC, "No space left on device")
+        original(src, dest)
+
+    monkeypatch.setattr(writer, "atomic_copy", copy)
+    with pytest.raises(DiskFullError):
+        run_script(env, [["s"]])
+    env.close()
+    (path,) = datasets_under(tmp_path)
+    assert len((path / writer.SIDECAR).read_text().splitlines()) == 3  # written before the commit point
+    assert [r["lerobot_episode_index"] for r in read_sidecar(path)] == [0, 1]
+    assert dataset_summary(path)["successes"] == 2 and load(path).num_episodes == 2
+
+
+def test_a_live_recording_without_episodes_is_left_alone(make_env: Callable, tmp_path: Path) -> None:
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
+    rec = env.dataset_manager.get_functor("rec")
+    reset(env)
+    run_script(env, [["."]])
+    writer = rec._ensure_writer()  # the folder exists; no episode is saved yet
+    status = folder_status(writer.root)
+    assert status.owner is not None and status.owner["pid"] == os.getpid() and not status.removable
+    assert clean_incomplete(tmp_path, writer.root.name.rsplit("_", 1)[0]) == []
+    with pytest.raises(FileNotFoundError, match=f"{writer.root} is being recorded by process {os.getpid()}"):
+        check_dataset_dir(writer.root)
+    env.close()
+    assert datasets_under(tmp_path) == []  # nothing saved: the folder is removed
