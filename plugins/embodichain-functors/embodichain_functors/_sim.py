@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from embodichain_core.sim.env_rows import batch_ids, field_selector, np_ids
+from embodichain_core.utils.math import matrix_to_pose
 
 _SETCONST = frozenset(mujoco.MjModel._setconst_inputs)
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
@@ -77,30 +78,9 @@ def step_envs(env: Any, env_ids: Any, nsteps: int) -> None:
         pass
 
 
-def quat_from_matrix(mat: torch.Tensor) -> torch.Tensor:
-    """(..., 3, 3) rotation matrices to (..., 4) wxyz quaternions, vectorized (w >= 0)."""
-    m = mat.to(torch.float64)
-    trace = m[..., 0, 0] + m[..., 1, 1] + m[..., 2, 2]
-    cands = torch.stack((
-        torch.stack((1 + trace, m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
-                     m[..., 1, 0] - m[..., 0, 1]), -1),
-        torch.stack((m[..., 2, 1] - m[..., 1, 2], 1 + m[..., 0, 0] - m[..., 1, 1] - m[..., 2, 2],
-                     m[..., 0, 1] + m[..., 1, 0], m[..., 0, 2] + m[..., 2, 0]), -1),
-        torch.stack((m[..., 0, 2] - m[..., 2, 0], m[..., 0, 1] + m[..., 1, 0],
-                     1 - m[..., 0, 0] + m[..., 1, 1] - m[..., 2, 2], m[..., 1, 2] + m[..., 2, 1]), -1),
-        torch.stack((m[..., 1, 0] - m[..., 0, 1], m[..., 0, 2] + m[..., 2, 0], m[..., 1, 2] + m[..., 2, 1],
-                     1 - m[..., 0, 0] - m[..., 1, 1] + m[..., 2, 2]), -1),
-    ), -2)
-    diag = torch.stack((trace, m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]), -1)
-    best = diag.argmax(-1, keepdim=True)
-    q = torch.gather(cands, -2, best[..., None].expand(best.shape + (4,))).squeeze(-2)
-    q = q / q.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-    return torch.where(q[..., :1] < 0, -q, q)
-
-
 def pose7_from_matrix(mat: torch.Tensor) -> torch.Tensor:
-    """(..., 4, 4) to (..., 7) xyz + wxyz."""
-    return torch.cat((mat[..., :3, 3].to(torch.float64), quat_from_matrix(mat[..., :3, :3])), -1)
+    """(..., 4, 4) to (..., 7) float64 xyz + wxyz (:func:`~embodichain_core.utils.math.matrix_to_pose`)."""
+    return matrix_to_pose(mat.to(torch.float64))
 
 
 def uids_matching(names: Sequence[str], prefix: str) -> list[int]:

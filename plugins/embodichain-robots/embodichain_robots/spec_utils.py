@@ -134,13 +134,6 @@ def add_mimic(spec: mujoco.MjSpec, follower: str, leader: str, multiplier: float
     eq.solref = [0.005, 1.0]
 
 
-def quat_from_matrix(rot: Sequence[Sequence[float]]) -> list[float]:
-    """(w, x, y, z) of a 3x3 rotation matrix."""
-    out = np.zeros(4)
-    mujoco.mju_mat2Quat(out, np.asarray(rot, dtype=float).reshape(-1))
-    return out.tolist()
-
-
 def axis_quat(axis: str) -> list[float]:
     """Quaternion turning a geom's local z axis onto ``axis`` (``"x"`` or ``"y"``)."""
     s = float(np.sqrt(0.5))

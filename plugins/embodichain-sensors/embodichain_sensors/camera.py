@@ -32,6 +32,7 @@ import torch
 
 from embodichain_core.sim.entities.base import env_index
 from embodichain_core.sim.sensor_base import BaseSensor
+from embodichain_core.utils.math import compose_frames, matrix_to_quat, quat_normalize, quat_to_matrix
 from embodichain_sensors import geometry as geo
 from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
@@ -79,7 +80,7 @@ class Camera(BaseSensor):
         if ext.eye is not None:
             pos, rot = geo.look_at(np.asarray(ext.eye), np.asarray(ext.target), None if ext.up is None else np.asarray(ext.up))
         else:
-            pos, rot = np.asarray(ext.pos, dtype=np.float64), geo.quat_to_mat(np.asarray(ext.quat))
+            pos, rot = np.asarray(ext.pos, dtype=np.float64), quat_to_matrix(quat_normalize(np.asarray(ext.quat)))
         n = self.num_envs
         return np.repeat(pos[None], n, 0), np.repeat(rot[None], n, 0)
 
@@ -95,8 +96,8 @@ class Camera(BaseSensor):
         body = spec.worldbody if self.mount.body is None else spec.body(self.mount.body)
         for k, view in enumerate(self.views):
             view.camera = self.uid if len(self.views) == 1 else f"{self.uid}/{('left', 'right')[k]}"
-            pos, rot = geo.compose(*geo.compose(self.mount.pos, self.mount.rot, self._local_pos[0], self._local_rot[0]),
-                                   view.pos, view.rot)
+            rig = compose_frames(self.mount.pos, self.mount.rot, self._local_pos[0], self._local_rot[0])
+            pos, rot = compose_frames(*rig, view.pos, view.rot)
             _add_spec_camera(body, view.camera, pos, rot, view.intrinsics[0], cfg.width, cfg.height)
         glob = spec.visual.global_
         glob.offwidth, glob.offheight = max(glob.offwidth, cfg.width), max(glob.offheight, cfg.height)
@@ -185,13 +186,13 @@ class Camera(BaseSensor):
     def get_view_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """Per view, ``(pos (N, 3), rot (N, 3, 3))`` in the env frame (current state)."""
         mpos, mrot = self.mount.body_poses(self.scene.sim)
-        rig = geo.compose(mpos, mrot, self._local_pos, self._local_rot)
-        return [rig if v.is_identity else geo.compose(*rig, v.pos, v.rot) for v in self.views]
+        rig = compose_frames(mpos, mrot, self._local_pos, self._local_rot)
+        return [rig if v.is_identity else compose_frames(*rig, v.pos, v.rot) for v in self.views]
 
     def get_arena_pose(self, to_matrix: bool = False) -> torch.Tensor:
         """The camera (rig) pose in the env frame: ``(N, 7)`` (xyz, wxyz) or ``(N, 4, 4)``."""
         mpos, mrot = self.mount.body_poses(self.scene.sim)
-        return _pose_out(*geo.compose(mpos, mrot, self._local_pos, self._local_rot), to_matrix)
+        return _pose_out(*compose_frames(mpos, mrot, self._local_pos, self._local_rot), to_matrix)
 
     def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
         """The camera pose in its parent frame (the env frame without a parent)."""
@@ -204,7 +205,7 @@ class Camera(BaseSensor):
         if p.shape[-2:] == (4, 4):
             pos, rot = p[..., :3, 3], p[..., :3, :3]
         else:
-            pos, rot = p[..., :3], geo.quat_to_mat(p[..., 3:7])
+            pos, rot = p[..., :3], quat_to_matrix(quat_normalize(p[..., 3:7]))
         self._local_pos[ids], self._local_rot[ids] = pos, rot
 
     def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
@@ -270,7 +271,7 @@ def _pose_out(pos: np.ndarray, rot: np.ndarray, to_matrix: bool) -> torch.Tensor
         mat = np.zeros(pos.shape[:-1] + (4, 4))
         mat[..., :3, :3], mat[..., :3, 3], mat[..., 3, 3] = rot, pos, 1.0
         return torch.from_numpy(mat.astype(np.float32))
-    return torch.from_numpy(np.concatenate([pos, geo.mat_to_quat(rot)], axis=-1).astype(np.float32))
+    return torch.from_numpy(np.concatenate([pos, matrix_to_quat(rot)], axis=-1).astype(np.float32))
 
 
 def _add_spec_camera(body: Any, name: str, pos: np.ndarray, rot: np.ndarray, intr: np.ndarray,
@@ -281,7 +282,7 @@ def _add_spec_camera(body: Any, name: str, pos: np.ndarray, rot: np.ndarray, int
     principal point, measured with y up (checked on MuJoCo 4.0).
     """
     fx, fy, cx, cy = (float(v) for v in intr)
-    cam = body.add_camera(name=name, pos=pos, quat=geo.mat_to_quat(rot))
+    cam = body.add_camera(name=name, pos=pos, quat=matrix_to_quat(rot))
     cam.resolution = [width, height]
     cam.sensor_size = [width * 1e-5, height * 1e-5]
     cam.focal_pixel = [fx, fy]

@@ -1,8 +1,8 @@
-"""Pose and projection math of the camera sensors (numpy, float64, batched).
+"""Camera frames and projection math of the camera sensors (numpy, float64, batched).
 
-Rotations are ``(..., 3, 3)`` matrices; quaternions ``(w, x, y, z)``. Camera
-frames follow OpenGL/MuJoCo: columns of a camera rotation are its +X (right),
-+Y (up) and +Z (backwards; the camera looks along -Z).
+Rotations are ``(..., 3, 3)`` matrices. Camera frames follow OpenGL/MuJoCo: columns of a
+camera rotation are its +X (right), +Y (up) and +Z (backwards; the camera looks along -Z).
+Quaternion, Euler and frame-composition maths come from :mod:`embodichain_core.utils.math`.
 """
 
 from __future__ import annotations
@@ -10,56 +10,6 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-
-
-def quat_to_mat(q: np.ndarray) -> np.ndarray:
-    """``(..., 4)`` quaternions (normalized here) to ``(..., 3, 3)`` rotations."""
-    q = np.asarray(q, dtype=np.float64)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    rows = [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]
-    return np.stack(rows, axis=-1).reshape(q.shape[:-1] + (3, 3))
-
-
-def mat_to_quat(m: np.ndarray) -> np.ndarray:
-    """``(..., 3, 3)`` rotations to ``(..., 4)`` unit quaternions with ``w >= 0``."""
-    m = np.asarray(m, dtype=np.float64)
-    flat = m.reshape(-1, 3, 3)
-    out = np.empty((flat.shape[0], 4))
-    for i, r in enumerate(flat):
-        out[i] = _mat_to_quat_one(r)
-    out[out[:, 0] < 0] *= -1
-    return out.reshape(m.shape[:-2] + (4,))
-
-
-def _mat_to_quat_one(r: np.ndarray) -> np.ndarray:
-    """Shepperd's method for one rotation matrix."""
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = np.asarray(q)
-    return q / np.linalg.norm(q)
-
-
-def euler_xyz_deg_to_mat(euler: Sequence[float]) -> np.ndarray:
-    """Extrinsic x-y-z Euler angles in degrees (scipy ``"xyz"``) to a rotation."""
-    ax, ay, az = np.radians(np.asarray(euler, dtype=np.float64))
-    rx = np.array([[1, 0, 0], [0, np.cos(ax), -np.sin(ax)], [0, np.sin(ax), np.cos(ax)]])
-    ry = np.array([[np.cos(ay), 0, np.sin(ay)], [0, 1, 0], [-np.sin(ay), 0, np.cos(ay)]])
-    rz = np.array([[np.cos(az), -np.sin(az), 0], [np.sin(az), np.cos(az), 0], [0, 0, 1]])
-    return rz @ ry @ rx
 
 
 def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -89,12 +39,6 @@ def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray | None = None) -
     cam_up = np.cross(right, forward)
     rot = np.stack([right, cam_up, -forward], axis=-1)
     return eye.copy(), rot
-
-
-def compose(pos_a: np.ndarray, rot_a: np.ndarray, pos_b: np.ndarray, rot_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Frame ``b`` (given in frame ``a``) in the frame ``a`` is given in."""
-    pos = pos_a + (rot_a @ pos_b[..., None])[..., 0]
-    return pos, rot_a @ rot_b
 
 
 def intrinsic_matrix(intrinsics: np.ndarray) -> np.ndarray:

@@ -17,8 +17,8 @@ import mujoco
 import numpy as np
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.utils.math import quat_normalize, quat_to_matrix
 from embodichain_core.utils.suggest import did_you_mean
-from embodichain_sensors.geometry import quat_to_mat
 
 
 @dataclass
@@ -65,8 +65,8 @@ def resolve_mount(spec: mujoco.MjSpec, parent: Optional[str], records: dict, whe
     site = _match(parent, list(sites), records, where)
     if site is not None:
         s = sites[site]
-        quat = np.asarray(s.quat, dtype=np.float64)
-        return Mount(body=s.parent.name or None, pos=np.asarray(s.pos, dtype=np.float64), rot=quat_to_mat(quat))
+        rot = quat_to_matrix(quat_normalize(np.asarray(s.quat, dtype=np.float64)))
+        return Mount(body=s.parent.name or None, pos=np.asarray(s.pos, dtype=np.float64), rot=rot)
     links = [b for b in bodies if "/" in b]
     raise ConfigError(where, f"no link, body or site named {parent!r} in the scene.{did_you_mean(parent, links)}")
 

@@ -28,6 +28,7 @@ import numpy as np
 import torch
 
 from embodichain_core.sim.entities.base import env_index
+from embodichain_core.utils.math import euler_xyz_to_quat, quat_to_matrix
 from embodichain_sensors import geometry as geo
 from embodichain_sensors.camera import Camera, View, _pose_out, _set_intrinsics
 
@@ -40,7 +41,7 @@ class StereoCamera(Camera):
     def _make_views(self) -> list[View]:
         cfg, n = self.cfg, self.num_envs
         baseline = np.asarray(cfg.left_to_right_pos, dtype=np.float64)
-        rot = geo.euler_xyz_deg_to_mat(cfg.left_to_right_rot)
+        rot = quat_to_matrix(euler_xyz_to_quat(cfg.left_to_right_rot))
         left_pos = -0.5 * baseline
         left = View("", np.tile(np.asarray(cfg.intrinsics, dtype=np.float64), (n, 1)), left_pos, np.eye(3))
         right = View("_right", np.tile(np.asarray(cfg.right_intrinsics(), dtype=np.float64), (n, 1)),

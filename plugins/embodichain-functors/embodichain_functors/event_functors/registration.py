@@ -65,7 +65,7 @@ def get_pose(env: Any, entity_cfg: Any, return_name: bool = False, to_matrix: bo
 
 
 def _quat(mat: torch.Tensor) -> torch.Tensor:
-    from embodichain_functors._sim import quat_from_matrix
+    from embodichain_core.utils.math import matrix_to_quat as quat_from_matrix
 
     return quat_from_matrix(mat[:, :3, :3]).to(mat.dtype)
 

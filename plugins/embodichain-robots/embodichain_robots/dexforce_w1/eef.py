@@ -16,8 +16,9 @@ from typing import Optional, Sequence
 import mujoco
 import numpy as np
 
+from embodichain_core.utils.math import matrix_to_quat
 from embodichain_robots.dexforce_w1.params import DexforceW1HandBrand, drive_group
-from embodichain_robots.spec_utils import add_body, add_geom, add_hinge, add_mimic, add_slide, quat_from_matrix
+from embodichain_robots.spec_utils import add_body, add_geom, add_hinge, add_mimic, add_slide
 
 #: Fingers in declaration order: name and x offset on the palm.
 FINGERS = (("index", 0.027), ("middle", 0.009), ("ring", -0.009), ("pinky", -0.027))
@@ -38,7 +39,7 @@ def build_eef(spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, brand: Dexforc
 
 
 def _mount_body(ee: mujoco.MjsBody, name: str, mount: np.ndarray, mass: float, ext: Sequence[float]) -> mujoco.MjsBody:
-    return add_body(ee, name, mount[:3, 3].tolist(), quat_from_matrix(mount[:3, :3]), mass=mass, inertia_box=ext,
+    return add_body(ee, name, mount[:3, 3].tolist(), matrix_to_quat(mount[:3, :3]).tolist(), mass=mass, inertia_box=ext,
                     ipos=(0, 0, ext[2] / 2))
 
 

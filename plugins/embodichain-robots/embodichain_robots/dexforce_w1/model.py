@@ -19,11 +19,12 @@ from typing import Optional
 import mujoco
 import numpy as np
 
+from embodichain_core.utils.math import matrix_to_quat
 from embodichain_robots.dexforce_w1 import params as P
 from embodichain_robots.dexforce_w1.arm import build_arm
 from embodichain_robots.dexforce_w1.body import build_chassis, build_head, build_torso
 from embodichain_robots.dexforce_w1.eef import build_eef
-from embodichain_robots.spec_utils import new_spec, quat_from_matrix
+from embodichain_robots.spec_utils import new_spec
 
 
 @dataclass
@@ -74,5 +75,5 @@ def _add_tcp_site(ee: mujoco.MjsBody, side: str, tcp: Optional[np.ndarray]) -> N
     if tcp is None:
         return
     tcp = np.asarray(tcp, dtype=float)
-    ee.add_site(name=f"{side}_tcp", pos=tcp[:3, 3].tolist(), quat=quat_from_matrix(tcp[:3, :3]),
+    ee.add_site(name=f"{side}_tcp", pos=tcp[:3, 3].tolist(), quat=matrix_to_quat(tcp[:3, :3]).tolist(),
                 size=[0.008, 0, 0], rgba=[0.1, 0.8, 0.2, 0.6], group=4)
