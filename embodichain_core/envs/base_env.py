@@ -18,7 +18,9 @@ import torch
 from gymnasium.vector import AutoresetMode
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.cfg import EnvCfg
+from embodichain_core.envs.episode_rng import EpisodeRandom
 from embodichain_core.envs.spaces import batch_space, space_from_obs
 from embodichain_core.envs.timing import resolve_num_envs, resolve_timing
 from embodichain_core.utils.suggest import did_you_mean
@@ -51,6 +53,7 @@ class BaseEnv(gym.Env):
         self.single_observation_space = space_from_obs(obs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._check_action = self._action_checker()
         self._init_obs = obs
 
     # -- config --------------------------------------------------------------------------------
@@ -78,6 +81,16 @@ class BaseEnv(gym.Env):
         self.generator = torch.Generator().manual_seed(int(seed))
         self.np_random_generator = np.random.default_rng(int(seed))
         self._np_random = self.np_random_generator
+        if getattr(self, "rng", None) is None:
+            self.rng = EpisodeRandom(self.num_envs, int(seed))
+        else:
+            self.rng.seed(int(seed))
+
+    @property
+    def episode_seeds(self) -> np.ndarray:
+        """Each env's current episode seed (uint64, ``(num_envs,)``): the key of its
+        random stream (``env.rng``), recorded with the episode for exact replay."""
+        return self.rng.episode_seeds
 
     # -- sizes and timing ----------------------------------------------------------------------
     @property
@@ -102,6 +115,11 @@ class BaseEnv(gym.Env):
     @property
     def unwrapped(self) -> "BaseEnv":
         return self
+
+    def _action_checker(self) -> ActionChecker:
+        """The boundary check of :meth:`step` (see :mod:`embodichain_core.envs.action_check`)."""
+        width = int(np.prod(self.single_action_space.shape))
+        return ActionChecker(self.num_envs, [width], self.device, self.action_space)
 
     # -- hooks for subclasses -----------------------------------------------------------------
     def _setup_scene(self) -> None:
@@ -177,6 +195,9 @@ class BaseEnv(gym.Env):
         return obs, self.get_info()
 
     def step(self, action: Any) -> tuple[dict, torch.Tensor, torch.Tensor, torch.Tensor, dict]:
+        """One control step of every env; ``action`` follows the rule of
+        :mod:`embodichain_core.envs.action_check` (a bad action is one clear error)."""
+        action = self._check_action(action)
         command = self._preprocess_action(action)
         self._step_action(command)
         diverged = self._physics_step()

@@ -15,8 +15,10 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
+from embodichain_core.envs.episode_rng import episode_seeds_option
 from embodichain_core.envs.rollout_buffer import RolloutBuffer
 from embodichain_core.envs.scene_setup import build_scene, filter_functors, resolve_active_joints
 from embodichain_core.envs.summary import print_summary
@@ -109,6 +111,23 @@ class EmbodiedEnv(BaseEnv):
             manager = DatasetManager(dataset, self)
             self.dataset_manager = manager if len(manager) else None
 
+    def _action_checker(self) -> ActionChecker:
+        """Action terms take their own width (a dict by term name or input key); without
+        terms, joint commands take the active joints' or all joints' width (a dict by
+        ``qpos``/``qvel``/``qf``)."""
+        manager = self.action_manager
+        terms = manager.get_terms_by_mode("pre") if manager is not None else {}
+        if terms:
+            keys: dict[str, list[int]] = {}
+            for name, term in terms.items():
+                keys[name] = keys[term.input_key] = [term.action_dim]
+            dims = [t.action_dim for t in terms.values()]
+            detail = f"the action terms {list(terms)} take {dims} values in this order (total {sum(dims)})"
+            return ActionChecker(self.num_envs, [sum(dims)], self.device, self.action_space, keys, detail)
+        widths = sorted({len(self.active_joint_ids), self.robot.dof}, key=lambda w: w != len(self.active_joint_ids))
+        return ActionChecker(self.num_envs, widths, self.device, self.action_space,
+                             {key: widths for key in ("qpos", "qvel", "qf")})
+
     # -- step pieces ----------------------------------------------------------------------------
     def _preprocess_action(self, action: Any) -> Any:
         if self.action_manager is not None and len(self.action_manager):
@@ -182,6 +201,8 @@ class EmbodiedEnv(BaseEnv):
     # -- reset -------------------------------------------------------------------------------------
     def _reset_envs(self, env_ids: torch.Tensor, options: dict) -> None:
         self._commit_or_discard(env_ids, bool(options.get("save_data", True)))
+        # the finished episodes are committed (with their seeds): start the new ones' streams
+        self.rng.begin_episodes(env_ids, episode_seeds_option(options, len(env_ids)))
         if self.rollout_buffer is not None:
             self.rollout_buffer.clear(env_ids)
         # whole state rows (also clears a diverged env), detached entities kept as they are

@@ -1,9 +1,9 @@
 """Helpers shared by the functors: env ids, per-env sampling, parameter errors.
 
-Every random draw goes through :func:`uniform` (or :func:`randint`) with
-``env.np_random`` (the numpy generator the env seeds from its seed, next to the
-torch ``env.generator``), one row per env in ``env_ids``, so each env draws its own
-value and a run is reproducible from the env seed.
+Every random draw goes through :func:`uniform` (or :func:`randint`), one row per env
+in ``env_ids``, each row from that env's episode stream ``env.rng`` (see
+:mod:`embodichain_core.envs.episode_rng`): an env's episode is a function of the seed,
+its env index and its episode index alone, whatever the other envs do.
 """
 
 from __future__ import annotations
@@ -98,15 +98,18 @@ def env_ids_of(env: Any, env_ids: Any) -> torch.Tensor:
     return env_index(env_ids, env.num_envs)
 
 
-def uniform(env: Any, low: Any, high: Any, n: int) -> torch.Tensor:
-    """``n`` per-env draws in ``[low, high]`` (float64), shape ``(n,) + broadcast(low, high)``."""
-    return torch.from_numpy(uniform_np(env, low, high, n))
+def uniform(env: Any, env_ids: Any, low: Any, high: Any, per_env: Sequence[int] = ()) -> torch.Tensor:
+    """Per-env draws in ``[low, high)`` (float64), shape ``(n, *per_env) + broadcast(low, high)``.
+
+    Row ``i`` comes from the episode stream of env ``env_ids[i]`` (``None``: every env).
+    """
+    return torch.from_numpy(uniform_np(env, env_ids, low, high, per_env))
 
 
-def uniform_np(env: Any, low: Any, high: Any, n: int) -> np.ndarray:
-    """:func:`uniform` as a numpy array (the same draws from ``env.np_random``)."""
+def uniform_np(env: Any, env_ids: Any, low: Any, high: Any, per_env: Sequence[int] = ()) -> np.ndarray:
+    """:func:`uniform` as a numpy array (the same draws)."""
     low_np, span = _bounds(low, high)
-    draw = env.np_random.random((n,) + low_np.shape)
+    draw = env.rng.random(env_ids, tuple(per_env) + low_np.shape)
     draw *= span
     draw += low_np
     return draw
@@ -133,9 +136,9 @@ def _bounds(low: Any, high: Any) -> tuple[np.ndarray, np.ndarray]:
     return lo, span
 
 
-def randint(env: Any, high: int, shape: Sequence[int]) -> torch.Tensor:
-    """Integers in ``[0, high)`` drawn from ``env.np_random`` (an int64 tensor)."""
-    return torch.from_numpy(env.np_random.integers(0, int(high), tuple(shape), dtype=np.int64))
+def randint(env: Any, env_ids: Any, high: int, per_env: Sequence[int] = ()) -> torch.Tensor:
+    """Integers in ``[0, high)``, shape ``(n, *per_env)``, one row per env's stream (int64)."""
+    return torch.from_numpy(env.rng.integers(env_ids, int(high), tuple(per_env)))
 
 
 _RANGES: dict[tuple[int, Optional[int]], tuple[Any, torch.Tensor, torch.Tensor]] = {}

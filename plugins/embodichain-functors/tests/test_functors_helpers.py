@@ -1,30 +1,16 @@
-"""Helpers of the functors: batched rotations agree with the core's, ranges are checked
-and cached, model writes run mj_setConst once and touch only the envs written."""
+"""Helpers of the functors: ranges are checked and cached, model writes run mj_setConst
+once and touch only the envs written (the rotations are the core's, tests/test_math.py)."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 import torch
 from functors_testlib import field
 
-from embodichain_core.utils.math import euler_xyz_to_quat, matrix_to_quat, pose_to_matrix, quat_mul
+from embodichain_core.envs.episode_rng import EpisodeRandom
 
-from embodichain_functors import _math
 from embodichain_functors._common import ParamError, as_range, uniform
-from embodichain_functors._sim import quat_from_matrix, write_model
-
-
-def test_rotations_match_the_core() -> None:
-    rng = np.random.default_rng(0)
-    euler = rng.uniform(-180, 180, (50, 3))
-    assert np.allclose(_math.euler_to_quat(euler), euler_xyz_to_quat(torch.tensor(euler)).numpy())
-    a, b = rng.normal(size=(5, 4)), rng.normal(size=(5, 4))
-    assert np.allclose(_math.quat_mul(a, b), quat_mul(torch.tensor(a), torch.tensor(b)).numpy())
-    pose = np.concatenate([rng.normal(size=(5, 3)), _math.euler_to_quat(euler[:5])], -1)
-    mats = pose_to_matrix(torch.tensor(pose))
-    assert np.allclose(_math.pose_to_matrix(pose), mats.numpy())
-    assert torch.allclose(quat_from_matrix(mats[:, :3, :3]), matrix_to_quat(mats[:, :3, :3]), atol=1e-9)
+from embodichain_functors._sim import write_model
 
 
 def test_ranges_are_checked_and_cached() -> None:
@@ -38,15 +24,21 @@ def test_ranges_are_checked_and_cached() -> None:
         assert err.value.path == "f.params.p" and "functor 'f'" in err.value.reason
 
 
-def test_uniform_draws_per_env_from_the_env_generator() -> None:
+def test_uniform_draws_one_row_per_env_from_its_episode_stream() -> None:
     class Env:
-        np_random = np.random.default_rng(0)
+        rng = EpisodeRandom(8, seed=0)
 
-    draws = uniform(Env(), torch.zeros(3), torch.ones(3), 8)
-    assert draws.shape == (8, 3) and len(set(draws[:, 0].tolist())) == 8
-    assert not torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
-    Env.np_random = np.random.default_rng(0)
-    assert torch.equal(uniform(Env(), torch.zeros(3), torch.ones(3), 8), draws)
+    Env.rng.begin_episodes(None)
+    ids = torch.arange(8)
+    draws = uniform(Env(), ids, torch.zeros(3), torch.ones(3))
+    assert draws.shape == (8, 3)
+    assert len(set(draws[:, 0].tolist())) == 8
+    assert not torch.equal(uniform(Env(), ids, torch.zeros(3), torch.ones(3)), draws)  # the streams advanced
+    Env.rng = EpisodeRandom(8, seed=0)
+    Env.rng.begin_episodes(None)
+    # env 5 alone draws what it drew as row 5 of the batch: rows never depend on the other ids
+    assert torch.equal(uniform(Env(), torch.tensor([5]), torch.zeros(3), torch.ones(3))[0], draws[5])
+    assert uniform(Env(), ids, torch.zeros(3), torch.ones(3), (2,)).shape == (8, 2, 3)
 
 
 def test_write_model_defers_one_constants_update_for_the_written_envs(build, monkeypatch) -> None:

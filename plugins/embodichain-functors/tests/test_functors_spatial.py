@@ -9,6 +9,7 @@ import torch
 from functors_testlib import CUBE_POS, apply, event, others, toy_ik_arm_cfg
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.envs.episode_rng import EpisodeRandom
 from embodichain_core.managers import SceneEntityCfg as E
 from embodichain_core.sim.cfg import ArticulationCfg
 from embodichain_core.utils.math import quat_to_euler_xyz
@@ -148,13 +149,17 @@ def test_target_pose_relative_to_a_reference_entity(build) -> None:
 
 def test_get_random_pose_is_reproducible() -> None:
     class Env:
-        np_random = np.random.default_rng(3)
+        rng = EpisodeRandom(5, seed=3)
 
     init = torch.tensor([[0.0, 0, 0, 1, 0, 0, 0]]).expand(5, 7)
     a = rand.get_random_pose(Env(), init, [[-1, -1, -1], [1, 1, 1]], [[0, 0, -180], [0, 0, 180]])
-    Env.np_random = np.random.default_rng(3)
+    Env.rng = EpisodeRandom(5, seed=3)
     b = rand.get_random_pose(Env(), init, [[-1, -1, -1], [1, 1, 1]], [[0, 0, -180], [0, 0, 180]])
-    assert torch.equal(a, b) and torch.allclose(a[:, 3:].norm(dim=-1), torch.ones(5, dtype=torch.float64))
+    assert torch.equal(a, b)
+    assert torch.allclose(a[:, 3:].norm(dim=-1), torch.ones(5, dtype=torch.float64))
+    Env.rng = EpisodeRandom(5, seed=3)
+    c = rand.get_random_pose(Env(), init[:2], [[-1, -1, -1], [1, 1, 1]], None, env_ids=[4, 1])
+    assert torch.equal(c[:, :3], a[[4, 1], :3])  # row i draws from env env_ids[i]'s stream
 
 
 @pytest.mark.parametrize("func, params, param", [

@@ -91,7 +91,7 @@ class replace_assets_from_group(CheckedFunctor):
 
     def __call__(self, env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, folder_path: str) -> None:
         ids = env_ids_of(env, env_ids)
-        pick = randint(env, len(self.files), (len(ids),))
+        pick = randint(env, ids, len(self.files))
         for k, path in enumerate(self.files):
             chosen = ids[pick == k]
             if len(chosen):
@@ -162,7 +162,7 @@ def drop_rigid_object_group_sequentially(env: Any, env_ids: Any, entity_cfg: Sce
     low, high = as_range(position_range, "drop_rigid_object_group_sequentially", "position_range", 3)
     for member in group.members:
         pose = member.get_local_pose()[ids].to(torch.float64)
-        pose[:, :3] = torch.as_tensor(drop_position, dtype=torch.float64) + uniform(env, low, high, len(ids))
+        pose[:, :3] = torch.as_tensor(drop_position, dtype=torch.float64) + uniform(env, ids, low, high)
         member.set_local_pose(pose, ids)
         member.clear_dynamics(ids)
         step_envs(env, ids, int(physics_step))

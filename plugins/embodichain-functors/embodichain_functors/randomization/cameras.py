@@ -68,8 +68,8 @@ def _check_extrinsics(env: Any, entity_cfg: SceneEntityCfg, **ranges: Any) -> No
         raise ParamError(name, "entity_cfg", f"sensor {entity_cfg.uid!r} has neither {api}() nor a MuJoCo camera")
 
 
-def _draw(env: Any, rng: Optional[Any], n: int) -> torch.Tensor:
-    return torch.zeros(n, 3, dtype=torch.float64) if rng is None else uniform(env, rng[0], rng[1], n)
+def _draw(env: Any, rng: Optional[Any], ids: torch.Tensor) -> torch.Tensor:
+    return torch.zeros(len(ids), 3, dtype=torch.float64) if rng is None else uniform(env, ids, rng[0], rng[1])
 
 
 @validated(_check_extrinsics)
@@ -101,12 +101,12 @@ def randomize_camera_extrinsics(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     sensor = env.scene.sensors[entity_cfg.uid]
     ext = getattr(sensor.cfg, "extrinsics", None)
     if _look_at_mode(sensor):
-        eye = np.asarray(ext.eye, dtype=np.float64) + _draw(env, eye_range, len(ids)).numpy()
-        target = np.asarray(ext.target, dtype=np.float64) + _draw(env, target_range, len(ids)).numpy()
+        eye = np.asarray(ext.eye, dtype=np.float64) + _draw(env, eye_range, ids).numpy()
+        target = np.asarray(ext.target, dtype=np.float64) + _draw(env, target_range, ids).numpy()
         up = np.asarray(ext.up if ext.up is not None else (0.0, 0.0, 1.0), dtype=np.float64)
-        sensor.look_at(eye, target, up + _draw(env, up_range, len(ids)).numpy(), env_ids=ids)
+        sensor.look_at(eye, target, up + _draw(env, up_range, ids).numpy(), env_ids=ids)
         return
-    dpos, deuler = _draw(env, pos_range, len(ids)), _draw(env, euler_range, len(ids))
+    dpos, deuler = _draw(env, pos_range, ids), _draw(env, euler_range, ids)
     if callable(getattr(sensor, "set_local_pose", None)) and ext is not None:
         pos = torch.as_tensor(ext.pos, dtype=torch.float64) + dpos
         quat = quat_mul(torch.as_tensor(ext.quat, dtype=torch.float64).expand(len(ids), 4), euler_xyz_to_quat(deuler))
@@ -131,9 +131,10 @@ def _check_intrinsics(env: Any, entity_cfg: SceneEntityCfg, **ranges: Any) -> No
                                                  "MuJoCo camera with a sensor size")
 
 
-def _offsets(env: Any, n: int, ranges: tuple) -> torch.Tensor:
+def _offsets(env: Any, ids: torch.Tensor, ranges: tuple) -> torch.Tensor:
+    n = len(ids)
     zeros = torch.zeros(n, dtype=torch.float64)
-    cols = [zeros if r is None else uniform(env, r[0], r[1], n).reshape(n) for r in ranges]
+    cols = [zeros if r is None else uniform(env, ids, r[0], r[1]).reshape(n) for r in ranges]
     return torch.stack(cols, -1)
 
 
@@ -159,7 +160,7 @@ def randomize_camera_intrinsics(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     """
     ids = env_ids_of(env, env_ids)
     sensor = env.scene.sensors[entity_cfg.uid]
-    delta = _offsets(env, len(ids), (focal_x_range, focal_y_range, cx_range, cy_range))
+    delta = _offsets(env, ids, (focal_x_range, focal_y_range, cx_range, cy_range))
     if callable(getattr(sensor, "set_intrinsics", None)):
         left = torch.as_tensor(sensor.cfg.intrinsics, dtype=torch.float64) + delta
         right_of = getattr(sensor.cfg, "right_intrinsics", None)

@@ -108,12 +108,15 @@ def _centres(low: float, high: float, n: int) -> np.ndarray:
     return low + (np.arange(n) + 0.5) * (high - low) / n
 
 
-def draw_scale(env: Any, scale_factor_range: Any, n: int, same_scale_all_axes: bool, functor: str) -> torch.Tensor:
-    """(n, 3) scale factors (one factor for all axes, from the x bounds, when ``same_scale_all_axes``)."""
+def draw_scale(env: Any, scale_factor_range: Any, ids: torch.Tensor, same_scale_all_axes: bool,
+               functor: str) -> torch.Tensor:
+    """(n, 3) scale factors of envs ``ids`` (one factor for all axes, from the x bounds, when
+    ``same_scale_all_axes``)."""
+    n = len(ids)
     low, high = as_range(scale_factor_range, functor, "scale_factor_range", 3)
     if same_scale_all_axes:
-        return uniform(env, low[0], high[0], n).reshape(n, 1).expand(n, 3)
-    return uniform(env, low, high, n)
+        return uniform(env, ids, low[0], high[0]).reshape(n, 1).expand(n, 3)
+    return uniform(env, ids, low, high)
 
 
 def apply_scale(env: Any, obj: RigidObject, ids: torch.Tensor, factor: torch.Tensor) -> None:
@@ -204,7 +207,7 @@ class randomize_rigid_object_scale(_ScaleFunctor):
     def __call__(self, env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, scale_factor_range: Any,
                  same_scale_all_axes: bool = True, mesh_scale_levels: int = 8) -> None:
         ids = env_ids_of(env, env_ids)
-        factor = draw_scale(env, scale_factor_range, len(ids), same_scale_all_axes, type(self).__name__)
+        factor = draw_scale(env, scale_factor_range, ids, same_scale_all_axes, type(self).__name__)
         self._apply(env, entity_cfg.uid, ids, factor, {"scale_factor_range": scale_factor_range,
                                                        "same_scale_all_axes": same_scale_all_axes,
                                                        "mesh_scale_levels": mesh_scale_levels})
@@ -247,8 +250,8 @@ class randomize_rigid_objects_scale(_ScaleFunctor):
         name = type(self).__name__
         params = {"scale_factor_range": scale_factor_range, "same_scale_all_axes": same_scale_all_axes,
                   "mesh_scale_levels": mesh_scale_levels}
-        shared = draw_scale(env, scale_factor_range, len(ids), same_scale_all_axes, name) if shared_sample else None
+        shared = draw_scale(env, scale_factor_range, ids, same_scale_all_axes, name) if shared_sample else None
         for cfg in entity_cfgs:
-            factor = shared if shared is not None else draw_scale(env, scale_factor_range, len(ids),
+            factor = shared if shared is not None else draw_scale(env, scale_factor_range, ids,
                                                                   same_scale_all_axes, name)
             self._apply(env, cfg["uid"] if isinstance(cfg, dict) else cfg.uid, ids, factor, params)

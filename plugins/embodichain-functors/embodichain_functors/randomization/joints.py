@@ -1,7 +1,7 @@
 """Joint randomization: passive damping and stiffness, and drive gains, per env and joint.
 
-Values are drawn from ``env.np_random`` and written into the per-env model fields of
-``env_ids`` only (``dof_damping``, ``jnt_stiffness``, the drive actuators' gains).
+Values are drawn from each env's episode stream ``env.rng`` and written into the per-env
+model fields of ``env_ids`` only (``dof_damping``, ``jnt_stiffness``, the drive actuators' gains).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def _joint_param(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, value_range
     joints = joint_ids_of(art, entity_cfg)
     index = art.dof_adr.numpy()[joints] if field == "dof_damping" else mj_joint_ids(art, joints)
     low, high = as_range(value_range, name, f"{field.split('_')[1]}_range")
-    sample = uniform_np(env, low, high, len(ids) * len(index)).reshape(len(ids), len(index))
+    sample = uniform_np(env, ids, low, high, (len(index),))
     base = getattr(env.scene.model, field)[index][None, :] if relative else 0.0
     write_model(env.sim, ids, [(field, index, np.maximum(base + sample, 0.0))])
 
@@ -135,7 +135,7 @@ def randomize_joint_drive(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, st
         if rng is None:
             continue
         low, high = as_range(rng, "randomize_joint_drive", f"{key}_range")
-        draw = uniform(env, low, high, len(ids) * len(joints)).reshape(len(ids), len(joints))
+        draw = uniform(env, ids, low, high, (len(joints),))
         if relative:
             draw = draw + torch.tensor([_drive_base(art, key, j) for j in joints], dtype=torch.float64)
         values[key] = draw.clamp_min(0.0)

@@ -61,7 +61,7 @@ class planner_grid_cell_sampler(CheckedFunctor):
         ids = env_ids_of(env, env_ids)
         low, high = as_range(position_range, type(self).__name__, "position_range", 2)
         cols, rows = int(grid_size[0]), int(grid_size[1])
-        cells = torch.from_numpy(env.np_random.random((len(ids), cols * rows)).argsort(axis=1))
+        cells = torch.from_numpy(env.rng.random(ids, (cols * rows,)).argsort(axis=1))
         cell_size = (high - low) / torch.tensor([cols, rows], dtype=torch.float64)
         for k, uid in enumerate(object_uid_list):
             cell = cells[:, k]
@@ -123,12 +123,13 @@ class randomize_anchor_height(CheckedFunctor):
             warnings.warn(f"{name}: anchor {anchor_uid!r} is a group; its members are shifted relatively",
                           RuntimeWarning, stacklevel=2)
 
-    def _draw(self, env: Any, n: int, height_delta_range: Any, height_delta_candidates: Any) -> torch.Tensor:
+    def _draw(self, env: Any, ids: torch.Tensor, height_delta_range: Any, height_delta_candidates: Any) -> torch.Tensor:
+        n = len(ids)
         if height_delta_range is not None:
             low, high = as_range(height_delta_range, type(self).__name__, "height_delta_range")
-            return uniform(env, low, high, n).reshape(n)
+            return uniform(env, ids, low, high).reshape(n)
         values = torch.as_tensor(height_delta_candidates, dtype=torch.float64).reshape(-1)
-        return values[randint(env, len(values), (n,))]
+        return values[randint(env, ids, len(values))]
 
     def _members(self, env: Any, anchor_uid: str, include_groups: Sequence[str], exclude_uids: Sequence[str]) -> list:
         scene, out = env.scene, []
@@ -167,7 +168,7 @@ class randomize_anchor_height(CheckedFunctor):
                  exclude_uids: Sequence[str] = (), physics_update_step: int = 0,
                  store_key: str = "anchor_height_delta") -> None:
         ids = env_ids_of(env, env_ids)
-        dz = self._draw(env, len(ids), height_delta_range, height_delta_candidates)
+        dz = self._draw(env, ids, height_delta_range, height_delta_candidates)
         self._shift(env, env.scene[anchor_uid], ids, dz, absolute=True)
         for entity in self._members(env, anchor_uid, include_groups, exclude_uids):
             self._shift(env, entity, ids, dz, absolute=False)

@@ -184,11 +184,11 @@ class randomize_visual_material(CheckedFunctor):
         texid = np.repeat(self._tex0[None], n, axis=0)
         if base_color_range is not None:
             low, high = as_range(base_color_range, type(self).__name__, "base_color_range", 3)
-            color = uniform_np(env, low, high, n * parts).reshape(n, parts, 3)
+            color = uniform_np(env, ids, low, high, (parts,))
             rgba[..., :3], texid[:] = color[:, self._part], -1
         if len(self.textures) and random_texture_prob > 0:
-            use = (env.np_random.random((n, parts)) < random_texture_prob)[:, self._part]
-            pick = self.textures[randint(env, len(self.textures), (n, parts)).numpy()][:, self._part]
+            use = (env.rng.random(ids, (parts,)) < random_texture_prob)[:, self._part]
+            pick = self.textures[randint(env, ids, len(self.textures), (parts,)).numpy()][:, self._part]
             texid = np.where(use, pick, texid)
             rgba = np.where(use[..., None], 1.0, rgba)
         writes = [("mat_rgba", self._mats, rgba), ("mat_texid", (self._mats, RGB_ROLE), texid)]
@@ -196,7 +196,7 @@ class randomize_visual_material(CheckedFunctor):
                                   ("mat_roughness", "roughness_range", roughness_range)):
             if rng is not None:
                 low, high = as_range(rng, type(self).__name__, param)
-                writes.append((field, self._mats, uniform_np(env, low, high, n * parts).reshape(n, parts)[:, self._part]))
+                writes.append((field, self._mats, uniform_np(env, ids, low, high, (parts,))[:, self._part]))
         write_model(env.sim, ids, writes)
 
 

@@ -1,6 +1,6 @@
 """Physics randomization: masses, centres of mass, friction; joint damping, stiffness and
 drive gains live in :mod:`.joints` (re-exported here). Every value is drawn per env from
-``env.np_random`` and written into the per-env model fields of ``env_ids`` only."""
+each env's episode stream (``env.rng``) and written into the per-env model fields of ``env_ids`` only."""
 
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ def randomize_rigid_object_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     ids = env_ids_of(env, env_ids)
     low, high = as_range(mass_range, "randomize_rigid_object_mass", "mass_range")
     bodies = [obj.body_id for obj in rigid_bodies(env.scene[entity_cfg.uid])]
-    sample = np.repeat(uniform_np(env, low, high, len(ids))[:, None], len(bodies), axis=1)
+    sample = np.repeat(uniform_np(env, ids, low, high)[:, None], len(bodies), axis=1)
     _masses(env, ids, bodies, sample, relative)
 
 
@@ -119,7 +119,7 @@ class randomize_rigid_object_center_of_mass(CheckedFunctor):
             warnings.warn(f"{type(self).__name__}: {entity_cfg.uid!r} is not dynamic; skipped", RuntimeWarning,
                           stacklevel=2)
             return
-        offset = uniform_np(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies), 3)
+        offset = uniform_np(env, ids, low, high, (len(bodies),))
         com = env.scene.model.body_ipos[bodies][None] + offset
         write_model(env.sim, ids, [("body_ipos", bodies, com)])
 
@@ -174,7 +174,7 @@ def randomize_articulation_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     art = env.scene[entity_cfg.uid]
     for bodies, rng in _link_ranges(art, mass_range, link_names):
         low, high = as_range(rng, "randomize_articulation_mass", "mass_range")
-        sample = uniform_np(env, low, high, len(ids) * len(bodies)).reshape(len(ids), len(bodies))
+        sample = uniform_np(env, ids, low, high, (len(bodies),))
         _masses(env, ids, bodies, sample, relative)
 
 
@@ -203,7 +203,7 @@ def randomize_rigid_object_friction(env: Any, env_ids: Any, entity_cfg: SceneEnt
     """
     ids = env_ids_of(env, env_ids)
     low, high = as_range(friction_range, "randomize_rigid_object_friction", "friction_range")
-    value = uniform_np(env, low, high, len(ids)).reshape(len(ids))
+    value = uniform_np(env, ids, low, high).reshape(len(ids))
     writes = []
     for obj in rigid_bodies(env.scene[entity_cfg.uid]):
         for gid in obj.geom_ids:

@@ -18,14 +18,14 @@ from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.entities.robot import Robot
-from embodichain_core.utils.math import pose_to_matrix
+from embodichain_core.utils.math import euler_xyz_to_quat as euler_to_quat
+from embodichain_core.utils.math import pose_to_matrix, quat_mul
+from embodichain_core.utils.math import pose_to_matrix as pose_matrix
 
 from embodichain_functors._common import (
     ParamError, as_range, check_optional_range, entity_of, env_ids_of, uniform_np, validated,
 )
 from embodichain_functors._entities import joint_ids_of
-from embodichain_functors._math import euler_to_quat, quat_mul
-from embodichain_functors._math import pose_to_matrix as pose_matrix
 from embodichain_functors._kinematics import check_ik, check_part, default_part, eef_pose, solve_ik
 from embodichain_functors._sim import pose7_from_matrix, step_envs, write_model
 from embodichain_functors.randomization.layout import planner_grid_cell_sampler, randomize_anchor_height
@@ -39,35 +39,37 @@ __all__ = [
 
 def get_random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
                     rotation_range: Optional[Sequence] = None, relative_position: bool = True,
-                    relative_rotation: bool = False) -> torch.Tensor:
+                    relative_rotation: bool = False, env_ids: Any = None) -> torch.Tensor:
     """Draw one pose per row of ``init_pose`` ((n, 7) xyz + wxyz); returns (n, 7) float64.
 
     Without ``position_range`` the position stays ``init_pose``'s; a relative
     position adds the draw to it. Without ``rotation_range`` the orientation stays;
     a drawn rotation replaces it, or with ``relative_rotation`` composes with it.
+    Row ``i`` draws from the episode stream of env ``env_ids[i]`` (default: env ``i``).
     """
     return torch.from_numpy(random_pose(env, init_pose, position_range, rotation_range, relative_position,
-                                        relative_rotation))
+                                        relative_rotation, env_ids))
 
 
 def random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
                 rotation_range: Optional[Sequence] = None, relative_position: bool = True,
-                relative_rotation: bool = False) -> np.ndarray:
+                relative_rotation: bool = False, env_ids: Any = None) -> np.ndarray:
     """:func:`get_random_pose` as a new (n, 7) float64 numpy array (the hot-path form)."""
     if isinstance(init_pose, torch.Tensor):
         init_pose = init_pose.detach().cpu().numpy()
     pose = np.array(init_pose, dtype=np.float64)
     n = pose.shape[0]
+    ids = np.arange(n) if env_ids is None else env_ids
     if position_range is not None:
         low, high = as_range(position_range, "get_random_pose", "position_range", 3)
-        draw = uniform_np(env, low, high, n)
+        draw = uniform_np(env, ids, low, high)
         if relative_position:
             pose[:, :3] += draw
         else:
             pose[:, :3] = draw
     if rotation_range is not None:
         low, high = as_range(rotation_range, "get_random_pose", "rotation_range", 3)
-        quat = euler_to_quat(uniform_np(env, low, high, n))
+        quat = euler_to_quat(uniform_np(env, ids, low, high))
         pose[:, 3:] = quat_mul(pose[:, 3:], quat) if relative_rotation else quat
     return pose
 
@@ -109,7 +111,7 @@ def randomize_rigid_object_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     ids = env_ids_of(env, env_ids)
     obj = env.scene[entity_cfg.uid]
     init = np.broadcast_to(obj.init_pose.numpy(), (len(ids), 7))
-    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
+    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation, ids)
     obj.set_local_pose(pose, ids)
     obj.clear_dynamics(ids)
     step_envs(env, ids, physics_update_step)
@@ -152,7 +154,7 @@ def randomize_robot_qpos(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, qpo
     art = env.scene[entity_cfg.uid]
     joints = np.asarray(_qpos_joints(art, entity_cfg, joint_ids), dtype=np.int64)
     low, high = as_range(qpos_range, "randomize_robot_qpos", "qpos_range", len(joints))
-    qpos = uniform_np(env, low, high, len(ids))
+    qpos = uniform_np(env, ids, low, high)
     if relative_qpos:
         qpos += env.sim.arrays["qpos"][ids.numpy()[:, None], art.qpos_adr.numpy()[joints][None, :]]
     limits = art.qpos_limits_array(ids, joints)
@@ -202,7 +204,7 @@ def randomize_robot_eef_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg,
     robot = env.scene[entity_cfg.uid]
     for part in _eef_parts(env, robot, entity_cfg):
         current = pose7_from_matrix(eef_pose(robot, part)[ids])
-        target = get_random_pose(env, current, position_range, rotation_range, True, True)
+        target = get_random_pose(env, current, position_range, rotation_range, True, True, ids)
         _, qpos, joints = solve_ik(robot, pose_to_matrix(target).to(torch.float32), part, ids)
         robot.set_qpos(qpos, joint_ids=joints, env_ids=ids, target=False)
     robot.clear_dynamics(ids)
@@ -249,7 +251,7 @@ def randomize_articulation_root_pose(env: Any, env_ids: Any, entity_cfg: SceneEn
     ids = env_ids_of(env, env_ids)
     art = env.scene[entity_cfg.uid]
     init = _initial_root_pose(art).expand(len(ids), 7)
-    pose = get_random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
+    pose = get_random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation, ids)
     if art.is_floating:
         art.set_local_pose(pose, ids)
         art.clear_dynamics(ids)
@@ -302,7 +304,7 @@ def randomize_target_pose(env: Any, env_ids: Any, position_range: Any = None, ro
     init = np.broadcast_to(_IDENTITY_POSE, (len(ids), 7))
     if reference_entity_cfg is not None:
         init = env.scene[reference_entity_cfg.uid].get_local_pose()[ids].to(torch.float64)
-    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation)
+    pose = random_pose(env, init, position_range, rotation_range, relative_position, relative_rotation, ids)
     if rotation_range is None and reference_entity_cfg is None:  # identity rotations: only translations
         mats = np.repeat(np.eye(4)[None], len(ids), axis=0)
         mats[:, :3, 3] = pose[:, :3]

@@ -46,15 +46,17 @@ _LIGHT_PARAMS = {"pos": ("position_range", 3), "color": ("color_range", 3), "int
                  "dir": ("direction_range", 3)}
 
 
-def _light_draws(env: Any, light: Light, n: int, ranges: dict) -> dict[str, np.ndarray]:
-    """One draw per env (one shared draw for a global light) of each given range."""
-    rows = 1 if light.is_global else n
+def _light_draws(env: Any, light: Light, ids: Any, ranges: dict) -> dict[str, np.ndarray]:
+    """One draw per env (one shared draw for a global light, from the first env's stream)
+    of each given range."""
+    n = len(ids)
+    rows = ids[:1] if light.is_global else ids
     out = {}
     for key, rng in ranges.items():
         if rng is not None:
             param, width = _LIGHT_PARAMS[key]
             low, high = as_range(rng, "randomize_light", param, width)
-            draw = uniform_np(env, low, high, rows)
+            draw = uniform_np(env, rows, low, high)
             out[key] = np.broadcast_to(draw, (n,) + draw.shape[1:]) if light.is_global else draw
     return out
 
@@ -87,7 +89,7 @@ def randomize_light(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position
     ids = torch.arange(env.num_envs) if light.is_global else env_ids_of(env, env_ids)
     cfg = light.cfg
     point_like = not light.is_global
-    draws = _light_draws(env, light, len(ids), {
+    draws = _light_draws(env, light, ids, {
         "pos": position_range if point_like else None, "color": color_range, "intensity": intensity_range,
         "dir": direction_range if cfg.light_type != "point" else None})
     pos = light.init_pos.numpy() + draws["pos"] if "pos" in draws else None

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import hashlib
 from typing import Any, Callable, Iterator, List, Optional, Sequence, TypeVar
 
 import mujoco
@@ -120,7 +121,6 @@ class DLSSolver:
         self.joint_ids = list(joint_ids) if joint_ids is not None else list(range(chain.n))
         self.root_link_name, self.end_link_name = cfg.root_link_name, cfg.end_link_name
         self.tcp = torch.as_tensor(cfg.tcp, dtype=_F64).reshape(4, 4)
-        self._rng = torch.Generator().manual_seed(int(cfg.seed))
 
     @classmethod
     def from_model(cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "",
@@ -198,12 +198,12 @@ class DLSSolver:
         q, ok, err = self._solve(target, seed)
         restarts = self.cfg.num_restarts if num_restarts is None else int(num_restarts)
         todo = torch.nonzero(~ok).flatten()
-        for _ in range(restarts):
+        for round_ in range(restarts):
             if len(todo) == 0:
                 break
             k = max(int(self.cfg.num_samples), 1)
             owners = todo.repeat_interleave(k)
-            q_try, ok_try, err_try = self._solve(target[owners], self._restart_seeds(target[todo], k))
+            q_try, ok_try, err_try = self._solve(target[owners], self._restart_seeds(target[todo], k, round_))
             best = err_try.reshape(-1, k).argmin(-1) + torch.arange(len(todo)) * k
             better = err_try[best] < err[todo]
             q[todo[better]], err[todo[better]] = q_try[best][better], err_try[best][better]
@@ -211,17 +211,25 @@ class DLSSolver:
             todo = todo[~ok[todo]]
         return ok, q
 
-    def _restart_seeds(self, target: torch.Tensor, k: int) -> torch.Tensor:
+    def _restart_seeds(self, target: torch.Tensor, k: int, round_: int = 0) -> torch.Tensor:
         """(len(target) * k, n) seeds: the ``k`` best of ``pool_factor * k`` random samples
         per target, ranked by their TCP pose error (one cheap batched FK)."""
         pool = max(int(self.cfg.pool_factor), 1) * k
-        cand = sample_joint_values(self.chain.limits, len(target) * pool, self._rng)
+        cand = torch.cat([sample_joint_values(self.chain.limits, pool, self._target_rng(t, round_)) for t in target])
         pose = self.chain.fk(cand, self.tcp).reshape(len(target), pool, 4, 4)
         pos = torch.linalg.norm(pose[..., :3, 3] - target[:, None, :3, 3], dim=-1)
         rot = rotation_angle(target[:, None, :3, :3], pose[..., :3, :3])
         best = (pos + self.cfg.rot_weight * rot).topk(k, dim=-1, largest=False).indices
         picked = cand.reshape(len(target), pool, -1).gather(1, best[..., None].expand(-1, -1, self.dof))
         return picked.reshape(-1, self.dof)
+
+    def _target_rng(self, target: torch.Tensor, round_: int) -> torch.Generator:
+        """A generator seeded by ``cfg.seed``, the restart round and the target pose's bytes: an
+        env's restarts depend on its own target alone, never on which other envs needed some."""
+        data = target.to(_F64).contiguous().numpy().tobytes() + int(round_).to_bytes(4, "little")
+        digest = hashlib.blake2b(data, digest_size=8,
+                                 key=int(self.cfg.seed).to_bytes(8, "little", signed=True)).digest()
+        return torch.Generator().manual_seed(int.from_bytes(digest, "little") >> 1)
 
     def _middle(self) -> torch.Tensor:
         """(n,) middle of the (finite, +-pi clipped) joint ranges."""

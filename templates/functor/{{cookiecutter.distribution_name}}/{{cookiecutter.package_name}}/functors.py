@@ -64,7 +64,8 @@ def {{ cookiecutter.functor_name }}(env: Any, env_ids: torch.Tensor, entity_cfg:
     obj = env.scene[entity_cfg.uid]
     pose = obj.get_local_pose()[env_ids]
     low, high = offset_range
-    pose[:, 0] += low + (high - low) * torch.rand(len(env_ids), generator=env.generator, dtype=pose.dtype)
+    # one draw per env, from that env's per-episode stream (reproducible, independent of other envs)
+    pose[:, 0] += torch.from_numpy(env.rng.uniform(env_ids, low, high)).to(pose.dtype)
     obj.set_local_pose(pose, env_ids)
 {% elif cookiecutter.kind == "randomization" %}
 
@@ -82,6 +83,6 @@ def {{ cookiecutter.functor_name }}(env: Any, env_ids: torch.Tensor, entity_cfg:
         mass_range: ``(low, high)`` of the mass.
     """
     low, high = mass_range
-    mass = low + (high - low) * torch.rand(len(env_ids), generator=env.generator, dtype=torch.float64)
+    mass = torch.from_numpy(env.rng.uniform(env_ids, low, high))  # one draw per env, float64
     env.scene[entity_cfg.uid].set_mass(mass, env_ids)
 {% endif -%}

@@ -27,8 +27,8 @@ def shift_object(env: Any, env_ids: torch.Tensor, entity_cfg: SceneEntityCfg,
     obj = env.scene[entity_cfg.uid]
     pose = obj.get_local_pose()[env_ids]
     low, high = offset_range
-    noise = torch.rand(len(env_ids), 2, generator=env.generator, dtype=pose.dtype)
-    pose[:, :2] += low + (high - low) * noise
+    # one (x, y) draw per env, from that env's per-episode stream
+    pose[:, :2] += torch.from_numpy(env.rng.uniform(env_ids, low, high, shape=(2,))).to(pose.dtype)
     obj.set_local_pose(pose, env_ids)
 
 
