@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: run test setup system-deps bench docs clean
 
-$(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml) $(wildcard tests/fixture_plugins/*/pyproject.toml)
+$(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml)
 	PYTHON=$(PYTHON) bash scripts/setup_env.sh
 	touch $(STAMP)
 

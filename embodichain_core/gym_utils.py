@@ -1,9 +1,12 @@
-"""Launcher helpers for env scripts (EmbodiChain's ``lab.gym.utils.gym_utils`` surface).
+"""Launcher arguments for env scripts (EmbodiChain's ``lab.gym.utils.gym_utils`` surface).
 
-:func:`add_env_launcher_args_to_parser` adds the standard launcher arguments to a
-script's parser. Unlike EmbodiChain, a CLI value overrides a gym config only when it is
-given: the parsed namespace keeps EmbodiChain's defaults (``args.num_envs == 1``) and
-remembers which arguments were given, and :func:`launcher_overrides` returns only those.
+:func:`add_env_launcher_args_to_parser` is the one definition of the env launcher
+arguments: a script's parser gets them from it, and so does ``embodichain run-env``
+(:func:`embodichain_core.cli.run_env.build_parser`), so both accept the same flags, with
+the same defaults (:data:`LAUNCHER_DEFAULTS`, EmbodiChain's) and the same renderer choices
+(:data:`RENDERERS`). Unlike EmbodiChain, a CLI value overrides a gym config only when it
+is given: the parsed namespace keeps the defaults (``args.num_envs == 1``) and remembers
+which arguments were given, and :func:`launcher_overrides` returns only those.
 
 Example:
     >>> import argparse
@@ -22,10 +25,23 @@ import argparse
 import itertools
 from typing import Any, Iterator, Optional
 
-__all__ = ["add_env_launcher_args_to_parser", "launcher_overrides", "episode_loop", "RENDERERS"]
+__all__ = ["add_env_launcher_args_to_parser", "launcher_overrides", "episode_loop", "RENDERERS",
+           "LAUNCHER_DEFAULTS"]
 
 #: Renderer names accepted by ``--renderer`` (EmbodiChain's; all render with MuJoCo here).
 RENDERERS = ("auto", "hybrid", "fast-rt", "rt")
+
+#: The value of each launcher argument when it is not given (EmbodiChain's defaults). A
+#: default never overrides a gym config: only given values do (:func:`launcher_overrides`).
+LAUNCHER_DEFAULTS: dict[str, Any] = {
+    "num_envs": 1, "device": "cpu", "headless": False, "renderer": "auto", "gym_config": "",
+    "max_episodes": None, "preview": False, "filter_visual_rand": False, "filter_dataset_saving": False,
+    "seed": None,
+}
+
+#: Launcher arguments that map onto a gym-config override of the same name.
+OVERRIDE_KEYS = ("num_envs", "headless", "device", "renderer", "max_episodes", "seed", "filter_visual_rand",
+                 "filter_dataset_saving")
 
 #: Attribute of the parsed namespace holding the names of the arguments given on the command line.
 GIVEN_ATTR = "_launcher_given"
@@ -60,43 +76,52 @@ def _mark_given(namespace: argparse.Namespace, dest: str) -> None:
 def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_gym_config: bool = False) -> None:
     """Add the env launcher arguments to ``parser`` (in place).
 
-    Arguments (defaults): ``--num_envs`` (1), ``--device`` ("cpu"), ``--headless``,
-    ``--renderer`` (auto | hybrid | fast-rt | rt; "auto"), ``--gym_config`` (""),
-    ``--max_episodes`` (None: run until interrupted), ``--preview``,
+    Arguments (defaults from :data:`LAUNCHER_DEFAULTS`): ``--num_envs`` (1), ``--device``
+    ("cpu"), ``--headless``, ``--renderer`` (one of :data:`RENDERERS`; "auto"),
+    ``--gym_config`` (""), ``--max_episodes`` (None: run until interrupted), ``--preview``,
     ``--filter_visual_rand``, ``--filter_dataset_saving``, ``--seed`` (None). The parsed
     namespace remembers which were given: :func:`launcher_overrides` returns only those,
     so a gym config is overridden only by values given on the command line.
 
     Args:
         parser: the script's parser.
-        require_gym_config: make ``--gym_config`` required (as ``run-env`` does).
+        require_gym_config: make ``--gym_config`` required.
     """
+    d = LAUNCHER_DEFAULTS
     add = parser.add_argument
-    add("--num_envs", action=_Value, type=int, default=1, help="number of parallel environments")
-    add("--device", action=_Value, default="cpu", help="simulation device (sim_cfg.sim_device)")
-    add("--headless", action=_Flag, help="run without a viewer window")
-    add("--renderer", action=_Value, default="auto", choices=RENDERERS, help="render_cfg.renderer")
-    add("--gym_config", action=_Value, default="", required=require_gym_config,
-        help="JSON/YAML gym config file")
-    add("--max_episodes", action=_Value, type=int, default=None,
-        help="stop after this many episodes (default: run until interrupted)")
-    add("--preview", action=_Flag, help="interactive preview; records no dataset")
+    add("--gym_config", action=_Value, default=d["gym_config"], required=require_gym_config, metavar="FILE",
+        help="JSON/YAML gym config file (EmbodiChain layout)")
+    add("--num_envs", action=_Value, type=int, default=d["num_envs"], metavar="N",
+        help=f"number of parallel environments (default: the config's, else {d['num_envs']})")
+    add("--headless", action=_Flag, help="run without a viewer window (default: the config's)")
+    add("--device", action=_Value, default=d["device"], metavar="DEVICE",
+        help=f"simulation device, sim_cfg.sim_device (default: the config's, else {d['device']})")
+    add("--renderer", action=_Value, default=d["renderer"], choices=RENDERERS,
+        help=f"render_cfg.renderer (default: the config's, else {d['renderer']})")
+    add("--max_episodes", action=_Value, type=int, default=d["max_episodes"], metavar="N",
+        help="stop after this many episodes, summed over envs (default: the config's; scripts: "
+             "run until interrupted)")
+    add("--seed", action=_Value, type=int, default=d["seed"], metavar="SEED", help="RNG seed (default: the config's)")
+    add("--preview", action=_Flag,
+        help="preview instead of running, recording no dataset (run-env: build, reset, step once, "
+             "describe the spaces, exit)")
     add("--filter_visual_rand", action=_Flag, help="drop visual randomization events")
     add("--filter_dataset_saving", action=_Flag, help="record no dataset")
-    add("--seed", action=_Value, type=int, default=None, help="RNG seed")
 
 
 def launcher_overrides(args: argparse.Namespace) -> dict[str, Any]:
     """The given launcher values as flat gym-config overrides (for ``load_gym_config``).
 
-    Keys (only those given): ``num_envs``, ``headless``, ``device``, ``renderer``,
-    ``max_episodes``, ``seed``, ``filter_visual_rand``, ``filter_dataset_saving``
-    (``--preview`` forces it).
+    Args:
+        args: a namespace parsed by a parser with :func:`add_env_launcher_args_to_parser`.
+
+    Returns:
+        Only the keys given on the command line, among ``num_envs``, ``headless``,
+        ``device``, ``renderer``, ``max_episodes``, ``seed``, ``filter_visual_rand``,
+        ``filter_dataset_saving`` (``--preview`` forces it to ``True``).
     """
     given = getattr(args, GIVEN_ATTR, set())
-    keys = ("num_envs", "headless", "device", "renderer", "max_episodes", "seed", "filter_visual_rand",
-            "filter_dataset_saving")
-    values = {key: getattr(args, key) for key in keys if key in given}
+    values = {key: getattr(args, key) for key in OVERRIDE_KEYS if key in given}
     if "preview" in given:
         values["filter_dataset_saving"] = True
     return values

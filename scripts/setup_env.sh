@@ -1,6 +1,17 @@
 #!/usr/bin/env bash
-# Creates the project's virtual environment and installs the core, every plugin
-# under plugins/, and the test fixture plugins. Idempotent.
+# Creates the project's virtual environment and installs the core (with its test and
+# `new` extras), every plugin under plugins/, and torch. Idempotent. The test fixture
+# plugins (tests/fixture_plugins/) are not installed: the tests expose them themselves.
+#
+# Environment variables:
+#   PYTHON           interpreter that creates .venv (default: python3)
+#   TORCH_VERSION    torch version (default below), TORCHVISION_VERSION likewise
+#   TORCH_INDEX_URL  install torch and torchvision from this package index instead of the
+#                    default one, e.g. the CPU-only wheels, which leave out about 4 GB of
+#                    CUDA libraries a CPU machine never uses:
+#                      TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu make setup
+#                    Unset (the default), they come from the configured registry (pip's
+#                    index), whose Linux build bundles the CUDA libraries.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
@@ -32,12 +43,26 @@ $PIP install -q --upgrade pip >/dev/null 2>&1 || true
 # torch: the version lerobot 0.4.x allows (plugins/embodichain-lerobot needs torch<2.11,
 # torchvision<0.26). Pinned first so no later requirement pulls another build. The
 # registry's Linux build bundles CUDA libraries (about 4 GB of wheels); it runs on the CPU.
+# docs/getting_started.md and the other pages cite this version (tests/test_docs.py checks).
 TORCH_VERSION=${TORCH_VERSION:-2.10.0}
 TORCHVISION_VERSION=${TORCHVISION_VERSION:-0.25.0}
-$PIP install -q "torch==$TORCH_VERSION" "torchvision==$TORCHVISION_VERSION"
-args=(-e ".[test]")
-for p in plugins/*/ tests/fixture_plugins/*/; do
+TORCH_INDEX_URL=${TORCH_INDEX_URL:-}
+torch_index=()
+if [ -n "$TORCH_INDEX_URL" ]; then
+  echo "[setup] torch $TORCH_VERSION and torchvision $TORCHVISION_VERSION from $TORCH_INDEX_URL"
+  torch_index=(--index-url "$TORCH_INDEX_URL")
+fi
+$PIP install -q ${torch_index[@]+"${torch_index[@]}"} "torch==$TORCH_VERSION" "torchvision==$TORCHVISION_VERSION"
+# The core with its test extra and the `new` extra (cookiecutter, for `embodichain new`).
+args=(-e ".[test,new]")
+for p in plugins/*/; do
   [ -f "$p/pyproject.toml" ] && args+=(-e "$p")
 done
 $PIP install -q "${args[@]}"
+# An older set-up installed the test fixture plugin, which put FixtureReach-v0 into every
+# `embodichain list tasks`: remove it (the tests expose it themselves).
+if $PIP show -q embodichain-fixture >/dev/null 2>&1; then
+  echo "[setup] removing the test fixture plugin an older set-up installed"
+  $PIP uninstall -q -y embodichain-fixture
+fi
 echo "[setup] environment ready in .venv"

@@ -29,6 +29,14 @@ PACKAGE_RE = re.compile(r"^[a-z_][a-z0-9_]*$")
 TASK_ID_RE = re.compile(r"^(?:[A-Za-z][\w-]*/)?[A-Za-z][\w.:-]*-v\d+$")
 #: The functor template's kinds.
 FUNCTOR_KINDS = ("observation", "reward", "event", "randomization")
+#: The functor template's default one-line description of each kind: what the baked example
+#: functor of that kind does. Mirrors the ``description`` default of ``functor/cookiecutter.json``.
+FUNCTOR_DESCRIPTIONS = {
+    "observation": "Position of an object",
+    "reward": "Minus the distance from an object to a target point",
+    "event": "Shift an object by a random offset",
+    "randomization": "Randomize the mass of an object",
+}
 #: Name prefix of randomization functors (``filter_visual_rand`` relies on it).
 RANDOMIZE_PREFIX = "randomize_"
 
@@ -57,7 +65,11 @@ def task_context(name: str, **overrides: Any) -> dict[str, Any]:
 
 
 def functor_context(name: str, kind: str | None = None, **overrides: Any) -> dict[str, Any]:
-    """The functor template's names derived from ``name`` (``randomize_`` added for that kind)."""
+    """The functor template's names derived from ``name`` (``randomize_`` added for that kind).
+
+    With a known ``kind``, the context also has that kind's default ``description``
+    (:data:`FUNCTOR_DESCRIPTIONS`).
+    """
     if kind == "randomization" and not name.startswith(RANDOMIZE_PREFIX):
         name = RANDOMIZE_PREFIX + name
     ctx: dict[str, Any] = {"functor_name": name}
@@ -65,6 +77,8 @@ def functor_context(name: str, kind: str | None = None, **overrides: Any) -> dic
         ctx["kind"] = kind
     ctx["distribution_name"] = "embodichain-" + name.replace("_", "-")
     ctx["package_name"] = ctx["distribution_name"].replace("-", "_")
+    if kind in FUNCTOR_DESCRIPTIONS:
+        ctx["description"] = FUNCTOR_DESCRIPTIONS[kind]
     ctx.update({k: v for k, v in overrides.items() if v is not None})
     return ctx
 

@@ -1,9 +1,17 @@
-"""The fixture plugin under tests/fixture_plugins is installed through a real
-``embodichain`` entry point: its task, functor, robot and data root must be
-discoverable from a plain ``import embodichain_core``."""
+"""The fixture plugin under tests/fixture_plugins, discovered through a real
+``embodichain`` entry point: its task, functor, robot and data root must be discoverable
+from a plain ``import embodichain_core``.
 
+The plugin is test-only: the set-up never installs it (no ``FixtureReach-v0`` in a user's
+``embodichain list tasks``). The ``fixture_plugins`` fixture of ``tests/conftest.py``
+exposes it to this module, as an installation would (a ``*.dist-info`` with its entry
+point on ``sys.path`` and ``PYTHONPATH``).
+"""
+
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import gymnasium as gym
 import pytest
@@ -13,7 +21,23 @@ from embodichain_core.plugins import get_registry
 from embodichain_core.sim.cfg import RobotCfg
 from embodichain_core.testing.env_checks import check_batched_env, make_env_instance
 
-pytest.importorskip("embodichain_fixture", reason="the fixture plugin is installed by scripts/setup_env.sh")
+pytestmark = pytest.mark.usefixtures("fixture_plugins")
+
+
+def test_the_fixture_plugin_is_not_installed_for_users(fixture_plugins_site: Path) -> None:
+    """Without the test's exposure a fresh interpreter knows no fixture plugin."""
+    path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != str(fixture_plugins_site)]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}
+    code = ("import importlib.metadata as md, embodichain_core, gymnasium as gym\n"
+            "dists = [d.metadata['Name'] for d in md.distributions()]\n"
+            "print('embodichain-fixture' in dists, 'FixtureReach-v0' in gym.registry)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env,
+                         check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "False"], (
+        "the test-only plugin embodichain-fixture is installed in this environment (an older "
+        "scripts/setup_env.sh installed it): run scripts/setup_env.sh again or "
+        "pip uninstall embodichain-fixture")
 
 
 def test_task_id_registered_on_import_without_importing_the_task_module():

@@ -155,12 +155,12 @@ def test_bare_task_id_uses_the_env_default_cfg(task: Callable, capsys: pytest.Ca
     assert "episodes     4 (2 env(s))" in capsys.readouterr().out
     plan = run_env.prepare(run_env.build_parser().parse_args([uid, "--num_envs", "1", "--seed", "3"]))
     assert plan.cfg is None and plan.make_kwargs == {"num_envs": 1, "seed": 3}  # gym.make kwargs
-    assert run_env.main([uid, "--num_envs", "1", "--max_episodes", "1", "--renderer", "fast", "--quiet"]) == 0
+    assert run_env.main([uid, "--num_envs", "1", "--max_episodes", "1", "--renderer", "rt", "--quiet"]) == 0
     assert "episodes     1 (1 env(s))" in capsys.readouterr().out
 
 
 def test_bare_task_without_default_cfg_needs_a_config(task: Callable, capsys: pytest.CaptureFixture) -> None:
-    assert run_env.main([task(PlainTask), "--renderer", "fast"]) == 2
+    assert run_env.main([task(PlainTask), "--renderer", "rt"]) == 2
     assert "pass --gym_config to use --renderer" in capsys.readouterr().err
 
 

@@ -87,6 +87,28 @@ def test_cookiecutter_defaults_match_the_python_derivation(template: str, name: 
     assert {k: rendered[k] for k in derived} == derived
 
 
+@pytest.mark.parametrize("kind", FUNCTOR_KINDS)
+def test_functor_template_describes_each_kind_by_what_it_bakes(kind: str) -> None:
+    """The default description (registration, docstring, README) is the one of ``kind``'s example,
+    not the observation's "Position of an object" for every kind."""
+    from cookiecutter.generate import generate_context
+    from cookiecutter.prompt import prompt_for_config
+
+    name = "randomize_cube" if kind == "randomization" else "cube_thing"
+    context = generate_context(str(template_dir("functor") / "cookiecutter.json"),
+                               extra_context={"functor_name": name, "kind": kind})
+    rendered = prompt_for_config(context, no_input=True)
+    assert rendered["kind"] == kind
+    assert rendered["description"] == names.FUNCTOR_DESCRIPTIONS[kind]
+    assert names.functor_context(name, kind)["description"] == names.FUNCTOR_DESCRIPTIONS[kind]
+    assert ("Position" in rendered["description"]) is (kind == "observation")
+
+
+def test_functor_descriptions_are_one_per_kind() -> None:
+    assert set(names.FUNCTOR_DESCRIPTIONS) == set(FUNCTOR_KINDS) == set(names.FUNCTOR_KINDS)
+    assert len(set(names.FUNCTOR_DESCRIPTIONS.values())) == len(FUNCTOR_KINDS)
+
+
 @pytest.mark.parametrize("argv, message", [
     (["task", "my-task!"], "invalid task name 'my-task!'"),
     (["task", "9lives"], "invalid task name '9lives'"),
@@ -139,8 +161,26 @@ def test_templates_ship_in_the_core_package() -> None:
         assert (template_dir(name) / "hooks" / "pre_gen_project.py").is_file()
     config = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert config["package-dir"]["embodichain_core.templates"] == "templates"
-    assert "cookiecutter" in " ".join(tomllib.loads((REPO / "pyproject.toml").read_text())
-                                      ["project"]["dependencies"])
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    # cookiecutter is only for `embodichain new`: the `new` extra, not a core dependency
+    assert not any(dep.startswith("cookiecutter") for dep in project["dependencies"])
+    assert any(dep.startswith("cookiecutter") for dep in project["optional-dependencies"]["new"])
+
+
+def test_new_without_cookiecutter_names_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """Without cookiecutter (the `new` extra), `embodichain new` exits 1 naming the install command."""
+    for module in [m for m in sys.modules if m == "cookiecutter" or m.startswith("cookiecutter.")]:
+        monkeypatch.delitem(sys.modules, module)
+    monkeypatch.setitem(sys.modules, "cookiecutter", None)  # `import cookiecutter...` raises ImportError
+    assert new("functor", "cube_height", "--no-input", "-o", str(tmp_path)) == 1
+    err = capsys.readouterr().err
+    assert 'pip install "embodichain-core[new]"' in err
+    assert err.startswith("embodichain new: error: cookiecutter is not installed")
+    assert "Traceback" not in err and list(tmp_path.iterdir()) == []
+    with pytest.raises(new_cmd.MissingTemplateEngineError, match=r"embodichain-core\[new\]"):
+        new_cmd.bake("functor", {"functor_name": "cube_height"}, tmp_path)
+    assert new("functor", "Bad-Name", "--no-input", "-o", str(tmp_path)) == 2  # names are still checked first
 
 
 def test_pyproject_lists_every_core_package() -> None:

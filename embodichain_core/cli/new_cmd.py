@@ -6,7 +6,12 @@ checked before anything is written; every option given on the command line is pa
 cookiecutter as ``extra_context``, and the other values derive from the name. Nothing is
 asked when ``--no-input`` is given or stdin is not a terminal.
 
-Exit codes: 0 created, 1 the output directory exists or baking failed, 2 invalid names.
+cookiecutter is not a required dependency of the core: it comes with the ``new`` extra
+(``pip install "embodichain-core[new]"``); without it the command stops with a message
+saying so (:data:`INSTALL_HINT`).
+
+Exit codes: 0 created, 1 the output directory exists, baking failed or cookiecutter is
+missing, 2 invalid names.
 
 Example:
     $ embodichain new task push_cube --no-input
@@ -19,16 +24,47 @@ import argparse
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 PROG = "embodichain new"
 FUNCTOR_KINDS = ("observation", "reward", "event", "randomization")
+#: How to install what ``embodichain new`` needs beyond the core (the ``new`` extra).
+INSTALL_HINT = 'pip install "embodichain-core[new]"'
+
+
+EPILOG = f"""**Requirements.** The templates are rendered by cookiecutter, which comes with the
+core's `new` extra: `{INSTALL_HINT}` (`scripts/setup_env.sh` installs
+it). Without it the command exits with 1 and says so."""
+
+
+class MissingTemplateEngineError(ImportError):
+    """cookiecutter, which renders the templates, is not installed (the ``new`` extra)."""
+
+
+def require_cookiecutter() -> Callable[..., str]:
+    """The ``cookiecutter()`` function, imported on demand.
+
+    Returns:
+        ``cookiecutter.main.cookiecutter``.
+
+    Raises:
+        MissingTemplateEngineError: cookiecutter is not installed; the message names
+            :data:`INSTALL_HINT`.
+    """
+    try:
+        from cookiecutter.main import cookiecutter
+    except ImportError as err:
+        raise MissingTemplateEngineError(
+            f"cookiecutter is not installed; embodichain new renders its templates with it. "
+            f"Install it with: {INSTALL_HINT}", name="cookiecutter") from err
+    return cookiecutter
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``embodichain new`` parser, with one subcommand per template."""
     parser = argparse.ArgumentParser(
-        prog=PROG, description="Create a plugin package (installable, with tests) from a template.")
+        prog=PROG, description="Create a plugin package (installable, with tests) from a template.",
+        epilog=EPILOG)
     sub = parser.add_subparsers(dest="template", metavar="<template>", title="templates", required=True)
     task = sub.add_parser(
         "task", help="a task: an EmbodiedEnv subclass registered as a gym id",
@@ -94,8 +130,9 @@ def bake(template: str, extra_context: dict[str, Any], output_dir: str | Path = 
         cookiecutter.exceptions.OutputDirExistsException: the directory exists and
             ``overwrite`` is false.
         cookiecutter.exceptions.FailedHookException: the template's name checks failed.
+        MissingTemplateEngineError: cookiecutter is not installed.
     """
-    from cookiecutter.main import cookiecutter
+    cookiecutter = require_cookiecutter()
 
     from embodichain_core.templates import template_dir
 
@@ -118,6 +155,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"{PROG}: error: {error}", file=sys.stderr)
         return 2
     no_input = args.no_input or not sys.stdin.isatty()
+    try:
+        require_cookiecutter()
+    except MissingTemplateEngineError as err:
+        print(f"{PROG}: error: {err}", file=sys.stderr)
+        return 1
     try:
         created = bake(args.template, extra_context, args.output_dir, no_input=no_input,
                        overwrite=args.overwrite)

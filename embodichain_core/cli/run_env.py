@@ -35,6 +35,7 @@ from embodichain_core.cli.run_loops import (  # noqa: F401  (re-exported)
     written_episodes,
 )
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.gym_utils import add_env_launcher_args_to_parser, launcher_overrides
 from embodichain_core.utils.suggest import did_you_mean
 
 PROG = "embodichain run-env"
@@ -64,34 +65,44 @@ episodes intact (see datasets.md).
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``run-env`` argument parser; every override defaults to ``None`` (not given)."""
+    """The ``run-env`` argument parser.
+
+    The launcher flags come from the one definition,
+    :func:`embodichain_core.gym_utils.add_env_launcher_args_to_parser` (same flags,
+    defaults and renderer choices as a script's); ``run-env`` adds ``TASK_ID``,
+    ``--max_steps`` and ``--quiet``. Only the values given on the command line override
+    the config (:func:`overrides_from_args`).
+
+    Returns:
+        The parser.
+    """
     p = argparse.ArgumentParser(prog=PROG, description="Run a task or a gym config with random or demo actions.",
                                 epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("task", nargs="?", metavar="TASK_ID", help="gym task id (or a .json/.yaml config file)")
-    p.add_argument("--gym_config", metavar="FILE", help="JSON/YAML gym config (EmbodiChain layout)")
-    p.add_argument("--num_envs", type=int, help="parallel environments")
-    p.add_argument("--headless", action="store_true", default=None, help="no viewer window")
-    p.add_argument("--device", help="simulation device (sim_cfg.sim_device)")
-    p.add_argument("--renderer", help="render_cfg.renderer")
-    p.add_argument("--max_episodes", type=int, help="episodes to run, summed over envs")
-    p.add_argument("--max_steps", type=int, help="episode step limit (max_episode_steps)")
-    p.add_argument("--seed", type=int, help="RNG seed")
-    p.add_argument("--preview", action="store_true", help="build, reset, step once, describe the spaces, exit")
-    p.add_argument("--filter_visual_rand", action="store_true", default=None, help="drop visual randomization")
-    p.add_argument("--filter_dataset_saving", action="store_true", default=None, help="record no dataset")
+    add_env_launcher_args_to_parser(p)
+    p.add_argument("--max_steps", type=int, metavar="N",
+                   help="episode step limit, max_episode_steps (default: the config's)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no construction summary")
     return p
 
 
 def overrides_from_args(args: argparse.Namespace) -> dict[str, Any]:
-    """The CLI values as flat loader overrides (``None`` = not given, config value kept)."""
-    return {
-        "num_envs": args.num_envs, "headless": args.headless, "device": args.device,
-        "renderer": args.renderer, "max_episodes": args.max_episodes, "max_episode_steps": args.max_steps,
-        "seed": args.seed, "filter_visual_rand": args.filter_visual_rand,
-        "filter_dataset_saving": True if args.preview else args.filter_dataset_saving,
-        "verbose": False if args.quiet else None,
-    }
+    """The CLI values given, as flat loader overrides; a flag not given keeps the config's value.
+
+    Args:
+        args: a namespace parsed by :func:`build_parser`.
+
+    Returns:
+        :func:`~embodichain_core.gym_utils.launcher_overrides` (only the launcher values
+        given), plus ``max_episode_steps`` from ``--max_steps`` and ``verbose=False`` from
+        ``--quiet`` when given; ``--preview`` also sets ``filter_dataset_saving``.
+    """
+    values = launcher_overrides(args)
+    if args.max_steps is not None:
+        values["max_episode_steps"] = args.max_steps
+    if args.quiet:
+        values["verbose"] = False
+    return values
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
