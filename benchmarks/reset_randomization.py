@@ -10,7 +10,7 @@ two are interleaved ``--repeats`` times after a warm-up and medians are reported
 
 The mass and centre-of-mass events change constants MuJoCo derives from them; the
 core recomputes those once per reset, in closed form for free bodies
-(``embodichain_core/sim/free_body_const.py``) or with the whole model's
+(``embodichain_core/sim/backend/free_body_const.py``) or with the whole model's
 ``mj_setConst``. The table reports how many of each ran per reset and their time.
 A second pass times each event alone (called by its manager entry for all envs).
 As a yardstick of the machine's speed during the run, a bare ``Batch.forward`` of

@@ -103,7 +103,7 @@ def _seed_with_extra(extra: Any) -> Any:
 def worker(variant: str, warm: int) -> dict[str, Any]:
     """Time the imports, one cold build and ``warm`` warm builds, counting coacd runs."""
     start = time.perf_counter()
-    import embodichain_core.sim.convex as convex
+    import embodichain_core.sim.scene_build.convex as convex
     import embodichain_core.sim.scene  # noqa: F401
 
     import_s = time.perf_counter() - start

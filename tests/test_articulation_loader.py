@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from embodichain_core.sim.articulation_loader import (
+from embodichain_core.sim.scene_build.articulation_loader import (
     JointInfo,
     joint_dynamics,
     list_joints,

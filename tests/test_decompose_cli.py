@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 from embodichain_core.cli.decompose import main
-from embodichain_core.sim.convex import decompose_file
+from embodichain_core.sim.scene_build.convex import decompose_file
 
 
 def l_shape_mesh() -> trimesh.Trimesh:

@@ -111,7 +111,8 @@ def test_interval_rejects_env_ids_and_bad_step(make_env, make_cfg) -> None:
 
 
 def test_custom_mode_runs_only_when_applied(make_env) -> None:
-    env = make_env(events={"attach": EventCfg(func=log_event, mode="attach", params={"tag": "attach"})})
+    with pytest.warns(UserWarning, match=r"custom event mode 'attach' is not declared"):
+        env = make_env(events={"attach": EventCfg(func=log_event, mode="attach", params={"tag": "attach"})})
     env.reset()
     run_steps(env, 3, "attach")
     env.reset(options={"reset_ids": [0]})
@@ -130,7 +131,7 @@ def test_event_moves_only_selected_envs(make_env) -> None:
         pose[:, 2] += dz
         obj.set_local_pose(pose, env_ids)
 
-    env = make_env(num_envs=3, events={
+    env = make_env(num_envs=3, custom_event_modes=["custom"], events={
         "lift": EventCfg(func=lift, mode="custom", params={"entity_cfg": SceneEntityCfg(uid="cube"), "dz": 0.5}),
     })
     env.reset()

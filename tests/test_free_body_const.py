@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from embodichain_core.sim.batch_sim import BatchSim
-from embodichain_core.sim.free_body_const import eligible_bodies
+from embodichain_core.sim.backend.batch_sim import BatchSim
+from embodichain_core.sim.backend.free_body_const import eligible_bodies
 
 SCENE = """
 <mujoco>

@@ -11,8 +11,8 @@ import pytest
 import trimesh
 
 from embodichain_core.sim import convex
-from embodichain_core.sim.convex import collision_parts, decompose
-from embodichain_core.sim.mesh import (
+from embodichain_core.sim.scene_build.convex import collision_parts, decompose
+from embodichain_core.sim.scene_build.mesh import (
     MeshData,
     add_mesh_to_spec,
     box_uv,

@@ -12,7 +12,7 @@ import torch
 
 from scenes import DRAWER_URDF, seven_dof_arm_mjcf
 
-from embodichain_core.sim.builder import light_diffuse
+from embodichain_core.sim.scene_build.builder import light_diffuse
 from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg, LightCfg, RigidObjectCfg, \
     RobotCfg, SimulationManagerCfg
 from embodichain_core.sim.scene import Scene

@@ -1,6 +1,6 @@
 """``embodichain decompose PATH``: convex decomposition of a mesh or of every mesh of a URDF.
 
-Runs :func:`embodichain_core.sim.convex.collision_parts` (coacd, cached on disk) and prints one
+Runs :func:`embodichain_core.sim.scene_build.convex.collision_parts` (coacd, cached on disk) and prints one
 row per mesh: components, convex components, hulls, whether the result came from the cache, time.
 
 Example:
@@ -34,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Decompose ``args.path`` and print the report table; 0 on success, 1 on error."""
-    from embodichain_core.sim.convex import decompose_file
+    from embodichain_core.sim.scene_build.convex import decompose_file
     from embodichain_core.sim.data import get_data_path
 
     try:

@@ -160,7 +160,7 @@ def check_data_path(value: Any, path: str, functor: str = "") -> None:
 def scene_uids(cfg: Any) -> list[str]:
     """Every uid the config's scene will have (the ground plane included); uids must be
     unique, non-empty and free of ``/`` (group members are named ``<group>/<member>``)."""
-    from embodichain_core.sim.builder import GROUND_UID
+    from embodichain_core.sim.scene_build.builder import GROUND_UID
 
     entries = [("robot", getattr(cfg.robot, "uid", None) or "robot")]
     for key in ("articulation", "articulation_cfg", "background", "rigid_object", "rigid_object_group", "sensor"):

@@ -1,4 +1,4 @@
-"""Env classes and configs."""
+"""Env classes and configs (``BaseEnv`` is an alias of ``EmbodiedEnv``)."""
 
 from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg, EnvCfg

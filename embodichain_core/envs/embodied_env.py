@@ -1,35 +1,37 @@
-"""``EmbodiedEnv``: builds the scene from ``EmbodiedEnvCfg`` and wires the managers.
+"""``EmbodiedEnv``: the batched, configuration-driven env (leading ``num_envs`` dim everywhere).
 
-Construction: bind ``extensions`` -> scene (robot, lights, background,
-articulations, rigid objects, groups, sensors) -> event manager (+ startup
-events) -> observation, reward, action, dataset managers -> spaces from the first
-observation -> summary.
+Construction (:mod:`embodichain_core.envs.env_build`): config -> timing and seed ->
+scene -> managers -> first observation and spaces -> action check -> summary.
+:meth:`EmbodiedEnv.step` and :meth:`EmbodiedEnv.reset` each read top to bottom, one
+named phase after the other; docs/embodied_env.md lists the same phases with the
+same numbers. ``step`` auto-resets finished envs in the same call (gymnasium
+``AutoresetMode.SAME_STEP``): the terminal observation is in ``info["final_obs"]``
+with the mask ``info["_final_obs"]``.
 """
 
 from __future__ import annotations
 
+import os
+import warnings
 from typing import Any, Optional
 
 import gymnasium as gym
 import numpy as np
 import torch
+from gymnasium.vector import AutoresetMode
 
-from embodichain_core.config.errors import ConfigError
-from embodichain_core.envs.action_check import ActionChecker
-from embodichain_core.envs.base_env import BaseEnv
+from embodichain_core.envs import env_build
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
-from embodichain_core.envs.episode_rng import episode_seeds_option
+from embodichain_core.envs.episode_rng import EpisodeRandom, episode_seeds_option
 from embodichain_core.envs.rollout_buffer import RolloutBuffer
-from embodichain_core.envs.scene_setup import build_scene, filter_functors, resolve_active_joints
+from embodichain_core.envs.scene_setup import build_scene
+from embodichain_core.envs.spaces import batch_space, space_from_obs
 from embodichain_core.envs.summary import print_summary
-from embodichain_core.managers.action_manager import ActionManager
-from embodichain_core.managers.dataset_manager import DatasetManager
-from embodichain_core.managers.event_manager import EventManager
-from embodichain_core.managers.observation_manager import ObservationManager
-from embodichain_core.managers.reward_manager import RewardManager
+from embodichain_core.envs.task_api import TaskApi
+from embodichain_core.envs.timing import resolve_num_envs, resolve_timing
 
 
-class EmbodiedEnv(BaseEnv):
+class EmbodiedEnv(TaskApi, gym.Env):
     """The configuration-driven env (see docs/embodied_env.md).
 
     Example:
@@ -38,111 +40,149 @@ class EmbodiedEnv(BaseEnv):
         >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """
 
-    cfg_cls = EmbodiedEnvCfg
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
+    cfg_cls: type = EmbodiedEnvCfg
+    # set during construction (env_build)
+    cfg: Any
+    single_action_space: gym.spaces.Space
+    scene: Any
+    robot: Any
+    sensors: dict[str, Any]
+    active_joint_ids: list[int]
+    event_manager: Any
+    observation_manager: Any
+    reward_manager: Any
+    action_manager: Any
+    dataset_manager: Any
+    _active_qpos_adr: torch.Tensor
+    _active_dof_adr: torch.Tensor
+    _drive_targets: dict[str, tuple[torch.Tensor, torch.Tensor]]
 
-    def __init__(self, cfg: Optional[EmbodiedEnvCfg] = None, num_envs: Optional[int] = None, **kwargs: Any):
-        self.event_manager: Optional[EventManager] = None
-        self.observation_manager: Optional[ObservationManager] = None
-        self.reward_manager: Optional[RewardManager] = None
-        self.action_manager: Optional[ActionManager] = None
-        self.dataset_manager: Optional[DatasetManager] = None
+    def __init__(self, cfg: Optional[EmbodiedEnvCfg] = None, num_envs: Optional[int] = None,
+                 render_mode: Optional[str] = None, **kwargs: Any):
+        self.event_manager = self.observation_manager = self.reward_manager = None
+        self.action_manager = self.dataset_manager = None
         self.affordance_datas: dict[str, Any] = {}
         self._detached_uids_for_reset: list[str] = []
         self.rollout_buffer: Optional[RolloutBuffer] = None
-        super().__init__(cfg, num_envs, **kwargs)
-        if self.cfg.init_rollout_buffer or self._recorders_need_buffer():
+        self._closed = False
+        # config, timing, seed
+        self.cfg = env_build.resolve_cfg(self.cfg_cls, cfg, kwargs)
+        self.metadata = dict(type(self).metadata)
+        self.render_mode = render_mode
+        self._num_envs = resolve_num_envs(self.cfg, num_envs)
+        self.physics_dt, self.sim_steps_per_control = resolve_timing(self.cfg)
+        self.step_dt = self.physics_dt * self.sim_steps_per_control
+        self.metadata["render_fps"] = self.control_frequency
+        self.device = torch.device(self.cfg.sim_cfg.sim_device if self.cfg.sim_cfg.sim_device != "cuda" else "cpu")
+        self._seed_rng(self.cfg.seed)
+        self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
+        self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
+        self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
+        # scene, managers, spaces, the action check
+        env_build.build_managers(self, env_build.setup_scene(self, build_scene))
+        self._init_obs = obs = self.get_obs()
+        self.single_observation_space = space_from_obs(obs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._check_action = env_build.action_checker(self)
+        if self.cfg.init_rollout_buffer or env_build.recorders_need_buffer(self.dataset_manager):
             self.cfg.init_rollout_buffer = True
-            self.rollout_buffer = RolloutBuffer(self._init_obs, self.single_action_space.shape, self.num_envs,
+            self.rollout_buffer = RolloutBuffer(obs, self.single_action_space.shape, self.num_envs,
                                                 self.max_episode_steps)
         if self.cfg.verbose:
             print_summary(self)
 
-    # -- construction -----------------------------------------------------------------------
-    def _bind_extensions(self) -> None:
-        for key, value in (self.cfg.extensions or {}).items():
-            if hasattr(type(self), key):
-                raise ConfigError(f"env.extensions.{key}",
-                                  f"{key!r} would shadow the env attribute of the same name; rename it")
-            setattr(self, key, value)
-
-    def _setup_scene(self) -> None:
-        self.cfg.validate()
-        self._bind_extensions()
-        events = filter_functors(self.cfg, "events")
-        self.scene = build_scene(self, events)
-        self.robot = next(iter(self.scene.robots.values()))
-        self.sensors = self.scene.sensors
-        self.active_joint_ids = resolve_active_joints(self.cfg, self.robot)
-        aid = torch.as_tensor(self.active_joint_ids, dtype=torch.long)
-        self._active_qpos_adr = self.robot.qpos_adr[aid]
-        self._active_dof_adr = self.robot.dof_adr[aid]
-        # per command kind: (driven columns of the action, their actuator ids), resolved once
-        self._drive_targets = {
-            key: ((acts >= 0), acts[acts >= 0])
-            for key, acts in (("qpos", self.robot.pos_act[aid]), ("qvel", self.robot.vel_act[aid]))
-        }
-        limits = self.robot.get_qpos_limits()[0, aid].numpy()
-        self.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
-        self._events_cfg = events
-
-    def _recorders_need_buffer(self) -> bool:
-        """A recorder that reads ``env.rollout_buffer`` sets ``uses_rollout_buffer = True``."""
-        manager = self.dataset_manager
-        return manager is not None and any(getattr(e.func, "uses_rollout_buffer", False)
-                                           for e in manager.entries.values())
-
-    @property
-    def sim(self):
-        """The batched simulation (``env.sim.qpos`` etc.)."""
-        return self.scene.sim
-
-    def _init_sim_state(self) -> None:
-        cfg = self.cfg
-        self.event_manager = EventManager(self._events_cfg, self)
-        self.event_manager.apply("startup", None)
-        self.observation_manager = ObservationManager(cfg.observations, self)
-        self.reward_manager = RewardManager(cfg.rewards, self)
-        self.action_manager = ActionManager(cfg.actions, self)
-        space = self.action_manager.single_action_space()
-        if space is not None:
-            self.single_action_space = space
-        dataset = filter_functors(cfg, "dataset")
-        if dataset is not None and not cfg.filter_dataset_saving:
-            manager = DatasetManager(dataset, self)
-            self.dataset_manager = manager if len(manager) else None
-
-    def _action_checker(self) -> ActionChecker:
-        """Action terms take their own width (a dict by term name or input key); without
-        terms, joint commands take the active joints' or all joints' width (a dict by
-        ``qpos``/``qvel``/``qf``)."""
-        manager = self.action_manager
-        terms = manager.get_terms_by_mode("pre") if manager is not None else {}
-        if terms:
-            keys: dict[str, list[int]] = {}
-            for name, term in terms.items():
-                keys[name] = keys[term.input_key] = [term.action_dim]
-            dims = [t.action_dim for t in terms.values()]
-            detail = f"the action terms {list(terms)} take {dims} values in this order (total {sum(dims)})"
-            return ActionChecker(self.num_envs, [sum(dims)], self.device, self.action_space, keys, detail)
-        widths = sorted({len(self.active_joint_ids), self.robot.dof}, key=lambda w: w != len(self.active_joint_ids))
-        return ActionChecker(self.num_envs, widths, self.device, self.action_space,
-                             {key: widths for key in ("qpos", "qvel", "qf")})
-
-    # -- step pieces ----------------------------------------------------------------------------
-    def _preprocess_action(self, action: Any) -> Any:
+    # -- the loop ----------------------------------------------------------------------------------
+    def step(self, action: Any) -> tuple[dict, torch.Tensor, torch.Tensor, torch.Tensor, dict]:  # type: ignore[override]
+        """One control step of every env; ``action`` follows the rule of
+        :mod:`embodichain_core.envs.action_check` (a bad action is one clear error)."""
+        # 0. action check, once at the boundary
+        action = self._check_action(action)
+        # 1. action terms (pre): policy action -> command
+        command = action
         if self.action_manager is not None and len(self.action_manager):
-            return self.action_manager.process_action(action, "pre")
-        return action
+            command = self.action_manager.process_action(action, "pre")
+        # 2. apply the command: joint targets / efforts into the simulation
+        self._apply_command(command)
+        # 3. physics: sim_steps_per_control physics steps of every env
+        diverged = self.sim.step(self.sim_steps_per_control)
+        # 4. interval events
+        self.event_manager.apply("interval")
+        # 5. counters: this step counts from here on
+        self._elapsed_steps += 1
+        # 6. observations
+        obs = self.get_obs()
+        # 7. task state and info
+        info = self.get_info()
+        # 8. rewards: task reward + reward functors
+        reward = self._reward(obs, command, info)
+        # 9. action terms (post)
+        self.last_action = command
+        if self.action_manager is not None and self.action_manager.terms("post"):
+            self.last_action = self.action_manager.process_action(command, "post")
+        # 10. dones
+        terminated, truncated = self._dones(obs, info, diverged)
+        # 11. recording
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.add(obs, action, reward, terminated, truncated, info["success"])
+        if self.dataset_manager is not None:
+            self.dataset_manager.record_step(obs, action, reward, terminated, truncated, info)
+        # 12. autoreset of the done envs (gymnasium SAME_STEP)
+        dones = terminated | truncated
+        if dones.any():
+            obs = self._auto_reset(obs, dones, info)
+        return obs, reward, terminated, truncated, info
 
-    def _step_action(self, command: Any) -> None:
+    def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
+        """Reset ``options["reset_ids"]`` (all envs by default); ``options["episode_seeds"]``
+        replays episodes, ``save_data=False`` discards the finished episodes."""
+        options = dict(options or {})
+        # 1. seed
+        if seed is not None:
+            self._seed_rng(seed)
+        # 2. the envs to reset
+        ids = options.pop("reset_ids", None)
+        ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
+        # 3. dataset: commit (or discard) the episodes that just ended, with their seeds
+        self._commit_or_discard(ids, bool(options.get("save_data", True)))
+        # 4. episode streams of the new episodes
+        self.rng.begin_episodes(ids, episode_seeds_option(options, len(ids)))
+        # 5. scene reset: whole state rows (clears a diverged env), then every entity
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.clear(ids)
+        self.scene.reset_state(ids, keep_uids=self._detached_uids_for_reset)
+        self.scene.reset(ids, excluded_uids=self._detached_uids_for_reset)
+        # 6. reset events
+        self.event_manager.apply("reset", ids)
+        # 7. manager resets (interval counters, class functors)
+        for manager in (self.event_manager, self.observation_manager, self.reward_manager, self.action_manager,
+                        self.dataset_manager):
+            if manager is not None:
+                manager.reset(ids)
+        # 8. counters
+        self._elapsed_steps[ids] = 0
+        self._episode_success[ids] = False
+        # 9. observation, info, first-frame recording
+        obs = self.get_obs()
+        info = self.get_info()
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.set_first_obs(obs, ids)
+        if self.dataset_manager is not None:
+            self.dataset_manager.record_reset(obs, ids)
+        return obs, info
+
+    # -- phases with more than a line ---------------------------------------------------------------
+    def _apply_command(self, command: Any) -> None:
+        """Phase 2: a tensor is position targets; a dict routes ``qpos``/``qvel``/``qf``."""
         if isinstance(command, dict):
             for key in ("qpos", "qvel", "qf"):
                 if key in command:
-                    self._apply_command(key, command[key])
+                    self._apply_joint_command(key, command[key])
             return
-        self._apply_command("qpos", command)
+        self._apply_joint_command("qpos", command)
 
-    def _apply_command(self, key: str, value: Any) -> None:
+    def _apply_joint_command(self, key: str, value: Any) -> None:
         value = torch.as_tensor(value)
         if value.dim() == 1:
             value = value.unsqueeze(0).expand(self.num_envs, -1)
@@ -159,18 +199,9 @@ class EmbodiedEnv(BaseEnv):
         columns, actuators = self._drive_targets[key]
         self.sim.ctrl[:, actuators] = value[:, columns]
 
-    def _physics_step(self) -> list[int]:
-        return self.sim.step(self.sim_steps_per_control)
-
-    def _update_sim_state(self) -> None:
-        self.event_manager.apply("interval")
-
-    def _postprocess_action(self, action: Any) -> Any:
-        if self.action_manager is not None and self.action_manager.terms("post"):
-            return self.action_manager.process_action(action, "post")
-        return action
-
     def get_obs(self, **kwargs: Any) -> dict:
+        """Phase 6: ``robot`` (active joints' qpos, qvel, qf), ``sensor`` (per uid), then
+        the observation functors."""
         sim = self.sim
         dof = self._active_dof_adr
         obs: dict[str, Any] = {"robot": {
@@ -185,36 +216,41 @@ class EmbodiedEnv(BaseEnv):
                 obs["sensor"][uid] = sensor.get_data()
         return self.observation_manager.compute(obs) if self.observation_manager else obs
 
-    def _compute_reward(self, obs: Any, action: Any, info: dict) -> torch.Tensor:
-        reward = self.get_reward(obs, action, info).float()
+    def _reward(self, obs: Any, command: Any, info: dict) -> torch.Tensor:
+        """Phase 8: ``get_reward`` combined with the reward functors (terms in ``info["rewards"]``)."""
+        reward = self.get_reward(obs, command, info).float()
         if self.reward_manager is not None and len(self.reward_manager):
-            reward, terms = self.reward_manager.compute(obs, action, info, reward)
+            reward, terms = self.reward_manager.compute(obs, command, info, reward)
             info["rewards"] = terms
         return reward
 
-    def _after_step(self, obs, action, reward, terminated, truncated, info) -> None:
-        if self.rollout_buffer is not None:
-            self.rollout_buffer.add(obs, action, reward, terminated, truncated, info["success"])
-        if self.dataset_manager is not None:
-            self.dataset_manager.record_step(obs, action, reward, terminated, truncated, info)
+    def _dones(self, obs: Any, info: dict, diverged: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
+        """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
+        ``truncated = check_truncated | time limit | diverged``."""
+        terminated = info["success"] | info["fail"]
+        if self.cfg.ignore_terminations:
+            terminated = torch.zeros_like(terminated)
+        truncated = self.check_truncated(obs, info) | (self._elapsed_steps >= self.max_episode_steps)
+        mask = torch.zeros(self.num_envs, dtype=torch.bool)
+        if diverged:
+            mask[diverged] = True
+            warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
+        info["diverged"] = mask
+        truncated = truncated | mask
+        dones = terminated | truncated
+        self._episode_success[dones] = info["success"][dones]
+        return terminated, truncated
 
-    # -- reset -------------------------------------------------------------------------------------
-    def _reset_envs(self, env_ids: torch.Tensor, options: dict) -> None:
-        self._commit_or_discard(env_ids, bool(options.get("save_data", True)))
-        # the finished episodes are committed (with their seeds): start the new ones' streams
-        self.rng.begin_episodes(env_ids, episode_seeds_option(options, len(env_ids)))
-        if self.rollout_buffer is not None:
-            self.rollout_buffer.clear(env_ids)
-        # whole state rows (also clears a diverged env), detached entities kept as they are
-        self.scene.reset_state(env_ids, keep_uids=self._detached_uids_for_reset)
-        self.scene.reset(env_ids, excluded_uids=self._detached_uids_for_reset)
-        self.event_manager.apply("reset", env_ids)
-        for manager in (self.event_manager, self.observation_manager, self.reward_manager, self.action_manager,
-                        self.dataset_manager):
-            if manager is not None:
-                manager.reset(env_ids)
+    def _auto_reset(self, obs: Any, dones: torch.Tensor, info: dict) -> Any:
+        """Phase 12: reset the done envs; the terminal step stays in ``info``."""
+        info["final_obs"] = obs
+        info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs",)}
+        info["_final_obs"] = dones.clone()
+        new_obs, _ = self.reset(options={"reset_ids": torch.nonzero(dones).flatten()})
+        return new_obs
 
     def _commit_or_discard(self, env_ids: torch.Tensor, save: bool) -> None:
+        """Reset phase 3: successful episodes (all with ``save_failed_episodes``) are committed."""
         manager = self.dataset_manager
         if manager is None:
             return
@@ -228,40 +264,25 @@ class EmbodiedEnv(BaseEnv):
         manager.commit(env_ids[keep])
         manager.discard(env_ids[~keep])
 
-    def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
-        obs, info = super().reset(seed=seed, options=options)
-        ids = (options or {}).get("reset_ids")
-        ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
-        if self.rollout_buffer is not None:
-            self.rollout_buffer.set_first_obs(obs, ids)
-        if self.dataset_manager is not None:
-            self.dataset_manager.record_reset(obs, ids)
-        return obs, info
-
-    # -- extras -------------------------------------------------------------------------------------
-    def add_detached_uids_for_reset(self, uids: Any) -> None:
-        """Exclude entities from the automatic reset to their initial state."""
-        self._detached_uids_for_reset += [uids] if isinstance(uids, str) else list(uids)
-
-    def get_sensor(self, name: str) -> Any:
-        return self.scene[name]
-
-    @property
-    def has_sensors(self) -> bool:
-        return bool(self.sensors)
-
-    def set_affordance(self, key: str, value: Any) -> None:
-        self.affordance_datas[key] = value
-
-    def get_affordance(self, key: str, default: Any = None) -> Any:
-        return self.affordance_datas.get(key, default)
+    def _seed_rng(self, seed: Optional[int]) -> None:
+        """Seed ``env.generator``, ``env.np_random`` and the episode streams ``env.rng``."""
+        if seed is None or seed == -1:
+            seed = int.from_bytes(os.urandom(4), "little") >> 1
+        self.cfg.seed = int(seed)
+        self.generator = torch.Generator().manual_seed(int(seed))
+        self.np_random_generator = np.random.default_rng(int(seed))
+        self._np_random = self.np_random_generator
+        if getattr(self, "rng", None) is None:
+            self.rng = EpisodeRandom(self.num_envs, int(seed))
+        else:
+            self.rng.seed(int(seed))
 
     def close(self) -> None:
         """Finalize recorders (never committing partial episodes) and release sensors; idempotent."""
         if self._closed:
             return
         self._closed = True
-        errors = []
+        errors: list[Exception] = []
         if self.dataset_manager is not None:
             try:
                 self.dataset_manager.finalize()

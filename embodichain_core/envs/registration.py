@@ -77,10 +77,10 @@ def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bo
         raise RuntimeError(f"register_env({uid!r}): kwargs must be JSON-serialisable: {err}") from err
 
     def wrap(cls: type) -> type:
-        from embodichain_core.envs.base_env import BaseEnv
+        from embodichain_core.envs.embodied_env import EmbodiedEnv
 
-        if not (isinstance(cls, type) and issubclass(cls, BaseEnv)):
-            raise TypeError(f"register_env({uid!r}) decorates BaseEnv subclasses, got {cls!r}")
+        if not (isinstance(cls, type) and issubclass(cls, EmbodiedEnv)):
+            raise TypeError(f"register_env({uid!r}) decorates EmbodiedEnv subclasses, got {cls!r}")
         if _provided_by_plugins(uid, cls, kwargs, max_episode_steps):
             return cls
         existing = gym.envs.registry.get(uid)

@@ -19,7 +19,7 @@ from embodichain_core.managers.functor import ActionTerm
 from embodichain_core.managers.manager_base import ManagerBase
 
 
-class ActionManager(ManagerBase):
+class ActionManager(ManagerBase[ActionTermCfg]):
     """Builds the action space from its ``pre`` terms and processes actions."""
 
     section = "actions"

@@ -16,7 +16,7 @@ from embodichain_core.managers.cfg import DatasetFunctorCfg
 from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
 
 
-class DatasetManager(ManagerBase):
+class DatasetManager(ManagerBase[DatasetFunctorCfg]):
     """Runs dataset recorder functors."""
 
     section = "dataset"

@@ -21,7 +21,7 @@ from embodichain_core.managers.manager_base import FunctorEntry, ManagerBase
 from embodichain_core.managers.param_rules import check_param_types
 
 
-class EventManager(ManagerBase):
+class EventManager(ManagerBase[EventCfg]):
     """Runs event functors ``f(env, env_ids, **params)`` by mode."""
 
     section = "events"

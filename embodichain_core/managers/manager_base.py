@@ -8,7 +8,7 @@ import dataclasses
 import importlib
 import inspect
 from dataclasses import dataclass
-from typing import Any, Iterator, Optional
+from typing import Any, Generic, Iterator, Optional, TypeVar
 
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import FunctorCfg, SceneEntityCfg
@@ -20,12 +20,15 @@ ENTITY_PARAM_KEYS = {"entity_cfg", "source_entity_cfg", "target_entity_cfg", "ob
                      "reference_entity_cfg", "end_effector_cfg", "robot_cfg", "obj_a_cfg", "obj_b_cfg"}
 
 
+CfgT = TypeVar("CfgT", bound=FunctorCfg)
+
+
 @dataclass
-class FunctorEntry:
-    """One resolved functor of a manager."""
+class FunctorEntry(Generic[CfgT]):
+    """One resolved functor of a manager (``cfg`` is the manager's functor cfg type)."""
 
     name: str
-    cfg: FunctorCfg
+    cfg: CfgT
     func: Any
     is_class: bool
     path: str
@@ -64,7 +67,7 @@ def functor_path_of(err: BaseException) -> Optional[str]:
     return getattr(err, FUNCTOR_PATH_ATTR, None)
 
 
-def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str, FunctorCfg]]:
+def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str, Any]]:
     """Yield ``(name, functor cfg)`` of a manager section (config object or dict)."""
     if section is None:
         return
@@ -185,11 +188,12 @@ def resolve_entities(value: Any, scene: Any, path: str, key: str = "") -> Any:
     return value
 
 
-class ManagerBase:
+class ManagerBase(Generic[CfgT]):
     """Builds the functors of one config section.
 
     Subclasses set ``section`` (the config key), ``kind`` (functor kind in the
-    registry), ``cfg_type`` and ``min_argc`` (positional args before params).
+    registry), ``cfg_type`` and ``min_argc`` (positional args before params), and
+    parametrize the class with their cfg type (``ManagerBase[EventCfg]``).
     """
 
     section = ""
@@ -200,11 +204,11 @@ class ManagerBase:
     def __init__(self, cfg: Any, env: Any, path: Optional[str] = None):
         self._env = env
         self.path = path or f"env.{self.section}"
-        self.entries: dict[str, FunctorEntry] = {}
+        self.entries: dict[str, FunctorEntry[CfgT]] = {}
         for name, fcfg in iter_section(cfg, self.cfg_type, self.path):
             self.entries[name] = self._build_entry(name, copy.deepcopy(fcfg))
 
-    def _build_entry(self, name: str, cfg: FunctorCfg) -> FunctorEntry:
+    def _build_entry(self, name: str, cfg: CfgT) -> FunctorEntry[CfgT]:
         where = join_path(self.path, name)
         func = resolve_func(cfg.func, self.kind, where)
         is_class = inspect.isclass(func)
@@ -225,7 +229,7 @@ class ManagerBase:
                 raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err
         return FunctorEntry(name, cfg, func, is_class, where)
 
-    def _run_param_check(self, func: Any, cfg: FunctorCfg, where: str) -> None:
+    def _run_param_check(self, func: Any, cfg: CfgT, where: str) -> None:
         """A function functor may carry ``check_params(env, **params)``; it runs
         now, so bad values are reported when the manager is built."""
         hook = getattr(func, "check_params", None)
@@ -241,7 +245,7 @@ class ManagerBase:
         except (TypeError, ValueError) as err:
             raise ConfigError(join_path(where, "params"), f"{getattr(func, '__name__', func)}: {err}") from err
 
-    def _check(self, func: Any, cfg: FunctorCfg, where: str) -> None:
+    def _check(self, func: Any, cfg: CfgT, where: str) -> None:
         check_params(func, cfg.params, self.min_argc, where)
         check_ranges(cfg.params, where, getattr(func, "__name__", str(func)))
 
@@ -257,7 +261,7 @@ class ManagerBase:
             raise KeyError(f"{self.section}: no functor {name!r}.{did_you_mean(name, self.entries)}")
         return self.entries[name].func
 
-    def get_functor_cfg(self, name: str) -> FunctorCfg:
+    def get_functor_cfg(self, name: str) -> CfgT:
         self.get_functor(name)
         return self.entries[name].cfg
 

@@ -30,7 +30,7 @@ def set_nested(obs: dict, name: str, value: Any) -> None:
     node[parts[-1]] = value
 
 
-class ObservationManager(ManagerBase):
+class ObservationManager(ManagerBase[ObservationCfg]):
     """Extends the default ``robot``/``sensor`` observation with functor outputs.
 
     Modes run in the order of their first appearance; functors in declaration order.

@@ -11,7 +11,7 @@ from embodichain_core.managers.cfg import RewardCfg
 from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
 
 
-class RewardManager(ManagerBase):
+class RewardManager(ManagerBase[RewardCfg]):
     """Sums weighted terms; a ``replace`` term sets the total (task reward included)."""
 
     section = "rewards"

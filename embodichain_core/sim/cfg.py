@@ -170,7 +170,7 @@ class ArticulationCfg(ObjectBaseCfg):
 
     def build_spec(self) -> Any:
         """Return the ``mujoco.MjSpec`` of this articulation (loaded from the cfg)."""
-        from embodichain_core.sim.model_source import spec_from_cfg
+        from embodichain_core.sim.scene_build.model_source import spec_from_cfg
 
         return spec_from_cfg(self)
 

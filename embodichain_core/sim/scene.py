@@ -15,10 +15,10 @@ from typing import Any, Optional
 import mujoco
 import torch
 
-from embodichain_core.sim.batch_sim import BatchSim
-from embodichain_core.sim.builder import GROUND_UID, SceneBuilder
-from embodichain_core.sim.builder_articulation import add_articulation
-from embodichain_core.sim.builder_objects import add_rigid_object, add_rigid_object_group
+from embodichain_core.sim.backend import BatchSim, SimBackend
+from embodichain_core.sim.scene_build.builder import GROUND_UID, SceneBuilder
+from embodichain_core.sim.scene_build.builder_articulation import add_articulation
+from embodichain_core.sim.scene_build.builder_objects import add_rigid_object, add_rigid_object_group
 from embodichain_core.sim.cfg import ArticulationCfg, LightCfg, RigidObjectCfg, RigidObjectGroupCfg, SimulationManagerCfg
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.base import Entity
@@ -38,7 +38,7 @@ class Scene:
         self.device = torch.device(device)
         self.builder: Optional[SceneBuilder] = SceneBuilder(sim_cfg)
         self.model: Optional[mujoco.MjModel] = None
-        self.sim: Optional[BatchSim] = None
+        self.sim: Optional[SimBackend] = None
         self.entities: dict[str, Entity] = {}
         self.robots: dict[str, Robot] = {}
         self.articulations: dict[str, Articulation] = {}
@@ -73,7 +73,7 @@ class Scene:
 
     def reserve_mesh_variants(self, uid: str, files: list[str]) -> None:
         """Before build: let mesh object ``uid`` take any mesh of ``files`` per env."""
-        from embodichain_core.sim.variants import add_variants
+        from embodichain_core.sim.scene_build.variants import add_variants
 
         record = self._b().record(uid)
         if record.kind not in ("rigid_object", "background") or "mesh_file" not in record.extra:
@@ -83,7 +83,7 @@ class Scene:
     def reserve_scale_variants(self, uid: str, factors: list) -> list[str]:
         """Before build: let mesh object ``uid`` take its mesh scaled by any of ``factors``
         ((sx, sy, sz) each) per env; returns the variant keys for :meth:`set_mesh_variants`."""
-        from embodichain_core.sim.variants import add_variants
+        from embodichain_core.sim.scene_build.variants import add_variants
 
         record = self._b().record(uid)
         if record.kind not in ("rigid_object", "background") or "mesh_file" not in record.extra:
@@ -101,7 +101,7 @@ class Scene:
     def set_mesh_variants(self, uid: str, keys: list[str], env_ids: Any = None) -> None:
         """After build: env ``env_ids[i]`` uses variant ``keys[i]`` (a reserved file or scale key)."""
         from embodichain_core.sim.entities.base import env_index
-        from embodichain_core.sim.variants import apply_variants
+        from embodichain_core.sim.scene_build.variants import apply_variants
 
         ids = env_index(env_ids, self.num_envs)
         if len(keys) != len(ids):

@@ -1,4 +1,4 @@
-"""Per-env models of a :class:`~embodichain_core.sim.batch_sim.BatchSim`: envs that need
+"""Per-env models of a :class:`~embodichain_core.sim.backend.batch_sim.BatchSim`: envs that need
 different model structures (``Batch.set_models``), each with its own ``MjModel`` copy."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from typing import Any, Iterable, Optional, Sequence
 
 import mujoco
 
-from embodichain_core.sim.env_rows import np_ids as _np_ids
+from embodichain_core.sim.backend.env_rows import np_ids as _np_ids
 
 
 class PerEnvModels:

@@ -1,15 +1,18 @@
-"""Batched simulation backend: ``num_envs`` simulations on ``mujoco.batch.Batch``.
+"""The CPU backend: ``num_envs`` simulations on ``mujoco.batch.Batch`` (MuJoCo >= 4.0).
 
 One state row per env, stepped on a thread pool with the GIL released and
-bit-identical to a loop. State fields are exposed as zero-copy torch views
-(float64) created once. Per-env model fields come in two ways:
+bit-identical to a loop. It implements :class:`~embodichain_core.sim.backend.interface.SimBackend`:
+state and derived fields are zero-copy float64 torch views created once (and numpy
+views, ``arrays``), forward is lazy (:meth:`BatchSim.mark_dirty`), any subset of envs
+steps natively. Per-env model fields come in two ways:
 
 * expanded fields (``Batch.expand``): cheap, while envs share one structure;
-* per-env models (``Batch.set_models``), once envs differ in structure (a
-  different mesh per env). Switching rebuilds the batch and copies the state.
+* per-env models (``Batch.set_models``, :mod:`.batch_env_models`), once envs differ in
+  structure. Switching rebuilds the batch and copies the state.
 
-This class is the only stepping path; a GPU backend would implement the same
-small interface (``step``, ``reset``, ``forward``, state views, model fields).
+Derived constants after model writes: :mod:`.batch_constants`. ``BatchSim.batch`` (the
+``mujoco.batch.Batch``) is this backend's own business: code outside ``sim/backend/``
+goes through the interface.
 """
 
 from __future__ import annotations
@@ -23,30 +26,21 @@ import mujoco.batch as mjbatch
 import numpy as np
 import torch
 
-from embodichain_core.sim.batch_env_models import PerEnvModels
-from embodichain_core.sim.env_rows import batch_ids as _batch_ids
-from embodichain_core.sim.env_rows import field_selector as _field_selector
-from embodichain_core.sim.env_rows import index_bodies as _index_bodies
-from embodichain_core.sim.env_rows import np_ids as _np_ids
-from embodichain_core.sim.free_body_const import FILTER_FIELDS, INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies
+from embodichain_core.sim.backend.batch_constants import BatchConstants
+from embodichain_core.sim.backend.batch_env_models import PerEnvModels
+from embodichain_core.sim.backend.env_rows import batch_ids as _batch_ids
+from embodichain_core.sim.backend.env_rows import field_selector as _field_selector
+from embodichain_core.sim.backend.env_rows import np_ids as _np_ids
+from embodichain_core.sim.backend.free_body_const import FreeBodyConstants
+from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
 
-STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
-OUTPUT_FIELDS = ("xpos", "xquat", "xmat", "cvel", "site_xpos", "site_xmat", "qfrc_actuator", "actuator_force",
-                 "cfrc_ext", "qacc", "sensordata", "light_xpos", "light_xdir", "cam_xpos", "cam_xmat", "geom_xpos",
-                 "geom_xmat", "ncon")
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 _SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
+CAPABILITIES = SimCapabilities(subset_step=True, per_env_models=True, host_arrays=True, float64=True,
+                               deterministic=True)
 
 
-class SimulationDiverged(RuntimeError):
-    """Some envs' simulations failed; ``env_ids`` lists them."""
-
-    def __init__(self, env_ids: list[int], messages: list[str]):
-        self.env_ids, self.messages = env_ids, messages
-        super().__init__(f"simulation diverged in envs {env_ids}: {messages[:1]}")
-
-
-class BatchSim(PerEnvModels):
+class BatchSim(BatchConstants, PerEnvModels):
     """``num_envs`` MuJoCo simulations of one compiled model.
 
     Args:
@@ -66,6 +60,9 @@ class BatchSim(PerEnvModels):
         self.substeps = int(substeps)
         self.nthread = int(nthread) or min(os.cpu_count() or 1, self.num_envs)
         self.persistent = persistent
+        self.device = torch.device("cpu")
+        self.dtype = torch.float64
+        self.capabilities = CAPABILITIES
         self.env_models: Optional[list[mujoco.MjModel]] = None
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
@@ -76,6 +73,7 @@ class BatchSim(PerEnvModels):
         self._fast_constants = fast_constants  # closed form where it applies (else always mj_setConst)
         self._free_bodies: Optional[np.ndarray] = None  # see _eligible_bodies
         self._free_const: Optional[FreeBodyConstants] = None
+        self._pending_failed: list[int] = []  # failures of forwards and subset steps, for the next full step
         self._make_batch()
         self.batch.reset(None)
 
@@ -92,7 +90,7 @@ class BatchSim(PerEnvModels):
             self._views[name] = torch.from_numpy(self.arrays[name])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # outputs are read-only numpy arrays
-            for name in OUTPUT_FIELDS:
+            for name in DERIVED_FIELDS:
                 try:
                     self._views[name] = torch.from_numpy(self.batch.bind(name))
                 except (ValueError, AttributeError):
@@ -126,18 +124,47 @@ class BatchSim(PerEnvModels):
         self._maybe_dirty = False
 
     # -- stepping ------------------------------------------------------------------------------
-    def step(self, nstep: int = 1) -> list[int]:
-        """Advance every env by ``nstep`` physics steps; return envs that diverged."""
+    def view(self, name: str) -> torch.Tensor:
+        """The persistent view of a state or derived field (same as ``sim.<name>``)."""
+        return self.__getattr__(name)
+
+    def step(self, nstep: int = 1, env_ids: Any = None) -> list[int]:
+        """Advance ``env_ids`` (``None``: every env) by ``nstep`` physics steps; return the
+        envs that diverged (MuJoCo raised, or the state went non-finite).
+
+        A subset step forwards its envs first (it usually follows direct state writes)
+        and leaves the other envs untouched. Failures of a subset step, or of a
+        forward (lazy or explicit), are reported again by the next step of every env,
+        which the env loop truncates and resets.
+        """
         self.flush_const()
-        self._forward_dirty()
+        if env_ids is None:
+            self._forward_dirty()
+            failed = self._step_rows(None, nstep)
+            if self._pending_failed:
+                failed, self._pending_failed = sorted(set(failed) | set(self._pending_failed)), []
+            return failed
+        rows = np.unique(_np_ids(env_ids, self.num_envs))
+        if not len(rows):
+            return []
+        before = set(self._pending_failed)
+        self.forward(rows)
+        failed = sorted(set(self._step_rows(rows, nstep)) | (set(self._pending_failed) - before))
+        self._pending_failed = sorted(before | set(failed))
+        return failed
+
+    def _step_rows(self, rows: Optional[np.ndarray], nstep: int) -> list[int]:
+        """``Batch.step`` of ``rows`` (None: all) at ``stage=VEL``; the failed and non-finite rows."""
         failed: list[int] = []
         try:
-            self.batch.step(nstep=nstep * self.substeps, stage=_VEL)
+            self.batch.step(_batch_ids(rows, self.num_envs), nstep=nstep * self.substeps, stage=_VEL)
         except mjbatch.SimulationError as err:
             failed = [int(i) for i in err.ids]
-        bad = ~np.isfinite(self.batch.state).all(axis=1)
+        state = self.batch.state if rows is None else self.batch.state[rows]
+        bad = ~np.isfinite(state).all(axis=1)
         if bad.any():
-            failed = sorted(set(failed) | set(np.flatnonzero(bad).tolist()))
+            bad_ids = np.flatnonzero(bad) if rows is None else rows[bad]
+            failed = sorted(set(failed) | set(bad_ids.tolist()))
         return failed
 
     def forward(self, env_ids: Any = None) -> None:
@@ -146,17 +173,21 @@ class BatchSim(PerEnvModels):
         ids = _batch_ids(env_ids, self.num_envs)
         try:
             self.batch.forward(ids, stage=_VEL)
-        except mjbatch.SimulationError:
-            pass
+        except mjbatch.SimulationError as err:  # reported by the next step of every env
+            self._pending_failed = sorted(set(self._pending_failed) | {int(i) for i in err.ids})
         self._dirty[_np_ids(env_ids, self.num_envs)] = False
 
     def reset(self, env_ids: Any = None) -> None:
-        """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls)."""
+        """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls);
+        failures of theirs not reported yet are dropped."""
         ids = _batch_ids(env_ids, self.num_envs)
         # no forward here: resets are followed by state writes; derived fields are
         # recomputed lazily when next read (or before the next step)
         self.batch.reset(ids, stage=int(mujoco.mjtStage.mjSTAGE_NONE))
         self.mark_dirty(env_ids)
+        if self._pending_failed:  # a reset state has nothing left to report
+            reset = set(_np_ids(env_ids, self.num_envs).tolist())
+            self._pending_failed = [i for i in self._pending_failed if i not in reset]
 
     def error(self, env_id: int) -> str:
         return self.batch.error(int(env_id))
@@ -171,6 +202,17 @@ class BatchSim(PerEnvModels):
             base = getattr(self.model, name)
             values = np.broadcast_to(base, (self.num_envs,) + base.shape)
         return values
+
+    def declare_per_env(self, names: Iterable[str]) -> None:
+        """Give model fields per-env values now (``Batch.expand``; with per-env models every
+        field already is)."""
+        if self.env_models is None:
+            for name in names:
+                self.batch.expand(name)
+
+    def is_per_env(self, name: str) -> bool:
+        """Whether model field ``name`` holds per-env values (expanded, or per-env models)."""
+        return self.env_models is not None or self.batch.expanded(name) is not None
 
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
@@ -208,88 +250,6 @@ class BatchSim(PerEnvModels):
         self.batch.expand("body_inertia")[sel] *= ratio
         self.batch.expand("body_mass")[sel] = mass
         self.mark_const_dirty(rows, (("body_mass", bodies), ("body_inertia", bodies)))
-
-    def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
-        """Note that constant inputs of ``env_ids`` changed (written directly into
-        expanded fields); ``mj_setConst`` runs once before they are next used.
-
-        ``fields`` (``(name, index)`` pairs of what was written) lets a write of only
-        free bodies' masses and inertial frames, or of geoms' collision filters, take
-        the closed form (:mod:`embodichain_core.sim.free_body_const`); without it the
-        full one runs.
-        """
-        ids = _np_ids(env_ids, self.num_envs)
-        fields = None if fields is None else list(fields)
-        if fields is not None and self._all_closed_form_fields(fields):
-            self._closed_form_dirty[ids] = True
-            self._closed_form_fields.update(name for name, _ in fields)
-        else:
-            self._const_dirty[ids] = True
-        self._const_pending = True
-
-    def _all_closed_form_fields(self, fields: Iterable[tuple[str, Any]]) -> bool:
-        for name, index in fields:
-            if not self._closed_form_field(name, index):
-                return False
-        return True
-
-    def _closed_form_field(self, name: str, index: Any) -> bool:
-        """Whether a write of ``name[index]`` is one the closed form absorbs."""
-        if not self._fast_constants or self.env_models is not None:
-            return False
-        if name in FILTER_FIELDS:  # any geom's: only the bodies' aggregate filters follow
-            return True
-        if name not in INERTIAL_FIELDS:
-            return False
-        eligible = self._eligible_bodies()
-        if isinstance(index, (int, np.integer)):
-            return bool(eligible[index])
-        if isinstance(index, np.ndarray) and index.dtype.kind in "iu":
-            return bool(eligible[index].all())
-        bodies = _index_bodies(index)
-        return bodies is not None and bool(eligible[bodies].all())
-
-    def _eligible_bodies(self) -> np.ndarray:
-        """``(nbody,)`` mask of the free bodies whose constants have a closed form."""
-        if self._free_bodies is None:
-            self._free_bodies = np.zeros(self.model.nbody, dtype=bool)
-            self._free_bodies[eligible_bodies(self.model)] = True
-        return self._free_bodies
-
-    def flush_const(self) -> None:
-        """Recompute MuJoCo's derived constants once for every env whose inputs changed.
-
-        Deferred from :meth:`set_model_field` so that a reset writing several fields
-        (mass, centre of mass, light position) pays for one call; run automatically
-        before stepping, forward and ``get_model``/``get_data``. Envs where only free
-        bodies' inertial properties changed get them in closed form
-        (:mod:`embodichain_core.sim.free_body_const`); the others run
-        ``mj_setConst`` on the whole model.
-        """
-        if not self._const_pending:
-            return
-        self._const_pending = False
-        full = np.flatnonzero(self._const_dirty)
-        fast = np.flatnonzero(self._closed_form_dirty & ~self._const_dirty)
-        self._const_dirty[:] = False
-        self._closed_form_dirty[:] = False
-        written, self._closed_form_fields = self._closed_form_fields, set()
-        if len(fast) and not self._free_body_constants().update(fast, written):
-            full = np.union1d(full, fast).astype(np.int64)  # a case the closed form does not cover
-        if not len(full):
-            return
-        if self.env_models is not None:
-            self._set_const_models(full)
-            self.batch.set_models(self.env_models)
-        else:
-            self.batch.set_const(_batch_ids(full, self.num_envs))
-
-    def _free_body_constants(self) -> FreeBodyConstants:
-        """The closed-form constants of the eligible free bodies (built on first use)."""
-        if self._free_const is None:
-            bodies = np.flatnonzero(self._eligible_bodies()).tolist()
-            self._free_const = FreeBodyConstants(self.model, self.batch, bodies)
-        return self._free_const
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
         """The model env ``env_id`` runs on (for rendering or any mj_ function).

@@ -38,7 +38,7 @@ import mujoco
 import mujoco.batch as mjbatch
 import numpy as np
 
-from embodichain_core.sim.free_body_geometry import (
+from embodichain_core.sim.backend.free_body_geometry import (
     GEOMETRY_FIELDS, GeomLayout, body_sameframe, member_sameframe, null_quat, null_vec, quat_to_mat,
 )
 

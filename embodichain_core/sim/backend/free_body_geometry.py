@@ -1,4 +1,4 @@
-"""Geometry of the free bodies of :mod:`embodichain_core.sim.free_body_const`, with
+"""Geometry of the free bodies of :mod:`embodichain_core.sim.backend.free_body_const`, with
 MuJoCo's definitions: rotations as ``mju_quat2Mat``, the ``*_sameframe`` rules
 (tolerance 1e-6), body sizes (``dof_length``) and the bounding-volume hierarchy
 (boxes in each body's inertial frame). Everything that depends only on the geoms

@@ -197,7 +197,7 @@ class Articulation(Entity):
         unlimited), as numpy: the cheap form for hot paths (a new array each call)."""
         cols = self._jids_np(joint_ids)
         n = self.num_envs if env_ids is None else len(self._ids(env_ids))
-        if self.sim.env_models is None and self.sim.batch.expanded("jnt_range") is None:
+        if not self.sim.is_per_env("jnt_range"):
             if self._shared_limits is None:  # one value for every env, until randomized per env
                 jnt = np.asarray(self._joint_ids)
                 rng = np.array(self.scene.model.jnt_range[jnt])
@@ -212,7 +212,7 @@ class Articulation(Entity):
 
     def get_qvel_limits(self) -> torch.Tensor:
         """(N, dof) velocity limits from the drive config (``max_velocity``)."""
-        from embodichain_core.sim.builder_articulation import joint_value
+        from embodichain_core.sim.scene_build.builder_articulation import joint_value
 
         vals = [joint_value(self.cfg.drive_pros.max_velocity, j, "drive_pros.max_velocity") for j in self.joint_names]
         vals = [v if np.isfinite(v) else 1e10 for v in vals]

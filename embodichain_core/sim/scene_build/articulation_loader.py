@@ -4,7 +4,7 @@ The returned spec can be attached into a scene spec (``frame.attach_body(spec.wo
 .first_body(), prefix, "")`` or ``scene.attach(spec, frame=frame, prefix=prefix)``): every asset
 file path is made absolute, so nothing depends on the working directory or on the parent's
 ``meshdir``, and meshes MuJoCo cannot decode (PLY, GLB, glTF, DAE) are loaded with
-:mod:`embodichain_core.sim.mesh` and stored in the spec as user vertices and faces.
+:mod:`embodichain_core.sim.scene_build.mesh` and stored in the spec as user vertices and faces.
 
 URDF specifics:
 
@@ -31,7 +31,7 @@ from typing import Any, NamedTuple
 
 import mujoco
 
-from embodichain_core.sim.mesh import MUJOCO_NATIVE_SUFFIXES, load_mesh, set_user_mesh
+from embodichain_core.sim.scene_build.mesh import MUJOCO_NATIVE_SUFFIXES, load_mesh, set_user_mesh
 
 URDF_COMPILER_DEFAULTS = {"fusestatic": "false", "discardvisual": "false"}
 _PACKAGE_SEARCH_LEVELS = 8

@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.sim.builder import EntityRecord, SceneBuilder
+from embodichain_core.sim.scene_build.builder import EntityRecord, SceneBuilder
 from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg
 from embodichain_core.utils.math import init_pos_from_cfg, init_quat_from_cfg
 

@@ -9,8 +9,8 @@ import mujoco
 import numpy as np
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.sim.builder_articulation import ALL_COLLISION_BITS
-from embodichain_core.sim.builder import COLLISION_GROUP, VISUAL_GROUP, EntityRecord, SceneBuilder
+from embodichain_core.sim.scene_build.builder_articulation import ALL_COLLISION_BITS
+from embodichain_core.sim.scene_build.builder import COLLISION_GROUP, VISUAL_GROUP, EntityRecord, SceneBuilder
 from embodichain_core.sim.cfg import RigidObjectCfg, RigidObjectGroupCfg
 from embodichain_core.sim.shapes import CapsuleCfg, CubeCfg, CylinderCfg, MeshCfg, SphereCfg
 from embodichain_core.utils.math import init_pos_from_cfg, init_quat_from_cfg
@@ -159,9 +159,9 @@ def _primitive_size(shape: Any, scale: np.ndarray) -> list[float]:
 
 
 def _add_mesh_shape(builder, body, cfg, shape, name, scale, material, path) -> dict:
-    from embodichain_core.sim.convex import collision_parts
+    from embodichain_core.sim.scene_build.convex import collision_parts
     from embodichain_core.sim.data import get_data_path
-    from embodichain_core.sim.mesh import load_mesh
+    from embodichain_core.sim.scene_build.mesh import load_mesh
 
     try:
         fpath = get_data_path(shape.fpath)

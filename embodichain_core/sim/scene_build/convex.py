@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from embodichain_core.sim.mesh import MeshData, convex_hull, is_convex, mesh_hash, split_components
+from embodichain_core.sim.scene_build.mesh import MeshData, convex_hull, is_convex, mesh_hash, split_components
 
 ENV_CACHE_DIR = "EMBODICHAIN_CACHE_DIR"
 METHODS = ("coacd", "hull")
@@ -223,11 +223,11 @@ def decompose_file(
     Example:
         >>> print(decompose_file("drawer.urdf").format_table())  # doctest: +SKIP
     """
-    from embodichain_core.sim.mesh import load_mesh
+    from embodichain_core.sim.scene_build.mesh import load_mesh
 
     path = os.fspath(path)
     if path.lower().endswith(".urdf"):
-        from embodichain_core.sim.articulation_loader import urdf_mesh_files
+        from embodichain_core.sim.scene_build.articulation_loader import urdf_mesh_files
 
         files = urdf_mesh_files(path)
     else:

@@ -18,7 +18,7 @@ def spec_from_cfg(cfg: Any) -> mujoco.MjSpec:
             raise ConfigError("mjcf", f"invalid MJCF for {cfg.uid!r}: {err}") from err
     if not getattr(cfg, "fpath", None):
         raise ConfigError("fpath", f"{type(cfg).__name__} {cfg.uid!r} needs 'fpath' (URDF/MJCF) or 'mjcf'")
-    from embodichain_core.sim.articulation_loader import load_articulation_spec
+    from embodichain_core.sim.scene_build.articulation_loader import load_articulation_spec
     from embodichain_core.sim.data import get_data_path
 
     return load_articulation_spec(get_data_path(cfg.fpath))

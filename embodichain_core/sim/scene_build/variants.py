@@ -31,7 +31,7 @@ from typing import Any, Optional, Sequence
 import mujoco
 import numpy as np
 
-from embodichain_core.sim.builder import VISUAL_GROUP
+from embodichain_core.sim.scene_build.builder import VISUAL_GROUP
 
 ALL_BITS = (1 << 30) - 1
 PARKED = 1 << 30  # collides with nothing, but compiled as a colliding geom
@@ -41,8 +41,8 @@ HIDDEN_MATERIAL = "embodichain/hidden"
 def load_variant_parts(cfg: Any, fpath: str, factor: Optional[Sequence[float]] = None) -> tuple[Any, list]:
     """Visual mesh and collision parts of ``fpath`` with ``cfg``'s scale and options,
     times ``factor`` (the parts are scaled, not decomposed again)."""
-    from embodichain_core.sim.convex import collision_parts
-    from embodichain_core.sim.mesh import load_mesh
+    from embodichain_core.sim.scene_build.convex import collision_parts
+    from embodichain_core.sim.scene_build.mesh import load_mesh
 
     shape = cfg.shape
     mesh = load_mesh(fpath, scale=tuple(cfg.body_scale), compute_uv=shape.compute_uv,
@@ -70,7 +70,7 @@ def scale_key(factor: Sequence[float]) -> str:
 def add_variants(builder: Any, uid: str, files: list[str], factors: Optional[list[Sequence[float]]] = None) -> list[str]:
     """Add the geoms of every file in ``files`` (or of the object's mesh scaled by each of
     ``factors``) to ``uid``'s body, disabled; return their keys."""
-    from embodichain_core.sim.builder_objects import add_collision_geoms, add_mesh_asset
+    from embodichain_core.sim.scene_build.builder_objects import add_collision_geoms, add_mesh_asset
 
     record = builder.record(uid)
     cfg = record.cfg
@@ -113,7 +113,7 @@ def _hidden_material(spec: mujoco.MjSpec) -> None:
 def _inertials(builder: Any, uid: str, model: mujoco.MjModel) -> None:
     """Each variant's mass, centre of mass and inertia, as MuJoCo computes them (a scaled
     variant keeps the object's mass: its inertia scales along)."""
-    from embodichain_core.sim.builder_objects import add_collision_geoms
+    from embodichain_core.sim.scene_build.builder_objects import add_collision_geoms
 
     record = builder.record(uid)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, uid)

@@ -8,7 +8,7 @@ import pytest
 from embodichain_assets import DATA_ROOT, generate, textures
 from embodichain_assets.pngread import read_png
 from embodichain_assets.writers import obj_bytes, ply_bytes, png_bytes
-from embodichain_core.sim.mesh import load_mesh
+from embodichain_core.sim.scene_build.mesh import load_mesh
 
 
 @pytest.fixture(scope="module")

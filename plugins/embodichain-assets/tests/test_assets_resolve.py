@@ -10,7 +10,7 @@ import pytest
 from embodichain_assets import DATA_ROOT, catalog
 from embodichain_assets.pngread import read_png
 from embodichain_core.sim.data import DataPathNotFoundError, data_roots, get_data_path
-from embodichain_core.sim.mesh import MESH_SUFFIXES, is_closed, is_convex, load_mesh, split_components
+from embodichain_core.sim.scene_build.mesh import MESH_SUFFIXES, is_closed, is_convex, load_mesh, split_components
 
 # the names exactly as the seed tutorial (modular_env.py) writes them
 SEED_TUTORIAL_NAMES = [
@@ -95,7 +95,7 @@ def test_table_and_object_dimensions():
 
 
 def test_drawer_urdf_keeps_links_and_joint_range():
-    from embodichain_core.sim.articulation_loader import joint_dynamics, list_joints, load_articulation_spec
+    from embodichain_core.sim.scene_build.articulation_loader import joint_dynamics, list_joints, load_articulation_spec
 
     spec = load_articulation_spec(get_data_path(catalog.DRAWER))
     assert [b.name for b in spec.bodies] == ["world", "outer_box", "inner_drawer", "handle_xpos"]

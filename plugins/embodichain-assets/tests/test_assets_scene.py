@@ -28,7 +28,7 @@ def _geom_world_z(scene, body: str) -> tuple[float, float]:
 
 
 def _half_thickness(fpath: str) -> float:
-    from embodichain_core.sim.mesh import load_mesh
+    from embodichain_core.sim.scene_build.mesh import load_mesh
 
     lo, hi = load_mesh(fpath, scale=seed_scene.FORK_SCALE).bounds
     return float(hi[2] - lo[2]) / 2.0

@@ -1,24 +1,21 @@
-"""Simulation helpers: batched per-env model writes and stepping a subset of envs.
+"""Simulation helpers: batched per-env model writes and stepping a subset of envs, all
+through the core's simulation interface (``env.sim``,
+:class:`~embodichain_core.sim.backend.SimBackend`).
 
-``BatchSim`` defers ``mj_setConst`` after writes of a field
-that MuJoCo derives constants from (masses, positions...). A functor writing
-several such fields would pay it several times; :func:`write_model` writes all
-fields of one call and runs ``mj_setConst`` once, for the envs written.
+The backend defers the recompute of derived constants after writes of a field
+that MuJoCo derives them from (masses, positions...): :func:`write_model` writes
+every field of one call and the recompute runs once, before the envs are next used.
 """
 
 from __future__ import annotations
 
 from typing import Any, Iterable, Sequence
 
-import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.env_rows import batch_ids, field_selector, np_ids
+from embodichain_core.sim.backend import field_selector, np_ids
 from embodichain_core.utils.math import matrix_to_pose
-
-_SETCONST = frozenset(mujoco.MjModel._setconst_inputs)
-_VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 
 Write = tuple[str, Any, Any]
 """``(field name, index into the field, values)`` (values broadcast to ``(n,) + field[index]``)."""
@@ -33,10 +30,10 @@ def _numpy(values: Any) -> np.ndarray:
 
 
 def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool = True) -> None:
-    """Write per-env model fields of ``env_ids``; at most one ``mj_setConst`` per call.
+    """Write per-env model fields of ``env_ids``; one deferred constants update per call.
 
     Args:
-        sim: the env's :class:`BatchSim`.
+        sim: the env's simulation backend (``env.sim``).
         env_ids: envs to write (long tensor or array).
         writes: ``(name, index, values)`` triples; an ``index`` list selects several
             elements (values then have shape ``(n, k, ...)``).
@@ -45,13 +42,8 @@ def write_model(sim: Any, env_ids: Any, writes: Iterable[Write], set_const: bool
     ids = np_ids(env_ids, sim.num_envs)
     if len(ids) == 0:
         return
-    const_fields = []
-    for name, index, values in writes:
-        sim.set_model_field(name, ids, index, _numpy(values), set_const=False)
-        if name in _SETCONST:
-            const_fields.append((name, index))
-    if const_fields and set_const:
-        sim.mark_const_dirty(ids, const_fields)  # one deferred constants update for every write of a reset
+    for name, index, values in writes:  # the backend schedules the constants update, run once
+        sim.set_model_field(name, ids, index, _numpy(values), set_const=set_const)
     sim.mark_dirty(ids)
 
 
@@ -65,17 +57,16 @@ def base_model_value(scene: Any, name: str, index: Any) -> np.ndarray:
     return np.array(getattr(scene.model, name)[index])
 
 
-def step_envs(env: Any, env_ids: Any, nsteps: int) -> None:
-    """Advance only ``env_ids`` by ``nsteps`` physics steps (the others keep their state)."""
+def step_envs(env: Any, env_ids: Any, nsteps: int) -> list[int]:
+    """Advance only ``env_ids`` by ``nsteps`` physics steps (the others keep their state).
+
+    Returns:
+        The envs that diverged. The backend reports them again at the env's next step,
+        which truncates and resets them (``info["diverged"]``, a ``RuntimeWarning``).
+    """
     if nsteps <= 0:
-        return
-    sim = env.sim
-    ids = np_ids(env_ids, sim.num_envs)
-    sim.forward(ids)  # stepping starts from up-to-date derived fields
-    try:
-        sim.batch.step(batch_ids(ids, sim.num_envs), nstep=int(nsteps) * sim.substeps, stage=_VEL)
-    except Exception:  # a diverging env surfaces as non-finite state on the env's next step
-        pass
+        return []
+    return env.sim.step(int(nsteps), env_ids=np_ids(env_ids, env.sim.num_envs))
 
 
 def pose7_from_matrix(mat: torch.Tensor) -> torch.Tensor:

@@ -42,7 +42,7 @@ def test_uniform_draws_one_row_per_env_from_its_episode_stream() -> None:
 
 
 def test_write_model_defers_one_constants_update_for_the_written_envs(build, monkeypatch) -> None:
-    from embodichain_core.sim.free_body_const import FreeBodyConstants
+    from embodichain_core.sim.backend.free_body_const import FreeBodyConstants
 
     env = build()
     full, closed = [], []

@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.builder import GROUND_UID
+from embodichain_core.sim.scene_build.builder import GROUND_UID
 from embodichain_core.sim.sensor_base import BaseSensor
 from embodichain_core.utils.suggest import did_you_mean
 from embodichain_sensors.envs import EnvReader

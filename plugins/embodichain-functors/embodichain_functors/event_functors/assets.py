@@ -12,7 +12,7 @@ import torch
 from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.data import get_data_path
 from embodichain_core.sim.entities.group import RigidObjectGroup
-from embodichain_core.sim.mesh import MESH_SUFFIXES
+from embodichain_core.sim.scene_build.mesh import MESH_SUFFIXES
 
 from embodichain_functors._common import ParamError, as_range, check_positive, entity_of, env_ids_of, randint, \
     uniform, validated

@@ -20,7 +20,7 @@ import torch
 
 from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.sim.entities.rigid_object import RigidObject
-from embodichain_core.sim.variants import scale_key
+from embodichain_core.sim.scene_build.variants import scale_key
 
 from embodichain_functors._common import ParamError, as_range, check_positive, entity_of, env_ids_of, uniform
 from embodichain_functors._functor import CheckedFunctor

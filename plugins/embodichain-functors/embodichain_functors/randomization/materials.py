@@ -16,7 +16,7 @@ from typing import Any, Optional
 import mujoco
 import numpy as np
 
-from embodichain_core.sim.builder import GROUND_UID
+from embodichain_core.sim.scene_build.builder import GROUND_UID
 from embodichain_core.sim.data import get_data_path
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.group import RigidObjectGroup

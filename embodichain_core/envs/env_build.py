@@ -1,0 +1,140 @@
+"""Construction of an :class:`~embodichain_core.envs.embodied_env.EmbodiedEnv`, by role.
+
+The env's ``__init__`` runs these in order: :func:`resolve_cfg` (config and keyword
+overrides) -> :func:`setup_scene` (extensions, scene, robot, active joints, default
+action space) -> :func:`build_managers` (event manager + startup events, observation,
+reward, action, dataset managers) -> the first observation and the spaces ->
+:func:`action_checker` (the boundary check of ``step``). The loop itself (``step``,
+``reset``) lives in the env class, top to bottom.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Optional
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from embodichain_core.config.errors import ConfigError
+from embodichain_core.envs.action_check import ActionChecker
+from embodichain_core.envs.cfg import EnvCfg
+from embodichain_core.envs.scene_setup import filter_functors, resolve_active_joints
+from embodichain_core.managers.action_manager import ActionManager
+from embodichain_core.managers.dataset_manager import DatasetManager
+from embodichain_core.managers.event_manager import EventManager
+from embodichain_core.managers.observation_manager import ObservationManager
+from embodichain_core.managers.reward_manager import RewardManager
+from embodichain_core.utils.suggest import did_you_mean
+
+
+def resolve_cfg(cfg_cls: Any, cfg: Any, overrides: dict) -> Any:
+    """The env's own copy of ``cfg`` (``None``: ``cfg_cls()``; a dict: ``from_dict``) with
+    the keyword ``overrides`` set; a limit given to ``register_env`` replaces
+    ``max_episode_steps`` when the config leaves it at its class default.
+
+    Raises:
+        ConfigError: an override names no config field.
+    """
+    registered_limit = overrides.pop("_registered_max_episode_steps", None)
+    if cfg is None:
+        cfg = cfg_cls()
+    elif isinstance(cfg, dict):
+        cfg = cfg_cls.from_dict(cfg)
+    else:
+        cfg = cfg.copy()
+    if registered_limit is not None and cfg.max_episode_steps == EnvCfg().max_episode_steps:
+        cfg.max_episode_steps = int(registered_limit)
+    names = set(cfg.__dataclass_fields__)
+    for key, value in overrides.items():
+        if key not in names:
+            raise ConfigError(key, f"unknown env argument {key!r}.{did_you_mean(key, names)}")
+        setattr(cfg, key, value)
+    return cfg
+
+
+def bind_extensions(env: Any) -> None:
+    """Set ``cfg.extensions`` as env attributes (one that would hide a class attribute is an error)."""
+    for key, value in (env.cfg.extensions or {}).items():
+        if hasattr(type(env), key):
+            raise ConfigError(f"env.extensions.{key}", f"{key!r} would shadow the env attribute of the same name; "
+                                                       "rename it")
+        setattr(env, key, value)
+
+
+def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
+    """Validate, bind extensions, build the scene; resolve the robot, the active joints,
+    their drive targets and the default action space.
+
+    Args:
+        env: the env under construction.
+        build_scene: :func:`~embodichain_core.envs.scene_setup.build_scene`, as the env
+            module names it (the seam tests replace to prove nothing was built).
+
+    Returns:
+        The events config after the filters (for the event manager).
+    """
+    env.cfg.validate()
+    bind_extensions(env)
+    events = filter_functors(env.cfg, "events")
+    env.scene = build_scene(env, events)
+    env.robot = next(iter(env.scene.robots.values()))
+    env.sensors = env.scene.sensors
+    env.active_joint_ids = resolve_active_joints(env.cfg, env.robot)
+    aid = torch.as_tensor(env.active_joint_ids, dtype=torch.long)
+    env._active_qpos_adr = env.robot.qpos_adr[aid]
+    env._active_dof_adr = env.robot.dof_adr[aid]
+    # per command kind: (driven columns of the action, their actuator ids), resolved once
+    env._drive_targets = {
+        key: ((acts >= 0), acts[acts >= 0])
+        for key, acts in (("qpos", env.robot.pos_act[aid]), ("qvel", env.robot.vel_act[aid]))
+    }
+    limits = env.robot.get_qpos_limits()[0, aid].numpy()
+    env.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
+    return events
+
+
+def build_managers(env: Any, events: Any) -> None:
+    """Event manager (then the ``startup`` events), observation, reward, action and
+    dataset managers; ``pre`` action terms replace the action space."""
+    cfg = env.cfg
+    env.event_manager = EventManager(events, env)
+    env.event_manager.apply("startup", None)
+    env.observation_manager = ObservationManager(cfg.observations, env)
+    env.reward_manager = RewardManager(cfg.rewards, env)
+    env.action_manager = ActionManager(cfg.actions, env)
+    space = env.action_manager.single_action_space()
+    if space is not None:
+        env.single_action_space = space
+    dataset = filter_functors(cfg, "dataset")
+    if dataset is not None and not cfg.filter_dataset_saving:
+        manager = DatasetManager(dataset, env)
+        env.dataset_manager = manager if len(manager) else None
+
+
+def recorders_need_buffer(manager: Optional[DatasetManager]) -> bool:
+    """A recorder that reads ``env.rollout_buffer`` sets ``uses_rollout_buffer = True``."""
+    return manager is not None and any(getattr(e.func, "uses_rollout_buffer", False)
+                                       for e in manager.entries.values())
+
+
+def action_checker(env: Any) -> ActionChecker:
+    """The boundary check of ``step`` (see :mod:`embodichain_core.envs.action_check`).
+
+    Action terms take their own width (a dict by term name or input key); without
+    terms, joint commands take the active joints' or all joints' width (a dict by
+    ``qpos``/``qvel``/``qf``).
+    """
+    manager = env.action_manager
+    terms = manager.get_terms_by_mode("pre") if manager is not None else {}
+    if terms:
+        keys: dict[str, list[int]] = {}
+        for name, term in terms.items():
+            keys[name] = keys[term.input_key] = [term.action_dim]
+        dims = [t.action_dim for t in terms.values()]
+        detail = f"the action terms {list(terms)} take {dims} values in this order (total {sum(dims)})"
+        return ActionChecker(env.num_envs, [sum(dims)], env.device, env.action_space, keys, detail)
+    n_active = len(env.active_joint_ids)
+    widths = sorted({n_active, env.robot.dof}, key=lambda w: w != n_active)
+    return ActionChecker(env.num_envs, widths, env.device, env.action_space,
+                         {key: widths for key in ("qpos", "qvel", "qf")})
