@@ -1,0 +1,208 @@
+"""The driver of ``embodichain generate``: Ray, the episode queue, faults and progress.
+
+The queue of episode indices lives in the driver; each worker actor has one batch of
+``K`` episodes in flight and gets the next batch as soon as it returns, so a slow
+worker takes fewer episodes (dynamic load balancing). A batch whose worker died
+(``SIGKILL``, out of memory) goes back to the front of the queue; Ray restarts the
+actor (``max_restarts``), whose constructor builds a fresh env recording into a *new*
+shard folder. Episodes that a dead batch had already published are found again in the
+old shard and de-duplicated at the merge.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+from embodichain_ray.spec import GenerateSpec
+from embodichain_ray.worker import BatchResult
+
+log = logging.getLogger("embodichain_ray")
+
+
+@dataclass
+class WorkerStats:
+    """Per-worker counters for the summary table."""
+
+    episodes: int = 0
+    failures: int = 0
+    env_steps: int = 0
+    busy_s: float = 0.0
+    restarts: int = 0
+    dead: bool = False
+
+    @property
+    def steps_per_s(self) -> float:
+        """Env steps per second of this worker's batches."""
+        return self.env_steps / self.busy_s if self.busy_s > 0 else 0.0
+
+
+@dataclass
+class RunState:
+    """What the driver knows: saved and failed episodes, per-worker stats, timings, the outcome."""
+
+    saved: set = field(default_factory=set)
+    failed: dict = field(default_factory=dict)  # episode -> attempts
+    workers: list = field(default_factory=list)
+    env_steps: int = 0
+    start_s: float = 0.0
+    run_s: float = 0.0
+    error: str | None = None
+    merged: int = 0
+    merge_s: float = 0.0
+    code: int = 0
+
+    @property
+    def busy_steps_per_s(self) -> float:
+        """Env steps per second while the workers ran batches (startup excluded)."""
+        busy = max((w.busy_s for w in self.workers), default=0.0)
+        return self.env_steps / busy if busy > 0 else 0.0
+
+
+def init_ray(spec: GenerateSpec) -> None:
+    """Join ``spec.ray_address``, or start a small local Ray sized to the workers."""
+    import ray
+
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    if spec.ray_address:  # the cluster's own settings (token authentication included) apply
+        ray.init(address=spec.ray_address, log_to_driver=False, logging_level="ERROR")
+        return
+    os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a private instance: no token file in ~/.ray
+    ray.init(num_cpus=spec.workers, include_dashboard=False, object_store_memory=80 * 2**20,
+             log_to_driver=False, logging_level="ERROR", configure_logging=True)
+
+
+def start_workers(spec: GenerateSpec) -> list:
+    """One restartable actor per worker (1 CPU each).
+
+    Raises:
+        RuntimeError: the cluster has fewer CPUs than workers (an actor would wait forever).
+    """
+    import ray
+
+    cpus = int(ray.cluster_resources().get("CPU", 0))
+    if cpus < spec.workers:
+        raise RuntimeError(f"the Ray cluster has {cpus} CPU(s) for {spec.workers} worker(s) of 1 CPU each; "
+                           "lower --workers or add machines")
+
+    from embodichain_ray.worker import EpisodeWorker
+
+    cls = ray.remote(num_cpus=1, max_restarts=spec.max_restarts, max_task_retries=0)(EpisodeWorker)
+    return [cls.remote(spec, w) for w in range(spec.workers)]
+
+
+class Scheduler:
+    """Hands batches of episode indices to idle workers until every episode is done.
+
+    A worker whose batch failed because its process died gets a ``pid`` probe instead
+    of a batch; Ray answers it once the actor is back (restarted, counted once per
+    failure), then the worker gets batches again. A worker past its
+    ``max_restarts`` is dead; when every worker is dead the run stops.
+    """
+
+    def __init__(self, spec: GenerateSpec, actors: list, state: RunState, bar: Any):
+        self.spec, self.actors, self.state, self.bar = spec, actors, state, bar
+        self.queue: deque = deque(range(spec.episodes))
+        self.inflight: dict = {}  # ObjectRef -> (worker, batch); batch None: a pid probe
+        self.down: list = [False] * len(actors)
+        state.workers = [WorkerStats() for _ in actors]
+
+    def _submit(self, worker: int) -> None:
+        if not self.queue or self.state.workers[worker].dead:
+            return
+        batch = [self.queue.popleft() for _ in range(min(self.spec.num_envs, len(self.queue)))]
+        self.inflight[self.actors[worker].run.remote(batch)] = (worker, batch)
+
+    def _probe(self, worker: int) -> None:
+        self.inflight[self.actors[worker].pid.remote()] = (worker, None)
+
+    def run(self) -> None:
+        """Run to the end (raises ``KeyboardInterrupt`` on Ctrl-C, ``RuntimeError`` when all workers died)."""
+        import ray
+
+        for w in range(len(self.actors)):
+            self._submit(w)
+        while self.inflight:
+            ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=1.0)
+            for ref in ready:
+                worker, batch = self.inflight.pop(ref)
+                if self._collect(ref, worker, batch):
+                    self._submit(worker)
+                elif not self.state.workers[worker].dead:
+                    self._probe(worker)
+            if not self.inflight and self.queue:
+                raise RuntimeError(f"every worker died ({self.state.error}); {len(self.queue)} episode(s) "
+                                   "were not run")
+
+    def _collect(self, ref: Any, worker: int, batch: list | None) -> bool:
+        """Take a finished call's result; ``False`` when the worker is down (its batch re-queued)."""
+        import ray
+        from ray.exceptions import ActorDiedError, RayActorError
+
+        stats = self.state.workers[worker]
+        try:
+            value = ray.get(ref)
+        except RayActorError as err:  # the worker died (killed, out of memory): run its batch again
+            if batch is not None:
+                self.queue.extendleft(reversed(batch))
+            if not self.down[worker]:
+                self.down[worker], stats.restarts = True, stats.restarts + 1
+            if isinstance(err, ActorDiedError) and batch is None:  # past max_restarts, or it cannot start
+                stats.dead = True
+                self.state.error = f"worker {worker} is gone: {str(err).splitlines()[0]}"
+            return False
+        self.down[worker] = False
+        if batch is not None:
+            self._record(stats, value)
+        return True
+
+    def _record(self, stats: WorkerStats, result: BatchResult) -> None:
+        before = len(self.state.saved)
+        for outcome in result.outcomes:
+            if outcome.saved:
+                self.state.saved.add(outcome.episode)
+            else:
+                self.state.failed[outcome.episode] = outcome.attempts
+        stats.episodes += len(self.state.saved) - before
+        stats.failures += result.failed_attempts
+        stats.env_steps += result.env_steps
+        stats.busy_s += result.seconds
+        self.state.env_steps += result.env_steps
+        self.bar.update(len(self.state.saved) - before)
+        elapsed = time.perf_counter() - self.state.start_s
+        self.bar.set_postfix_str(f"{self.state.env_steps / max(elapsed, 1e-9):.1f} env-steps/s", refresh=False)
+
+
+def close_workers(actors: list, timeout: float = 120.0) -> None:
+    """Let every live worker finalize its shard (up to ``timeout`` s), then kill them all."""
+    import ray
+
+    refs = []
+    for worker, actor in enumerate(actors):
+        try:
+            refs.append(actor.close.remote())
+        except Exception as err:  # noqa: BLE001  (an actor gone for good: its shard is as it was left)
+            log.debug("worker %d cannot close: %r", worker, err)
+    if refs:
+        done, _ = ray.wait(refs, num_returns=len(refs), timeout=timeout)
+        for ref in done:
+            try:
+                ray.get(ref)
+            except Exception as err:  # noqa: BLE001  (a shard that failed to finalize keeps its episodes)
+                log.warning("a worker failed to close its shard: %r", err)
+    kill_workers(actors)
+
+
+def kill_workers(actors: list) -> None:
+    """Kill the actors for good (their shards keep every published episode)."""
+    import ray
+
+    for worker, actor in enumerate(actors):
+        try:
+            ray.kill(actor, no_restart=True)
+        except Exception as err:  # noqa: BLE001  (already gone)
+            log.debug("worker %d: %r", worker, err)
