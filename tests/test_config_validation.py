@@ -329,3 +329,11 @@ def test_the_loader_bounds_num_envs_before_the_env_allocates_anything() -> None:
     err = raise_path(load_gym_config, {**_file_cfg(), "num_envs": 10 ** 9})
     assert err.path == "num_envs" and "1000000" in err.reason
     assert raise_path(load_gym_config, _file_cfg(), {"num_envs": 0}).path == "num_envs"
+
+
+def test_init_qpos_of_the_wrong_length_names_the_key(make_env, make_cfg) -> None:
+    cfg = make_cfg()
+    cfg.robot.init_qpos = [0.0, 0.1]
+    with pytest.raises(ConfigError, match=r"^robot\.init_qpos: 'arm' has 9 joints") as err:
+        make_env(cfg)
+    assert "got 2 values" in str(err.value)

@@ -12,6 +12,7 @@ import mujoco
 import numpy as np
 import torch
 
+from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.entities.base import Entity, as_array, as_values, find_names
 from embodichain_core.utils.math import pose_to_matrix
 
@@ -34,7 +35,7 @@ class Articulation(Entity):
         self._init_mimic(record.extra.get("mimic", {}))
         self._init_drives(record.extra.get("driven", []), p)
         self._init_root(model)
-        self.default_qpos = self._default_qpos(model)
+        self.default_qpos = self._default_qpos(model, getattr(record, "path", "") or uid)
 
     # -- construction helpers ----------------------------------------------------------------
     def _init_mimic(self, mimic: dict) -> None:
@@ -74,16 +75,16 @@ class Articulation(Entity):
         self.root_qpos_adr = int(model.jnt_qposadr[jnt]) if self.is_floating else -1
         self.root_dof_adr = int(model.jnt_dofadr[jnt]) if self.is_floating else -1
 
-    def _default_qpos(self, model: mujoco.MjModel) -> torch.Tensor:
+    def _default_qpos(self, model: mujoco.MjModel, path: str) -> torch.Tensor:
+        """``init_qpos`` (one value per joint, checked here: the joint count is known only
+        after compile), else the model's ``qpos0``."""
         init = getattr(self.cfg, "init_qpos", None)
         if init is None:
             return torch.as_tensor(model.qpos0[self.qpos_adr.numpy()], dtype=torch.float64)
         init = torch.as_tensor(np.asarray(init, dtype=np.float64))
         if init.shape != (self.dof,):
-            raise ValueError(
-                f"{self.uid}: init_qpos has {init.numel()} values but the articulation has {self.dof} joints "
-                f"(in this order: {self.joint_names})"
-            )
+            raise ConfigError(f"{path}.init_qpos", f"{self.uid!r} has {self.dof} joints (in this order: "
+                                                   f"{self.joint_names}); got {init.numel()} values")
         return init
 
     # -- sizes and names --------------------------------------------------------------------------

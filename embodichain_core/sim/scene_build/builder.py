@@ -43,6 +43,7 @@ class EntityRecord:
     cfg: Any
     root_body: str | None = None
     extra: dict = field(default_factory=dict)
+    path: str = ""  # where its config sits (``robot``, ``articulation[1]``), for error messages
 
 
 class SceneBuilder:
@@ -106,7 +107,7 @@ class SceneBuilder:
         if uid in self.records:
             other = self.records[uid].kind
             raise ConfigError(f"{path}.uid", f"uid {uid!r} is already used by a {other}; uids must be unique")
-        record = EntityRecord(uid, kind, cfg)
+        record = EntityRecord(uid, kind, cfg, path=path)
         self.records[uid] = record
         return record
 
