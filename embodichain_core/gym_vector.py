@@ -1,9 +1,30 @@
-"""Gymnasium vector entry point for batched envs (kept import-light)."""
+"""Gymnasium vector entry point for batched envs, and an unbatched single-env wrapper
+for gymnasium's own vector envs (kept import-light: gymnasium, numpy and torch are
+imported when used).
+
+An embodichain env is already batched, so ``gym.make_vec(task_id, num_envs=N)`` builds one
+env with ``num_envs=N`` (:func:`make_vec_env`, the ``"vector_entry_point"`` mode, the
+default). gymnasium's ``"sync"`` and ``"async"`` modes instead stack N copies of
+``gym.make(task_id)``, each a batch of one (observations ``(1, ...)``, reward ``(1,)``),
+which gives ``(N, 1)`` rewards (async) and ``(N, 1, ...)`` spaces. Pass
+``wrappers=[UnbatchedEnv]`` to get gymnasium's single-env layout in those modes:
+
+Example:
+    >>> venv = gym.make_vec("PushCube-v1", num_envs=4, vectorization_mode="async",
+    ...                     wrappers=[UnbatchedEnv])  # doctest: +SKIP
+    >>> _, reward, *_ = venv.step(venv.action_space.sample())  # doctest: +SKIP
+    >>> reward.shape  # doctest: +SKIP
+    (4,)
+"""
 
 from __future__ import annotations
 
 import importlib
 from typing import Any
+
+import gymnasium as gym
+
+__all__ = ["make_vec_env", "UnbatchedEnv"]
 
 
 def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
@@ -13,9 +34,66 @@ def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
     num_envs=N, vectorization_mode="vector_entry_point")``).
     """
     module, _, attr = cls_path.partition(":")
-    cls = importlib.import_module(module)
+    cls: Any = importlib.import_module(module)
     for part in attr.split("."):
         cls = getattr(cls, part)
     kwargs.pop("vectorization_mode", None)
     kwargs.pop("vector_kwargs", None)
     return cls(num_envs=num_envs, **kwargs)
+
+
+def _row(value: Any) -> Any:
+    """Row 0 of a batched value as numpy, a Python scalar for ``(N,)`` values (dicts
+    recursively); other values unchanged."""
+    import numpy as np
+    import torch
+
+    if isinstance(value, dict):
+        return {k: _row(v) for k, v in value.items()}
+    if isinstance(value, torch.Tensor):
+        value = value.detach().cpu().numpy()
+    if isinstance(value, np.ndarray) and value.ndim:
+        row = value[0]
+        return row.item() if row.ndim == 0 else row
+    return value
+
+
+class UnbatchedEnv(gym.Wrapper):
+    """A ``num_envs=1`` embodichain env in gymnasium's single-env layout (numpy).
+
+    Observations, info values and spaces lose the batch dim; ``reward`` is a float and
+    ``terminated``/``truncated`` are bools; actions are ``(action_dim,)`` arrays. When an
+    episode ends the env has already reset itself (same-step autoreset): the observation
+    returned is the episode's last one (``info["final_obs"]``), and the caller (a gymnasium
+    vector env) resets as after any single env's episode.
+
+    Args:
+        env: the env, built with ``num_envs=1`` (``gym.make(task_id)``).
+    """
+
+    def __init__(self, env: gym.Env):
+        super().__init__(env)
+        batched: Any = env.unwrapped
+        if int(getattr(batched, "num_envs", 1)) != 1:
+            raise ValueError(f"UnbatchedEnv needs num_envs=1, got {batched.num_envs}")
+        self.observation_space = batched.single_observation_space
+        self.action_space = batched.single_action_space
+        self.metadata = {**env.metadata, "autoreset_mode": None}
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        """Reset; the observation and info without the batch dim."""
+        obs, info = self.env.reset(seed=seed, options=options)
+        return _row(obs), _row(info)
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Step with an ``(action_dim,)`` action (a batch of one is applied as is)."""
+        import numpy as np
+        import torch
+
+        batch = torch.as_tensor(np.asarray(action, dtype=np.float32)).reshape(1, -1)
+        out: Any = self.env.step(batch)
+        obs, reward, info = out[0], out[1], out[4]
+        terminated, truncated = bool(out[2][0]), bool(out[3][0])
+        if (terminated or truncated) and "final_obs" in info:
+            obs, info = info["final_obs"], info.get("final_info", info)
+        return _row(obs), float(reward[0]), terminated, truncated, _row(info)

@@ -1,0 +1,48 @@
+"""``gym.make_vec`` in every vectorization mode gives rewards and flags of shape
+``(num_envs,)``: the vector entry point (the batched env itself), and gymnasium's sync and
+async vector envs over ``UnbatchedEnv`` (single-env layout, last observation on done)."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+from embodichain_core.gym_vector import UnbatchedEnv
+
+pytestmark = pytest.mark.usefixtures("fixture_plugins")
+TASK = "FixtureReach-v0"  # 3 actions, 15-step episodes (tests/fixture_plugins)
+
+
+@pytest.mark.parametrize("mode, vector_kwargs", [("sync", {}), ("async", {"context": "spawn"})])
+def test_gymnasium_vector_envs_over_unbatched_envs(mode: str, vector_kwargs: dict) -> None:
+    venv = gym.make_vec(TASK, num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs,
+                        wrappers=[UnbatchedEnv], verbose=False)
+    try:
+        assert venv.single_action_space.shape == (3,) and venv.action_space.shape == (2, 3)
+        obs, _ = venv.reset(seed=0)
+        assert obs["object"]["cube_pos"].shape == (2, 3)
+        for step in range(1, 16):
+            obs, reward, terminated, truncated, _ = venv.step(np.zeros((2, 3), np.float32))
+            assert reward.shape == terminated.shape == truncated.shape == (2,)
+            assert truncated.tolist() == [step == 15] * 2
+    finally:
+        venv.close()
+
+
+def test_vector_entry_point_is_the_batched_env() -> None:
+    venv = gym.make_vec(TASK, num_envs=3, verbose=False)
+    _, reward, terminated, truncated, _ = venv.step(torch.zeros(3, 3))
+    assert reward.shape == terminated.shape == truncated.shape == (3,)
+    venv.close()
+
+
+def test_unbatched_env_layout_and_errors() -> None:
+    env = UnbatchedEnv(gym.make(TASK, verbose=False))
+    obs, info = env.reset(seed=0)
+    assert env.observation_space.contains(obs) and isinstance(info["success"], bool)
+    for _ in range(15):
+        obs, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
+    assert isinstance(reward, float) and truncated is True and isinstance(terminated, bool)
+    assert info["elapsed_steps"] == 15  # the info of the episode's last step, not of the reset
+    with pytest.raises(ValueError, match="num_envs=1"):
+        UnbatchedEnv(gym.make(TASK, num_envs=2, verbose=False))
