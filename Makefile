@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test setup system-deps bench docs clean
+.PHONY: run test lint setup system-deps bench docs clean
 
 $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml)
 	PYTHON=$(PYTHON) bash scripts/setup_env.sh
@@ -23,6 +23,10 @@ run: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)
+
+# Lint gate (ruff; rules in pyproject.toml [tool.ruff]).
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q tests $(wildcard plugins/*/tests)

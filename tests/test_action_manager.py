@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import torch
 
-from core_testlib import ARM_ACTIVE, zero_action
+from core_testlib import ARM_ACTIVE
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.managers import ActionTerm, ActionTermCfg
-from embodichain_core.sim.cfg import JointDrivePropertiesCfg, RobotCfg
+from embodichain_core.sim.cfg import JointDrivePropertiesCfg
 
 
 class ScaledQpos(ActionTerm):
@@ -164,11 +164,13 @@ def test_qvel_command_drives_velocity(make_env, make_cfg) -> None:
     action = torch.zeros(2, ARM_ACTIVE)
     action[:, 0] = torch.tensor([0.5, -0.8])  # joint1: vertical axis, no gravity load
     command = env.action_manager.process_action(action)
-    assert isinstance(command, dict) and set(command) == {"qvel"}  # a lone qvel term is not applied as qpos
+    assert isinstance(command, dict)
+    assert set(command) == {"qvel"}
     for _ in range(3):
         obs, *_ = env.step(action)
     assert obs["robot"]["qvel"][:, 0].tolist() == pytest.approx([0.5, -0.8], abs=0.02)
-    assert obs["robot"]["qpos"][0, 0] > 0.03 and obs["robot"]["qpos"][1, 0] < -0.05
+    assert obs["robot"]["qpos"][0, 0] > 0.03
+    assert obs["robot"]["qpos"][1, 0] < -0.05
 
 
 def test_qf_command_writes_applied_forces(make_env, make_cfg) -> None:
@@ -183,7 +185,8 @@ def test_qf_command_writes_applied_forces(make_env, make_cfg) -> None:
     dof = env.robot.dof_adr[env.active_joint_ids]
     assert torch.allclose(env.sim.qfrc_applied[:, dof], (action * 10.0).double())
     assert obs["robot"]["qf"][:, 0].tolist() == pytest.approx([2.0, -1.0])
-    assert obs["robot"]["qvel"][0, 0] > 0 and obs["robot"]["qvel"][1, 0] < 0  # the effort moved joint1
+    assert obs["robot"]["qvel"][0, 0] > 0
+    assert obs["robot"]["qvel"][1, 0] < 0
     assert torch.all(env.sim.ctrl == 0)  # no drive target was written
 
 

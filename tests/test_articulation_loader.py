@@ -63,11 +63,13 @@ def test_fixed_link_kept_and_joint_limits(tmp_path):
     assert [b.name for b in spec.bodies] == ["world", "outer_box", "inner_drawer", "handle_xpos"]
     assert list_joints(spec) == [JointInfo("slide_rails", "slide", (0.0, 0.2))]
     dyn = joint_dynamics(spec)["slide_rails"]
-    assert dyn["damping"] == pytest.approx(1.0) and dyn["frictionloss"] == pytest.approx(0.05)
+    assert dyn["damping"] == pytest.approx(1.0)
+    assert dyn["frictionloss"] == pytest.approx(0.05)
     assert dyn["actfrcrange"] == (-50.0, 50.0)
     model = spec.compile()
     handle = model.body("handle_xpos")
-    assert model.jnt_limited[0] and model.jnt_range[0].tolist() == [0.0, 0.2]
+    assert model.jnt_limited[0]
+    assert model.jnt_range[0].tolist() == [0.0, 0.2]
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     z_axis = data.xmat[handle.id].reshape(3, 3)[:, 2]
@@ -87,7 +89,9 @@ def test_existing_compiler_block_is_completed_not_overridden():
         '<robot name="drawer">', '<robot name="drawer"><mujoco><compiler discardvisual="true"/></mujoco>'
     )
     out = prepare_urdf(text, "/tmp")
-    assert 'discardvisual="true"' in out and 'fusestatic="false"' in out and 'strippath="false"' in out
+    assert 'discardvisual="true"' in out
+    assert 'fusestatic="false"' in out
+    assert 'strippath="false"' in out
     assert out.count("<mujoco>") == 1
 
 
@@ -116,7 +120,8 @@ def test_ply_meshes_are_injected_as_user_vertices(tmp_path):
     trimesh.creation.box((0.2, 0.2, 0.2)).export(tmp_path / "outer.ply")
     geometry = '<mesh filename="outer.ply" scale="2 1 1"/>'
     spec = load_articulation_spec(write(tmp_path / "drawer.urdf", drawer_urdf(geometry)))
-    assert spec.meshes and all(m.file == "" and len(m.uservert) > 0 for m in spec.meshes)
+    assert spec.meshes
+    assert all(m.file == "" and len(m.uservert) > 0 for m in spec.meshes)
     model = spec.compile()
     mesh = model.mesh_vert[model.mesh_vertadr[0]:model.mesh_vertadr[0] + model.mesh_vertnum[0]]
     assert np.ptp(mesh, axis=0).max() == pytest.approx(0.4, rel=1e-5)  # URDF scale still applies

@@ -66,18 +66,22 @@ def test_list_functors_table(catalog: str, capsys: pytest.CaptureFixture[str]) -
 
 def test_list_other_kinds(catalog: str, capsys: pytest.CaptureFixture[str]) -> None:
     tasks = _list(capsys, "tasks")
-    assert "EcCliTask-v0" in tasks and "ec_cli_tasks:Env" in tasks and " 77 " in tasks
+    assert "EcCliTask-v0" in tasks
+    assert "ec_cli_tasks:Env" in tasks
+    assert " 77 " in tasks
     assert "ec_robots.w1:DexforceW1Cfg" in _list(capsys, "robots")
     assert "ec_sensors:StereoCamera " in _list(capsys, "sensors") + " "
     assert "/data/ec-pack" in _list(capsys, "assets")
     commands = _list(capsys, "commands")
-    assert "run-env" in commands and "embodichain_core.cli.run_env:main" in commands
+    assert "run-env" in commands
+    assert "embodichain_core.cli.run_env:main" in commands
 
 
 def test_list_json_and_provider_filter(catalog: str, capsys: pytest.CaptureFixture[str]) -> None:
     rows = json.loads(_list(capsys, "functors", "--json", "--provider", "catalog"))
     assert [r["name"] for r in rows] == ["joint_pos", "randomize_light"]
-    assert rows[1]["kind"] == "event" and rows[1]["target"] == "json:dumps"
+    assert rows[1]["kind"] == "event"
+    assert rows[1]["target"] == "json:dumps"
     assert json.loads(_list(capsys, "functors", "--json", "--provider", "nobody")) == []
     plugins = {r["name"]: r for r in json.loads(_list(capsys, "plugins", "--json"))}
     assert plugins["catalog"]["registered"]["tasks"] == ["EcCliTask-v0"]
@@ -85,7 +89,8 @@ def test_list_json_and_provider_filter(catalog: str, capsys: pytest.CaptureFixtu
 
 def test_list_resolve_fills_descriptions(catalog: str, capsys: pytest.CaptureFixture[str]) -> None:
     rows = json.loads(_list(capsys, "functors", "--json", "--resolve"))
-    assert rows[0]["name"] == "joint_pos" and rows[0]["description"].startswith("Deserialize")
+    assert rows[0]["name"] == "joint_pos"
+    assert rows[0]["description"].startswith("Deserialize")
 
 
 def test_list_plugins_shows_failures(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
@@ -96,8 +101,10 @@ def test_list_plugins_shows_failures(monkeypatch: pytest.MonkeyPatch, capsys: py
     monkeypatch.setattr(manager, "_iter_entry_points", lambda: [ep])
     with pytest.warns(PluginLoadWarning), isolated_plugins(load_entry_points=True):
         out = _list(capsys, "plugins")
-    assert "embodichain-core" in out and "commands=5" in out
-    assert "broken-plugin" in out and "failed" in out
+    assert "embodichain-core" in out
+    assert "commands=5" in out
+    assert "broken-plugin" in out
+    assert "failed" in out
     assert "broken-plugin: ImportError: no module named 'missing_dep'" in out
 
 
@@ -127,7 +134,8 @@ def test_command_gets_argv_and_help(register_plugin: Any, monkeypatch: pytest.Mo
             register("hello", "ec_cli_cmd:cmd", help="Say hello")
 
     register_plugin(CommandPlugin())
-    assert main(["hello", "--help", "x"]) == 3 and seen == [["--help", "x"]]
+    assert main(["hello", "--help", "x"]) == 3
+    assert seen == [["--help", "x"]]
     assert main(["list", "--help"]) == 0  # reaches list's own parser (argparse exits 0)
 
 
@@ -155,10 +163,12 @@ def _run_cli(*args: str) -> subprocess.CompletedProcess[str]:
 def test_help_and_version_import_no_command_module() -> None:
     result = _run_cli("--help")
     assert result.returncode == 0, result.stderr
-    assert "run-env" in result.stdout and "decompose" in result.stdout
+    assert "run-env" in result.stdout
+    assert "decompose" in result.stdout
     assert "IMPORTED []" in result.stdout
     version = _run_cli("--version")
-    assert version.returncode == 0 and "embodichain-core " in version.stdout
+    assert version.returncode == 0
+    assert "embodichain-core " in version.stdout
     assert "IMPORTED []" in version.stdout
 
 

@@ -72,12 +72,16 @@ def test_json_and_yaml_load_to_equal_cfgs(tmp_path: Path) -> None:
     assert cfg_json == cfg_yaml == load_gym_config(data)[1]
     assert id_json == id_yaml == "LoaderTest-v0"
     assert extras_json == extras_yaml == {"id": "LoaderTest-v0", "max_episodes": 3, "demo_max_attempts": 3}
-    assert cfg_json.num_envs == 2 and cfg_json.max_episode_steps == 20 and cfg_json.seed == 1
+    assert cfg_json.num_envs == 2
+    assert cfg_json.max_episode_steps == 20
+    assert cfg_json.seed == 1
     assert isinstance(cfg_json.rigid_object[0].shape, CubeCfg)
     assert cfg_json.background[0].body_type == "static"  # background default
     assert cfg_json.light.direct[0].uid == "lamp"
     event = cfg_json.events["tick"]
-    assert isinstance(event, EventCfg) and event.is_global and event.interval_step == 2
+    assert isinstance(event, EventCfg)
+    assert event.is_global
+    assert event.interval_step == 2
     assert event.func == f"{__name__}:count_event"  # kept as given; managers resolve it
     assert cfg_json.dataset == {"robot_meta": {"robot_type": "Arm3"}}  # plain metadata kept
 
@@ -87,7 +91,9 @@ def test_cfg_from_file_builds_an_env() -> None:
     CALLS.clear()
     env = EmbodiedEnv(cfg)
     try:
-        assert env.num_envs == 2 and env.physics_dt == 0.005 and env.cfg.seed == 1
+        assert env.num_envs == 2
+        assert env.physics_dt == 0.005
+        assert env.cfg.seed == 1
         env.reset()
         for _ in range(4):
             env.step(torch.zeros(env.action_space.shape))
@@ -125,8 +131,10 @@ def test_every_cfg_field_is_settable_from_a_file() -> None:
         assert getattr(cfg, name) == ENV_FIELDS[name], name
     assert (cfg.sim_cfg.width, cfg.sim_cfg.cpu_num, cfg.sim_cfg.headless, cfg.sim_cfg.sim_device) == (320, 2, False, "cpu")
     assert (cfg.sim_cfg.gpu_id, cfg.sim_cfg.arena_space, cfg.sim_cfg.physics_dt) == (1, 3.0, 0.002)
-    assert cfg.sim_cfg.physics_substeps == 2 and cfg.sim_cfg.physics_config.gravity == (0, 0, -1.0)
-    assert cfg.sim_cfg.physics_config.solver == "CG" and cfg.sim_cfg.render_cfg.quality == "high"
+    assert cfg.sim_cfg.physics_substeps == 2
+    assert cfg.sim_cfg.physics_config.gravity == (0, 0, -1.0)
+    assert cfg.sim_cfg.physics_config.solver == "CG"
+    assert cfg.sim_cfg.render_cfg.quality == "high"
     assert cfg.sim_cfg.render_cfg.renderer == "rt"  # the flat key overrides render_cfg.renderer
     assert cfg.events["e"] == EventCfg(func="f", mode="interval", interval_step=3, is_global=True)
     assert cfg.observations["o"] == ObservationCfg(func="g", mode="add", name="task/goal", extra={"shape": [3]})
@@ -156,7 +164,8 @@ def test_unknown_or_misplaced_keys_name_path_and_suggest(mutate: Any, path: str,
     data = gym_config()
     mutate(data)
     err = config_error(data)
-    assert err.path == path and hint in str(err)
+    assert err.path == path
+    assert hint in str(err)
 
 
 @pytest.mark.parametrize("mutate, path", [
@@ -183,7 +192,8 @@ def test_missing_required_keys(key: str) -> None:
     data = gym_config()
     del data[key]
     err = config_error(data)
-    assert err.path == key and "missing required key" in str(err)
+    assert err.path == key
+    assert "missing required key" in str(err)
 
 
 def test_functor_name_typo_fails_at_env_construction_with_path(register_plugin: Any) -> None:
@@ -198,7 +208,8 @@ def test_functor_name_typo_fails_at_env_construction_with_path(register_plugin: 
     _, cfg, _ = load_gym_config(data)  # names are resolved by the managers, not the loader
     with pytest.raises(ConfigError) as info:
         EmbodiedEnv(cfg)
-    assert info.value.path == "env.events.tick.func" and "Did you mean 'count_event'" in str(info.value)
+    assert info.value.path == "env.events.tick.func"
+    assert "Did you mean 'count_event'" in str(info.value)
 
 
 def test_overrides_apply_only_when_given() -> None:
@@ -207,7 +218,9 @@ def test_overrides_apply_only_when_given() -> None:
     overrides = {"num_envs": 4, "seed": 9, "max_episodes": 5, "headless": False, "renderer": "fast", "id": "X-v1"}
     task_id, cfg, extras = load_gym_config(gym_config(), overrides)
     assert (cfg.num_envs, cfg.sim_cfg.num_envs, cfg.seed, extras["max_episodes"]) == (4, 4, 9, 5)
-    assert cfg.sim_cfg.headless is False and cfg.sim_cfg.render_cfg.renderer == "fast" and task_id == "X-v1"
+    assert cfg.sim_cfg.headless is False
+    assert cfg.sim_cfg.render_cfg.renderer == "fast"
+    assert task_id == "X-v1"
     with pytest.raises(ConfigError, match="Did you mean 'num_envs'"):
         apply_overrides(cfg, extras, {"num_env": 2})
 
@@ -245,13 +258,18 @@ def test_task_cfg_subclass_keeps_its_defaults() -> None:
         sim_steps_per_control: int = 2
 
     cfg, _ = gym_config_to_cfg(_without(gym_config()), TaskCfg)
-    assert isinstance(cfg, TaskCfg) and cfg.max_episode_steps == 77 and cfg.sim_steps_per_control == 2
+    assert isinstance(cfg, TaskCfg)
+    assert cfg.max_episode_steps == 77
+    assert cfg.sim_steps_per_control == 2
 
 
 def test_the_documented_example_loads() -> None:
     text = (Path(__file__).parents[1] / "docs" / "configuration.md").read_text()
     example = json.loads(text.split("```json\n", 1)[1].split("```", 1)[0])
     task_id, cfg, extras = load_gym_config(example)
-    assert task_id == "EmbodiChainDemo-v0" and extras["max_episodes"] == 4
-    assert cfg.sim_cfg.physics_dt == 0.005 and cfg.events["nudge"].is_global
-    assert cfg.actions["delta_qpos"].mode == "pre" and "robot_meta" in cfg.dataset
+    assert task_id == "EmbodiChainDemo-v0"
+    assert extras["max_episodes"] == 4
+    assert cfg.sim_cfg.physics_dt == 0.005
+    assert cfg.events["nudge"].is_global
+    assert cfg.actions["delta_qpos"].mode == "pre"
+    assert "robot_meta" in cfg.dataset

@@ -39,7 +39,8 @@ def raise_path(fn: Any, *args: Any, **kwargs: Any) -> ConfigError:
                                              (math.inf, "finite"), (True, "got bool"), (-1.0, "must be >= 0")])
 def test_check_number_rejects(value: Any, expected: str) -> None:
     err = raise_path(check_number, value, "attrs.mass", low=0.0)
-    assert err.path == "attrs.mass" and expected in err.reason
+    assert err.path == "attrs.mass"
+    assert expected in err.reason
 
 
 def test_check_vector_names_the_item_and_the_length() -> None:
@@ -56,7 +57,8 @@ def test_check_range_rules() -> None:
     assert "finite" in raise_path(check_range, [0, math.inf], "r").reason
     assert "in [0, 1]" in raise_path(check_range, [0.5, 1.5], "r", low=0.0, high=1.0).reason
     low, high = check_range([[0, 0, 0], [1, 2, 3]], "r", width=3)
-    assert low.tolist() == [0, 0, 0] and high.tolist() == [1, 2, 3]
+    assert low.tolist() == [0, 0, 0]
+    assert high.tolist() == [1, 2, 3]
 
 
 def test_check_int_bounds_and_types() -> None:
@@ -118,8 +120,10 @@ def test_light_ambient_and_group_values() -> None:
 
 # -- manager sections and event modes ---------------------------------------------------------------
 def test_close_modes_catches_typos_only() -> None:
-    assert close_modes("rset", ["reset"]) == ["reset"] and close_modes("intervall", ["interval"]) == ["interval"]
-    assert close_modes("Reset", ["reset"]) == ["reset"] and close_modes("rseet", ["reset"]) == ["reset"]
+    assert close_modes("rset", ["reset"]) == ["reset"]
+    assert close_modes("intervall", ["interval"]) == ["interval"]
+    assert close_modes("Reset", ["reset"]) == ["reset"]
+    assert close_modes("rseet", ["reset"]) == ["reset"]
     assert close_modes("attach", ["startup", "reset", "interval"]) == []
     assert close_modes("test", ["reset"]) == []
 
@@ -129,7 +133,8 @@ def test_close_modes_catches_typos_only() -> None:
 def test_a_typo_of_an_event_mode_is_an_error_with_the_suggestion(mode: str, suggestion: str) -> None:
     cfg = base_cfg(events={"move": EventCfg(func=nudge, mode=mode, params={"entity_cfg": {"uid": "cube"}})})
     err = raise_path(cfg.validate)
-    assert err.path == "env.events.move.mode" and f"Did you mean {suggestion!r}" in err.reason
+    assert err.path == "env.events.move.mode"
+    assert f"Did you mean {suggestion!r}" in err.reason
 
 
 def test_declared_custom_modes(make_env) -> None:
@@ -201,7 +206,8 @@ def test_modify_of_a_missing_observation_is_a_config_error_at_build(make_env) ->
     observations = {"twice": ObservationCfg(func=double, mode="modify", name="robot/joint_pos")}
     with pytest.raises(ConfigError) as err:
         make_env(observations=observations)
-    assert err.value.path == "env.observations.twice.name" and "mode 'modify'" in err.value.reason
+    assert err.value.path == "env.observations.twice.name"
+    assert "mode 'modify'" in err.value.reason
     env = make_env(observations={"twice": ObservationCfg(func=double, mode="modify", name="robot/qpos")})
     assert env.observation_manager.active_functors == ["twice"]
 
@@ -221,7 +227,9 @@ def test_modify_of_a_missing_observation_is_a_config_error_at_build(make_env) ->
 ])
 def test_named_params(params: dict, key: str, text: str) -> None:
     err = raise_path(check_named_params, params, "env.events.e", "f")
-    assert err.path == f"env.events.e.params.{key}" and text in err.reason and "functor 'f'" in err.reason
+    assert err.path == f"env.events.e.params.{key}"
+    assert text in err.reason
+    assert "functor 'f'" in err.reason
 
 
 def test_named_params_accept_relative_and_optional_ranges() -> None:
@@ -232,7 +240,8 @@ def test_named_params_accept_relative_and_optional_ranges() -> None:
 def test_param_types_follow_the_signature() -> None:
     check_param_types(nudge, {"relative": True, "entity_cfg": SceneEntityCfg(uid="cube")}, "e", 2)
     err = raise_path(check_param_types, nudge, {"relative": 1}, "env.events.e", 2)
-    assert err.path == "env.events.e.params.relative" and "true/false" in err.reason
+    assert err.path == "env.events.e.params.relative"
+    assert "true/false" in err.reason
 
 
 # -- memory estimate -------------------------------------------------------------------------------
@@ -252,15 +261,19 @@ def test_memory_estimate_counts_envs_and_sensor_buffers() -> None:
     cfg = base_cfg(sensor=[FakeCameraCfg(uid="cam")])
     small, large = estimate_memory(cfg, 2), estimate_memory(cfg, 20)
     assert large.parts["sensor[0] (FakeCamera)"] == 10 * small.parts["sensor[0] (FakeCamera)"] == 2 * 20 * 640 * 480 * 4
-    assert large.total > small.total and "simulation" in large.parts
+    assert large.total > small.total
+    assert "simulation" in large.parts
 
 
 def test_memory_limit_fails_fast_with_the_fields_to_change(monkeypatch) -> None:
     cfg = base_cfg(sensor=[FakeCameraCfg(uid="cam", width=4096, height=4096)], num_envs=64)
     monkeypatch.setenv(MEMORY_LIMIT_ENV, "1")
     err = raise_path(check_memory, cfg)
-    assert err.path == "sensor[0]" and "sensor[0].width" in err.reason and MEMORY_LIMIT_ENV in err.reason
-    assert "GB" in err.reason and "num_envs=64" in err.reason
+    assert err.path == "sensor[0]"
+    assert "sensor[0].width" in err.reason
+    assert MEMORY_LIMIT_ENV in err.reason
+    assert "GB" in err.reason
+    assert "num_envs=64" in err.reason
     monkeypatch.setenv(MEMORY_LIMIT_ENV, "0")  # disabled
     check_memory(cfg)
     monkeypatch.setenv(MEMORY_LIMIT_ENV, "lots")
@@ -320,14 +333,16 @@ def test_entity_uids_are_unique_before_the_build() -> None:
     cfg = base_cfg()
     cfg.background[0].uid = "cube"
     err = raise_path(cfg.validate)
-    assert err.path == "rigid_object[0].uid" and "background[0]" in err.reason
+    assert err.path == "rigid_object[0].uid"
+    assert "background[0]" in err.reason
     cfg.background[0].uid = "default_plane"
     assert "ground plane" in raise_path(cfg.validate).reason
 
 
 def test_the_loader_bounds_num_envs_before_the_env_allocates_anything() -> None:
     err = raise_path(load_gym_config, {**_file_cfg(), "num_envs": 10 ** 9})
-    assert err.path == "num_envs" and "1000000" in err.reason
+    assert err.path == "num_envs"
+    assert "1000000" in err.reason
     assert raise_path(load_gym_config, _file_cfg(), {"num_envs": 0}).path == "num_envs"
 
 

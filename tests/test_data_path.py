@@ -96,7 +96,8 @@ def test_plugin_roots_in_registration_order_and_callable_targets(roots):
 def test_folder_keeps_trailing_slash(roots):
     _touch(roots.env / "TableWare" / "tableware" / "fork" / "standard_fork_scale.ply")
     path = get_data_path("TableWare/tableware/fork/")
-    assert path.endswith("/fork/") and os.path.isdir(path)
+    assert path.endswith("/fork/")
+    assert os.path.isdir(path)
     assert get_data_path("TableWare/tableware/fork").endswith("/fork")
 
 

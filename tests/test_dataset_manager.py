@@ -78,13 +78,15 @@ def test_commits_successful_episodes_only(make_env, make_cfg) -> None:
     env, rec = make_recording_env(make_env, make_cfg)
     assert not env.dataset_manager.save_failed_episodes
     env.reset()
-    assert rec.saved == [] and rec.discarded == []
+    assert rec.saved == []
+    assert rec.discarded == []
     steps(env, 3)
     env.success_flags[0] = True
     env.step(zero_action(env))  # env 0 succeeds at its 4th step and is auto-reset
     env.success_flags[0] = False
     assert rec.saved == [(0, 4, "t")]
-    assert rec.frames[0] == [] and len(rec.frames[1]) == 4
+    assert rec.frames[0] == []
+    assert len(rec.frames[1]) == 4
     env.fail_flags[1] = True
     env.step(zero_action(env))  # env 1 fails at its 5th step: dropped
     assert rec.saved == [(0, 4, "t")]
@@ -133,7 +135,8 @@ def test_save_data_false_discards_even_successful_episodes(make_env, make_cfg) -
     steps(env, 2)
     env.success_flags[:] = True
     env.reset(options={"save_data": False})
-    assert rec.saved == [] and rec.discarded == [(0, 2), (1, 2)]
+    assert rec.saved == []
+    assert rec.discarded == [(0, 2), (1, 2)]
 
 
 def test_finalize_is_idempotent_and_never_commits_partial_episodes(make_env, make_cfg) -> None:

@@ -36,9 +36,12 @@ def test_mesh_file_first_run_then_cached(tmp_path, capsys):
     args = [str(tmp_path / "l_shape.ply"), "--max-hulls", "3", "--cache-dir", str(tmp_path / "cache")]
     assert main(args) == 0
     out = capsys.readouterr().out
-    assert "components" in out and "cached" in out
+    assert "components" in out
+    assert "cached" in out
     (row,) = table_rows(out)
-    assert row[:3] == ["l_shape.ply", "1", "0"] and 1 <= int(row[3]) <= 3 and row[4] == "no"
+    assert row[:3] == ["l_shape.ply", "1", "0"]
+    assert 1 <= int(row[3]) <= 3
+    assert row[4] == "no"
     assert main(args) == 0
     (row,) = table_rows(capsys.readouterr().out)
     assert row[4] == "yes"
@@ -59,15 +62,19 @@ def test_urdf_reports_every_mesh(tmp_path, capsys):
     assert main([str(urdf), "--max-hulls", "1", "--cache-dir", str(tmp_path / "c")]) == 0
     rows = table_rows(capsys.readouterr().out)
     assert [r[0] for r in rows] == ["box.stl", "l.obj"]
-    assert rows[0][1:4] == ["1", "1", "1"] and rows[1][1:4] == ["1", "0", "1"]
+    assert rows[0][1:4] == ["1", "1", "1"]
+    assert rows[1][1:4] == ["1", "0", "1"]
 
 
 def test_report_object(tmp_path):
     l_shape_mesh().export(tmp_path / "l.stl")
     report = decompose_file(tmp_path / "l.stl", max_convex_hull_num=2, cache_dir=tmp_path / "c")
     (row,) = report.rows
-    assert row.components == 1 and row.convex_components == 0 and 1 <= row.hulls <= 2
-    assert not row.cached and row.seconds >= 0
+    assert row.components == 1
+    assert row.convex_components == 0
+    assert 1 <= row.hulls <= 2
+    assert not row.cached
+    assert row.seconds >= 0
     assert report.format_table().splitlines()[0].split() == [
         "mesh", "components", "convex", "hulls", "cached", "time", "[s]"
     ]

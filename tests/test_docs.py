@@ -70,7 +70,8 @@ def registered(kind: str) -> list[str]:
 
 def load_generator() -> ModuleType:
     spec = importlib.util.spec_from_file_location("gen_cli_docs", REPO / "scripts" / "gen_cli_docs.py")
-    assert spec is not None and spec.loader is not None
+    assert spec is not None
+    assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -88,7 +89,8 @@ def test_nav_lists_every_page_once() -> None:
 def test_mkdocs_build_is_strict_and_passes(tmp_path: Path) -> None:
     pytest.importorskip("mkdocs", reason="mkdocs is in the test extra")
     config = yaml.safe_load((REPO / "mkdocs.yml").read_text())
-    assert config["strict"] is True and config["theme"]["name"] == "material"
+    assert config["strict"] is True
+    assert config["theme"]["name"] == "material"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     out = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
                          cwd=REPO, capture_output=True, text=True, timeout=300, env=env)
@@ -110,7 +112,9 @@ def test_cli_reference_covers_every_builtin_command_and_option() -> None:
     assert all(f"## `embodichain {name}`" in text for name in BUILTIN_COMMANDS)
     for sub in ("task", "functor"):
         assert f"### `embodichain new {sub}`" in text
-    assert "`--no-input`" in text and "`--kind`" in text and "`-o`, `--output-dir` `DIR`" in text
+    assert "`--no-input`" in text
+    assert "`--kind`" in text
+    assert "`-o`, `--output-dir` `DIR`" in text
     assert new_cmd.build_parser().prog == "embodichain new"
 
 
@@ -259,8 +263,9 @@ def make_run_mentions(page: Path) -> list[tuple[int, str]]:
 def test_make_run_is_documented_as_the_makefile_main_job() -> None:
     path, config, comment, command = main_job()
     task_id, num_envs = config["id"], config["num_envs"]
-    assert task_id in comment and f"{num_envs} envs" in comment, (
-        f"the Makefile's MAIN_JOB comment does not describe {path} ({task_id}, {num_envs} envs): {comment!r}")
+    message = f"the Makefile's MAIN_JOB comment does not describe {path} ({task_id}, {num_envs} envs): {comment!r}"
+    assert task_id in comment, message
+    assert f"{num_envs} envs" in comment, message
     mentions = [(page, n, unit) for page in CHECKED_PAGES for n, unit in make_run_mentions(page)]
     assert len({page for page, *_ in mentions}) >= 2, "README and getting_started must say what `make run` does"
     wrong = []

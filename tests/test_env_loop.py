@@ -51,7 +51,8 @@ def test_same_step_autoreset_keeps_the_final_observation(make_env, make_cfg) -> 
     assert moved[0, 0] > 0.1
     env.success_flags[0] = True
     obs, reward, terminated, truncated, info = env.step(target)
-    assert terminated.tolist() == [True, False] and truncated.tolist() == [False, False]
+    assert terminated.tolist() == [True, False]
+    assert truncated.tolist() == [False, False]
     assert info["_final_obs"].tolist() == [True, False]
     final = info["final_obs"]
     assert final["robot"]["qpos"][0, 0] > 0.1  # the terminal state, not the reset one
@@ -63,7 +64,8 @@ def test_same_step_autoreset_keeps_the_final_observation(make_env, make_cfg) -> 
     assert info["final_info"]["success"].tolist() == [True, False]
     env.success_flags[0] = False
     _, _, terminated, _, info = env.step(target)
-    assert terminated.tolist() == [False, False] and "final_obs" not in info
+    assert terminated.tolist() == [False, False]
+    assert "final_obs" not in info
 
 
 def test_truncation_is_per_env(make_env) -> None:
@@ -179,13 +181,16 @@ def test_no_seed_draws_one_and_records_it(make_env) -> None:
 # -- timing ---------------------------------------------------------------------------------------
 def test_timing_is_exact(make_env, make_cfg) -> None:
     env = make_env(make_cfg(sim_cfg=SimulationManagerCfg(physics_dt=0.006), sim_steps_per_control=7))
-    assert env.physics_dt == 0.006 and env.sim_steps_per_control == 7
+    assert env.physics_dt == 0.006
+    assert env.sim_steps_per_control == 7
     assert env.step_dt == pytest.approx(0.042, abs=1e-12)
     assert env.physics_frequency == pytest.approx(1 / 0.006)
     assert env.control_frequency == pytest.approx(1 / 0.042)
-    assert env.sim_freq == env.physics_frequency and env.control_freq == env.control_frequency
+    assert env.sim_freq == env.physics_frequency
+    assert env.control_freq == env.control_frequency
     assert env.metadata["render_fps"] == env.control_frequency
-    assert "render_fps" not in BaseEnv.metadata and "render_fps" not in EmbodiedEnv.metadata
+    assert "render_fps" not in BaseEnv.metadata
+    assert "render_fps" not in EmbodiedEnv.metadata
     env.reset()
     t0 = env.sim.batch.bind("time").copy()
     env.step(zero_action(env))
@@ -195,7 +200,8 @@ def test_timing_is_exact(make_env, make_cfg) -> None:
 
 def test_target_control_frequency(make_env, make_cfg) -> None:
     env = make_env(make_cfg(target_control_frequency=20, sim_steps_per_control=2))
-    assert env.sim_steps_per_control == 5 and env.step_dt == pytest.approx(0.05)
+    assert env.sim_steps_per_control == 5
+    assert env.step_dt == pytest.approx(0.05)
     assert env.cfg.sim_steps_per_control == 5
     with pytest.raises(ConfigError, match="cannot be represented exactly"):
         make_env(make_cfg(target_control_frequency=30))
@@ -219,14 +225,16 @@ def test_invalid_timing_raises(make_env, make_cfg, field: str, value: Any) -> No
 # -- construction ----------------------------------------------------------------------------------------
 def test_extensions_are_bound_onto_the_env(make_env) -> None:
     env = make_env(extensions={"success_threshold": 0.1, "goal_names": ["a", "b"]})
-    assert env.success_threshold == 0.1 and env.goal_names == ["a", "b"]
+    assert env.success_threshold == 0.1
+    assert env.goal_names == ["a", "b"]
     with pytest.raises(ConfigError, match=r"env\.extensions\.step"):
         make_env(extensions={"step": 1})
 
 
 def test_num_envs_from_sim_cfg(make_env, make_cfg) -> None:
     env = make_env(make_cfg(num_envs=1, sim_cfg=SimulationManagerCfg(num_envs=3)))
-    assert env.num_envs == 3 and env.cfg.num_envs == 3
+    assert env.num_envs == 3
+    assert env.cfg.num_envs == 3
     obs, _ = env.reset()
     assert obs["robot"]["qpos"].shape == (3, 7)
     assert env.action_space.shape == (3, 7)
@@ -279,7 +287,8 @@ def test_gym_make_without_time_limit(registered_id: str) -> None:
         env.reset()
         for k in range(1, 5):
             _, _, _, truncated, _ = env.step(zero_action(env.unwrapped))
-            assert isinstance(truncated, torch.Tensor) and truncated.shape == (2,)
+            assert isinstance(truncated, torch.Tensor)
+            assert truncated.shape == (2,)
             assert truncated.tolist() == ([True, True] if k == 4 else [False, False])
     finally:
         env.close()
@@ -385,10 +394,12 @@ def test_filter_visual_rand_with_registered_names(make_env) -> None:
 def test_active_joints_do_not_leak_between_envs(make_env) -> None:
     a = make_env()
     b = make_env(control_parts=None, active_joint_ids=[0, 2])
-    assert a.active_joint_ids == list(range(7)) and b.active_joint_ids == [0, 2]
+    assert a.active_joint_ids == list(range(7))
+    assert b.active_joint_ids == [0, 2]
     assert b.action_space.shape == (2, 2)
     c = make_env()
-    assert c.active_joint_ids == list(range(7)) and a.active_joint_ids == list(range(7))
+    assert c.active_joint_ids == list(range(7))
+    assert a.active_joint_ids == list(range(7))
     with pytest.raises(ConfigError, match="control_parts"):
         make_env(active_joint_ids=[0])  # together with control_parts
 

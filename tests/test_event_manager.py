@@ -120,7 +120,8 @@ def test_custom_mode_runs_only_when_applied(make_env) -> None:
     ids = torch.tensor([1])
     env.event_manager.apply("attach", ids)
     calls = [c for c in call_log(env) if c[0] == "attach"]
-    assert len(calls) == 1 and calls[0][2] is ids
+    assert len(calls) == 1
+    assert calls[0][2] is ids
     assert "attach" in env.event_manager.available_modes
 
 

@@ -70,7 +70,8 @@ def test_make_vec_uses_the_batched_env():
     env = gym.make_vec("FixtureReach-v0", num_envs=2, vectorization_mode="vector_entry_point", verbose=False)
     obs, _ = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(torch.zeros(2, 3))
-    assert reward.shape == (2,) and env.num_envs == 2
+    assert reward.shape == (2,)
+    assert env.num_envs == 2
     env.close()
 
 
@@ -81,13 +82,15 @@ def test_episode_limit_truncates_every_env():
         _, _, _, truncated, _ = env.step(torch.zeros(2, 3))
         assert not truncated.any()
     _, _, _, truncated, info = env.step(torch.zeros(2, 3))
-    assert truncated.all() and info["_final_obs"].all()
+    assert truncated.all()
+    assert info["_final_obs"].all()
     assert (env.elapsed_steps == 0).all()
 
 
 def test_plugin_robot_and_data_root_resolve():
     cfg = RobotCfg.from_dict({"class_type": "FixtureArm", "init_pos": [0, 0, 0.1]})
-    assert type(cfg).__name__ == "FixtureArmCfg" and cfg.init_pos == (0, 0, 0.1)
+    assert type(cfg).__name__ == "FixtureArmCfg"
+    assert cfg.init_pos == (0, 0, 0.1)
     assert "fixture_nudge_cube" in get_registry("functors")
     from embodichain_core.sim.data import get_data_path
 

@@ -144,7 +144,8 @@ def test_other_writes_take_the_full_path(monkeypatch):
     _write((fast, full), model, "box", [2], rng)
     fast.flush_const()
     full.flush_const()
-    assert len(calls) == 1 and list(calls[0]) == [0, 1]
+    assert len(calls) == 1
+    assert list(calls[0]) == [0, 1]
     got, want = _derived(fast), _derived(full)
     for name in DERIVED:
         np.testing.assert_allclose(got[name], want[name], rtol=1e-12, atol=1e-14, err_msg=name)
@@ -207,7 +208,8 @@ def test_collision_filters_and_inertia_of_a_swapped_part_skip_mj_set_const(monke
     _assert_same(fast, full)
     for name in ("body_contype", "body_conaffinity"):
         np.testing.assert_array_equal(fast.model_field(name), full.model_field(name), err_msg=name)
-    assert fast.model_field("body_contype")[0, box] == 5 and fast.model_field("body_contype")[3, box] == 10
+    assert fast.model_field("body_contype")[0, box] == 5
+    assert fast.model_field("body_contype")[3, box] == 10
 
 
 def test_a_per_env_armature_takes_the_full_path(monkeypatch):

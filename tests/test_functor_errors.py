@@ -47,14 +47,16 @@ def test_unknown_param_names_functor_and_path(make_env) -> None:
     with pytest.raises(ConfigError) as err:
         make_env(events=nudge(entity_cfg=CUBE, offset=0.1, ofset=0.2))
     assert err.value.path == "env.events.nudge.params.ofset"
-    assert "nudge_cube" in err.value.reason and "Did you mean 'offset'" in err.value.reason
+    assert "nudge_cube" in err.value.reason
+    assert "Did you mean 'offset'" in err.value.reason
 
 
 def test_missing_param_names_functor_and_param(make_env) -> None:
     with pytest.raises(ConfigError) as err:
         make_env(events=nudge(entity_cfg=CUBE))
     assert err.value.path == "env.events.nudge.params"
-    assert "nudge_cube" in err.value.reason and "offset" in err.value.reason
+    assert "nudge_cube" in err.value.reason
+    assert "offset" in err.value.reason
     assert "axis" not in err.value.reason  # defaulted params are optional
 
 
@@ -69,7 +71,8 @@ def test_param_errors_in_other_sections(make_env) -> None:
 
     with pytest.raises(ConfigError) as err:
         make_env(rewards={"r": RewardCfg(func=reward)})
-    assert err.value.path == "env.rewards.r.params" and "target" in err.value.reason
+    assert err.value.path == "env.rewards.r.params"
+    assert "target" in err.value.reason
 
 
 def test_kwargs_functor_accepts_any_params(make_env) -> None:
@@ -89,7 +92,8 @@ class ScaledNudge(Functor):
 def test_class_functor_params(make_env) -> None:
     with pytest.raises(ConfigError) as err:
         make_env(events={"s": EventCfg(func=ScaledNudge, mode="reset", params={"scale": 1.0, "bias": 0})})
-    assert err.value.path == "env.events.s.params.bias" and "ScaledNudge" in err.value.reason
+    assert err.value.path == "env.events.s.params.bias"
+    assert "ScaledNudge" in err.value.reason
     env = make_env(events={"s": EventCfg(func=ScaledNudge, mode="reset", params={"scale": 3.0})})
     env.reset()
     assert env.scaled == [3.0]
@@ -148,7 +152,8 @@ def test_unknown_uid_suggests_the_closest(make_env) -> None:
     with pytest.raises(ConfigError) as err:
         make_env(events=nudge(entity_cfg=SceneEntityCfg(uid="cueb"), offset=0.1))
     assert err.value.path == "env.events.nudge.params.entity_cfg.uid"
-    assert "'cueb'" in err.value.reason and "Did you mean 'cube'" in err.value.reason
+    assert "'cueb'" in err.value.reason
+    assert "Did you mean 'cube'" in err.value.reason
 
 
 def test_entity_dict_and_nested_entities_are_resolved(make_env) -> None:
@@ -158,10 +163,12 @@ def test_entity_dict_and_nested_entities_are_resolved(make_env) -> None:
     with pytest.raises(ConfigError) as err:
         make_env(events={"p": EventCfg(func=pair, mode="reset",
                                        params={"targets": [SceneEntityCfg(uid="cube"), SceneEntityCfg(uid="tabel")]})})
-    assert err.value.path == "env.events.p.params.targets[1].uid" and "'table'" in err.value.reason
+    assert err.value.path == "env.events.p.params.targets[1].uid"
+    assert "'table'" in err.value.reason
     env = make_env(events=nudge(entity_cfg={"uid": "cube"}, offset=0.1))
     resolved = env.event_manager.get_functor_cfg("nudge").params["entity_cfg"]
-    assert isinstance(resolved, SceneEntityCfg) and resolved.uid == "cube"
+    assert isinstance(resolved, SceneEntityCfg)
+    assert resolved.uid == "cube"
 
 
 def test_joint_names_resolve_to_ids(make_env) -> None:

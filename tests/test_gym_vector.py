@@ -18,7 +18,8 @@ def test_gymnasium_vector_envs_over_unbatched_envs(mode: str, vector_kwargs: dic
     venv = gym.make_vec(TASK, num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs,
                         wrappers=[UnbatchedEnv], verbose=False)
     try:
-        assert venv.single_action_space.shape == (3,) and venv.action_space.shape == (2, 3)
+        assert venv.single_action_space.shape == (3,)
+        assert venv.action_space.shape == (2, 3)
         obs, _ = venv.reset(seed=0)
         assert obs["object"]["cube_pos"].shape == (2, 3)
         for step in range(1, 16):
@@ -39,10 +40,13 @@ def test_vector_entry_point_is_the_batched_env() -> None:
 def test_unbatched_env_layout_and_errors() -> None:
     env = UnbatchedEnv(gym.make(TASK, verbose=False))
     obs, info = env.reset(seed=0)
-    assert env.observation_space.contains(obs) and isinstance(info["success"], bool)
+    assert env.observation_space.contains(obs)
+    assert isinstance(info["success"], bool)
     for _ in range(15):
         obs, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
-    assert isinstance(reward, float) and truncated is True and isinstance(terminated, bool)
+    assert isinstance(reward, float)
+    assert truncated is True
+    assert isinstance(terminated, bool)
     assert info["elapsed_steps"] == 15  # the info of the episode's last step, not of the reset
     with pytest.raises(ValueError, match="num_envs=1"):
         UnbatchedEnv(gym.make(TASK, num_envs=2, verbose=False))

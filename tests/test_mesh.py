@@ -92,8 +92,10 @@ def test_load_round_trip_with_scale(tmp_path, suffix):
     path = tmp_path / f"box{suffix}"
     box.export(path)
     mesh = load_mesh(path, scale=(2.0, 1.0, 0.5))
-    assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.int32
-    assert mesh.vertices.shape[1] == 3 and len(mesh.faces) == 12
+    assert mesh.vertices.dtype == np.float64
+    assert mesh.faces.dtype == np.int32
+    assert mesh.vertices.shape[1] == 3
+    assert len(mesh.faces) == 12
     np.testing.assert_allclose(mesh.bounds, [[-0.2, -0.05, -0.0125], [0.2, 0.05, 0.0125]], atol=1e-6)
     assert mesh.volume == pytest.approx(0.4 * 0.1 * 0.025, rel=1e-5)
 
@@ -118,9 +120,12 @@ def test_mirroring_scale_keeps_outward_faces():
 def test_compute_uv_box_projection(tmp_path):
     trimesh.creation.icosphere(2).export(tmp_path / "sphere.ply")
     mesh = load_mesh(tmp_path / "sphere.ply", compute_uv=True)
-    assert mesh.texcoords is not None and mesh.texcoords.shape == (len(mesh.vertices), 2)
-    assert mesh.texcoords.min() >= -1e-9 and mesh.texcoords.max() <= 1 + 1e-9
-    assert len(split_components(mesh)) == 1 and is_closed(mesh)  # duplicated seams stay connected
+    assert mesh.texcoords is not None
+    assert mesh.texcoords.shape == (len(mesh.vertices), 2)
+    assert mesh.texcoords.min() >= -1e-9
+    assert mesh.texcoords.max() <= 1 + 1e-9
+    assert len(split_components(mesh)) == 1
+    assert is_closed(mesh)
 
 
 def test_planar_projection_needs_no_duplicates():
@@ -200,12 +205,15 @@ def test_single_hull_uses_convex_hull_without_coacd(tmp_path, monkeypatch):
 def test_coacd_runs_once_then_cache_hits(tmp_path, coacd_calls):
     mesh = grid_prism(L_SHAPE)
     first = decompose(mesh, max_convex_hull_num=4, cache_dir=tmp_path)
-    assert coacd_calls == [4] and not first.cached
-    assert 1 <= len(first.parts) <= 4 and all(is_convex(p) for p in first.parts)
+    assert coacd_calls == [4]
+    assert not first.cached
+    assert 1 <= len(first.parts) <= 4
+    assert all(is_convex(p) for p in first.parts)
     files = list(tmp_path.rglob("*"))
     assert [f.suffix for f in files if f.is_file()] == [".npz"]  # no temporary file left over
     second = decompose(grid_prism(L_SHAPE), max_convex_hull_num=4, cache_dir=tmp_path)
-    assert coacd_calls == [4] and second.cached
+    assert coacd_calls == [4]
+    assert second.cached
     assert len(second.parts) == len(first.parts)
     for a, b in zip(first.parts, second.parts):
         np.testing.assert_array_equal(a.vertices, b.vertices)
@@ -234,7 +242,8 @@ def test_corrupt_cache_is_recomputed(tmp_path, coacd_calls):
     (cached,) = list(tmp_path.rglob("*.npz"))
     cached.write_bytes(b"garbage")
     again = decompose(mesh, max_convex_hull_num=2, cache_dir=tmp_path)
-    assert not again.cached and len(coacd_calls) == 2
+    assert not again.cached
+    assert len(coacd_calls) == 2
 
 
 def test_unknown_method_is_an_error():

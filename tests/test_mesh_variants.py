@@ -1,6 +1,5 @@
 """Per-env mesh variants: envs of one batch run different meshes of one object."""
 
-import numpy as np
 import torch
 import trimesh
 
@@ -51,6 +50,7 @@ def test_unreserved_variant_is_a_clear_error(tmp_path):
     try:
         scene.set_mesh_variant("obj", other, env_ids=[0])
     except ValueError as err:
-        assert "reserve_mesh_variants" in str(err) and "obj" in str(err)
+        assert "reserve_mesh_variants" in str(err)
+        assert "obj" in str(err)
     else:
         raise AssertionError("expected a ValueError")

@@ -116,7 +116,8 @@ def test_add_terms_are_weighted_and_info_is_unweighted(make_env) -> None:
     })
     env.reset()
     _, reward, _, _, info = env.step(zero_action(env))
-    assert reward.shape == (3,) and reward.dtype == torch.float32
+    assert reward.shape == (3,)
+    assert reward.dtype == torch.float32
     assert torch.allclose(reward, torch.tensor([0.5 * 2 + 1.0, 0.5 * 2 - 3 + 1.0, 0.5 * 2 - 6 + 1.0]))
     assert set(info["rewards"]) == {"c", "i", "s"}
     assert torch.allclose(info["rewards"]["c"], torch.full((3,), 2.0))
@@ -203,12 +204,14 @@ def test_class_functors_reset_with_reset_ids(make_env) -> None:
     obs_functor = env.observation_manager.get_functor("cached")
     rew_functor = env.reward_manager.get_functor("progress")
     env.reset()
-    assert obs_functor.resets == [[0, 1, 2]] and rew_functor.resets == [[0, 1, 2]]
+    assert obs_functor.resets == [[0, 1, 2]]
+    assert rew_functor.resets == [[0, 1, 2]]
     for _ in range(3):
         obs, reward, *_ = env.step(zero_action(env))
     assert reward.tolist() == [3.0, 3.0, 3.0]
     obs, _ = env.reset(options={"reset_ids": [1]})
-    assert obs_functor.resets[-1] == [1] and rew_functor.resets[-1] == [1]
+    assert obs_functor.resets[-1] == [1]
+    assert rew_functor.resets[-1] == [1]
     # env 1's cache was cleared, so it was recomputed at the reset's observation
     assert obs["cached"][:, 0].tolist() == [1.0, 1.0, 1.0]
     assert env.observation_manager.get_functor("cached").cache[:, 0].tolist() == [1.0, 1.0, 1.0]

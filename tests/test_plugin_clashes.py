@@ -181,7 +181,8 @@ def test_both_plugins_load_and_qualified_names_resolve(
             functors = pm.registry("functors")
             assert functors.get("ecclash-alpha:shared_event") is alpha.shared_event
             assert functors.get("ecclash-beta:shared_event") is beta.shared_event
-            assert functors.get("alpha_only") is alpha.alpha_only and functors.get("beta_only") is beta.beta_only
+            assert functors.get("alpha_only") is alpha.alpha_only
+            assert functors.get("beta_only") is beta.beta_only
             assert get_registry("robots").get("ecclash-beta:ClashArmCfg") is beta.ArmCfg
             assert get_registry("sensors").get("ecclash-alpha:clashcam") is alpha.CamCfg
             assert get_registry("commands").get("ecclash-beta:hello") is beta.hello
@@ -315,8 +316,10 @@ def test_unregistering_one_provider_makes_the_bare_name_unique(
         unregister_plugin("ecclash-alpha")
         assert pm.registry("functors").entry("shared_event").provider == "ecclash-beta"
         assert gym.registry["ClashTask-v0"].entry_point == "ecclash_beta:ClashEnv"
-        assert "ecclash-alpha/ClashTask-v0" not in gym.registry and pm.name_clashes() == []
-    assert "ClashTask-v0" not in gym.registry and "ecclash-beta/ClashTask-v0" not in gym.registry
+        assert "ecclash-alpha/ClashTask-v0" not in gym.registry
+        assert pm.name_clashes() == []
+    assert "ClashTask-v0" not in gym.registry
+    assert "ecclash-beta/ClashTask-v0" not in gym.registry
 
 
 def test_register_env_never_replaces_a_plugin_id(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path]) -> None:
@@ -343,17 +346,20 @@ def test_command_clash(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Pa
     with isolated_plugins(load_entry_points=True):
         assert main(["run-env", "ClashTask-v0", "--preview", "--quiet"]) == 2  # a config error, no traceback
         err = capsys.readouterr().err
-        assert "task 'ClashTask-v0' is ambiguous" in err and "Traceback" not in err
+        assert "task 'ClashTask-v0' is ambiguous" in err
+        assert "Traceback" not in err
         assert main(["hello"]) == 2
         err = capsys.readouterr().err
-        assert "command 'hello' is ambiguous" in err and "'ecclash-alpha:hello' or 'ecclash-beta:hello'" in err
+        assert "command 'hello' is ambiguous" in err
+        assert "'ecclash-alpha:hello' or 'ecclash-beta:hello'" in err
         assert main(["ecclash-alpha:hello", "y"]) == 0
         assert "hello from alpha ['y']" in capsys.readouterr().out
         assert main(["ecclash-alpha:helo"]) == 2
         assert "Did you mean 'ecclash-alpha:hello'" in capsys.readouterr().err
         assert main(["--help"]) == 0
         help_text = capsys.readouterr().out
-        assert "ecclash-beta:hello" in help_text and "ambiguous: provided by ecclash-alpha, ecclash-beta" in help_text
+        assert "ecclash-beta:hello" in help_text
+        assert "ambiguous: provided by ecclash-alpha, ecclash-beta" in help_text
 
 
 def test_entry_point_name_declared_by_two_distributions(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
@@ -400,7 +406,8 @@ def test_list_shows_clashes_and_providers(monkeypatch: pytest.MonkeyPatch, dist_
         lines = capsys.readouterr().out.splitlines()
         assert lines[0].split()[:4] == ["NAME", "KIND", "CATEGORY", "PROVIDER"]
         rows = [line.split() for line in lines if line.startswith("shared_event")]
-        assert [r[:2] for r in rows] == [["shared_event", "*"]] * 2 and [r[4] for r in rows] == [
+        assert [r[:2] for r in rows] == [["shared_event", "*"]] * 2
+        assert [r[4] for r in rows] == [
             "ecclash-alpha", "ecclash-beta"]
         assert next(line for line in lines if line.startswith("beta_only")).split()[3] == "ecclash-beta"
         assert "  ecclash-beta:shared_event  (ecclash-beta)" in lines

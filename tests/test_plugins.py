@@ -116,7 +116,8 @@ def test_builtins_and_idempotent_load(plugin_manager: Any) -> None:  # noqa: F81
     commands = plugin_manager.registry("commands")
     assert {"list", "run-env", "decompose", "new", "bench"} <= set(commands.names())
     assert commands.entry("list").provider == CORE_PLUGIN_NAME
-    assert commands.entry("run-env").lazy and not commands.entry("run-env").resolved
+    assert commands.entry("run-env").lazy
+    assert not commands.entry("run-env").resolved
     assert [i.name for i in list_plugins()] == [CORE_PLUGIN_NAME]
     plugin_manager.check_pending()
 
@@ -129,10 +130,13 @@ def test_failing_plugin_reported_others_load(monkeypatch: pytest.MonkeyPatch) ->
             assert pm.registry("functors").names() == ["joint_pos", "randomize_light"]
             (name, tb), = failed_plugins()
             infos = {i.name: i for i in list_plugins()}
-    assert name == "bad-plugin" and "Traceback" in tb and "cannot import name 'thing'" in tb
+    assert name == "bad-plugin"
+    assert "Traceback" in tb
+    assert "cannot import name 'thing'" in tb
     assert infos["bad-plugin"].status == "failed"
     assert infos["bad-plugin"].error_summary.startswith("ImportError: cannot import name")
-    assert infos["good-plugin"].status == "loaded" and infos["good-plugin"].version == "1.2.3"
+    assert infos["good-plugin"].status == "loaded"
+    assert infos["good-plugin"].version == "1.2.3"
     assert infos["good-plugin"].registered == {"functors": ["randomize_light", "joint_pos"]}
     assert "Traceback" in str(record[0].message)
 
@@ -158,7 +162,8 @@ def test_clash_across_plugins_keeps_both(monkeypatch: pytest.MonkeyPatch, revers
                 CORE_PLUGIN_NAME: "loaded", "plugin-a": "loaded", "plugin-b": "loaded"}
             assert functors.get("plugin-a:randomize_light") is json.dumps
             assert functors.get("plugin-b:randomize_light") is json.loads
-            assert functors.get("reach_reward") is json.dumps and functors.get("joint_pos") is json.loads
+            assert functors.get("reach_reward") is json.dumps
+            assert functors.get("joint_pos") is json.loads
             with pytest.raises(AmbiguousNameError, match="'plugin-a' and 'plugin-b'"):
                 functors.get("randomize_light")
             assert [str(c) for c in pm.name_clashes()] == [
@@ -189,7 +194,8 @@ def test_block_env_var(monkeypatch: pytest.MonkeyPatch) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with _load_with(monkeypatch, blocked) as pm:
-            assert blocked.loaded == 0 and len(pm.registry("functors")) == 0
+            assert blocked.loaded == 0
+            assert len(pm.registry("functors")) == 0
             assert {i.name: i.status for i in list_plugins()}["blocked-plugin"] == "blocked"
 
 
@@ -221,8 +227,10 @@ def test_register_and_unregister_plugin(plugin_manager: Any) -> None:  # noqa: F
     name = register_plugin(FunctorPlugin())
     assert name.endswith("FunctorPlugin")
     entry = plugin_manager.registry("functors").entry("randomize_light")
-    assert entry.provider == name and is_visual_randomization("randomize_light")
-    assert not is_visual_randomization("joint_pos") and not is_visual_randomization("nope")
+    assert entry.provider == name
+    assert is_visual_randomization("randomize_light")
+    assert not is_visual_randomization("joint_pos")
+    assert not is_visual_randomization("nope")
     unregister_plugin(name)
     assert len(plugin_manager.registry("functors")) == 0
 
@@ -244,7 +252,8 @@ def test_module_plugin_and_helpers(plugin_manager: Any, tmp_path: Path) -> None:
     import json
 
     assert get_sensor_classes("camera") == (json.JSONDecoder, json.JSONEncoder)
-    assert get_asset_root("pack") == tmp_path == get_asset_root("pack") and calls == [1]
+    assert get_asset_root("pack") == tmp_path == get_asset_root("pack")
+    assert calls == [1]
 
 
 def test_tasks_reach_gymnasium_without_time_limit(plugin_manager: Any) -> None:  # noqa: F811
@@ -252,12 +261,15 @@ def test_tasks_reach_gymnasium_without_time_limit(plugin_manager: Any) -> None: 
 
     register_plugin(TaskPlugin(), name="tasks-plugin")
     spec = gymnasium.registry["EcTestTask-v0"]
-    assert spec.entry_point == "ec_test_tasks:TestEnv" and spec.max_episode_steps is None
+    assert spec.entry_point == "ec_test_tasks:TestEnv"
+    assert spec.max_episode_steps is None
     assert spec.kwargs == {"a": 1, "_registered_max_episode_steps": 123}
-    assert spec.disable_env_checker and not spec.order_enforce
+    assert spec.disable_env_checker
+    assert not spec.order_enforce
     assert gymnasium.registry["EcTestTaskNoLimit-v0"].kwargs == {}
     entry = plugin_manager.registry("tasks").entry("EcTestTask-v0")
-    assert entry.meta["max_episode_steps"] == 123 and entry.provider == "tasks-plugin"
+    assert entry.meta["max_episode_steps"] == 123
+    assert entry.provider == "tasks-plugin"
 
 
 def test_isolation_removes_gym_ids_and_restores_state() -> None:
@@ -288,7 +300,8 @@ def test_nested_isolation_shadows_and_restores_the_outer_gym_ids() -> None:
             register_plugin(OtherTaskPlugin(), name="inner")
             assert gymnasium.registry["EcTestTask-v0"].entry_point == "other_pkg:OtherEnv"
         assert gymnasium.registry["EcTestTask-v0"] is outer_spec
-        assert "inner/EcTestTask-v0" not in gymnasium.registry and "outer/EcTestTask-v0" in gymnasium.registry
+        assert "inner/EcTestTask-v0" not in gymnasium.registry
+        assert "outer/EcTestTask-v0" in gymnasium.registry
     assert "EcTestTask-v0" not in gymnasium.registry
 
 

@@ -42,10 +42,14 @@ def test_add_get_and_queries() -> None:
     entry = reg.add("randomize_light", _randomize_light, provider="plugin-a", meta={"kind": "event"})
     assert reg.get("randomize_light") is _randomize_light
     assert reg.entry("randomize_light") is entry
-    assert "randomize_light" in reg and "other" not in reg
-    assert reg.names() == ["randomize_light"] and reg.entries() == [entry]
-    assert entry.provider == "plugin-a" and entry.meta["kind"] == "event"
-    assert len(reg) == 1 and list(reg) == ["randomize_light"]
+    assert "randomize_light" in reg
+    assert "other" not in reg
+    assert reg.names() == ["randomize_light"]
+    assert reg.entries() == [entry]
+    assert entry.provider == "plugin-a"
+    assert entry.meta["kind"] == "event"
+    assert len(reg) == 1
+    assert list(reg) == ["randomize_light"]
 
 
 def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -57,16 +61,20 @@ def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pyte
     assert reg.get("plugin-a:randomize_light") is json.loads
     assert reg.get("plugin-b:randomize_light") is json.dumps
     assert reg.get("joint_pos") is json.JSONDecoder  # unique bare names still resolve
-    assert reg.names() == ["joint_pos", "randomize_light"] and len(reg) == 3
+    assert reg.names() == ["joint_pos", "randomize_light"]
+    assert len(reg) == 3
     assert reg.clashes() == {"randomize_light": ["plugin-a", "plugin-b"]}
-    assert "randomize_light" in reg and "plugin-a:randomize_light" in reg and "plugin-a:joint_pos" not in reg
+    assert "randomize_light" in reg
+    assert "plugin-a:randomize_light" in reg
+    assert "plugin-a:joint_pos" not in reg
     with pytest.raises(AmbiguousNameError) as info:
         reg.get("randomize_light")
     assert str(info.value) == (
         "functor 'randomize_light' is ambiguous: it is provided by 'plugin-a' and 'plugin-b'. Use a "
         "qualified name: 'plugin-a:randomize_light' or 'plugin-b:randomize_light'; or prefer one provider "
         "with EMBODICHAIN_PLUGIN_PRIORITY=plugin-a,plugin-b (first listed wins).")
-    assert info.value.providers == ["plugin-a", "plugin-b"] and not isinstance(info.value, KeyError)
+    assert info.value.providers == ["plugin-a", "plugin-b"]
+    assert not isinstance(info.value, KeyError)
     monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated, plugin-b,plugin-a")
     assert reg.get("randomize_light") is json.dumps
     monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated")  # lists neither: still ambiguous
@@ -81,7 +89,8 @@ def test_same_provider_twice_with_another_target_is_an_error() -> None:
     reg.add("randomize_light", "json:dumps", provider="plugin-a")
     with pytest.raises(DuplicateRegistrationError) as info:
         reg.add("randomize_light", "json:loads", provider="plugin-a")
-    assert "'randomize_light' is registered twice" in str(info.value) and "'plugin-a'" in str(info.value)
+    assert "'randomize_light' is registered twice" in str(info.value)
+    assert "'plugin-a'" in str(info.value)
 
 
 def test_qualified_lookups_of_unknown_names_suggest() -> None:
@@ -112,7 +121,8 @@ def test_unknown_name_suggests_closest() -> None:
     with pytest.raises(UnknownNameError) as info:
         reg.get("randomise_light")
     err = info.value
-    assert isinstance(err, KeyError) and isinstance(err, ValueError)
+    assert isinstance(err, KeyError)
+    assert isinstance(err, ValueError)
     assert str(err).startswith("unknown functor 'randomise_light'. Did you mean 'randomize_light'")
     assert err.matches[0] == "randomize_light"
 
@@ -125,11 +135,13 @@ def test_unknown_name_in_empty_registry_hints_at_plugins() -> None:
 def test_lazy_target_imported_on_first_get(monkeypatch: pytest.MonkeyPatch) -> None:
     reg = Registry("functors")
     entry = reg.add("thing", "ec_test_lazy_mod:Outer.inner", provider="p")
-    assert entry.lazy and not entry.resolved  # the module does not exist yet
+    assert entry.lazy
+    assert not entry.resolved
     module = types.ModuleType("ec_test_lazy_mod")
     module.Outer = types.SimpleNamespace(inner=_randomize_light)
     monkeypatch.setitem(sys.modules, "ec_test_lazy_mod", module)
-    assert reg.get("thing") is _randomize_light and entry.resolved
+    assert reg.get("thing") is _randomize_light
+    assert entry.resolved
     assert reg.add("dumps", "json:dumps", provider="p").resolve() is json.dumps
 
 
@@ -139,7 +151,9 @@ def test_import_error_names_entry_and_provider() -> None:
     with pytest.raises(TargetImportError) as info:
         reg.get("broken")
     msg = str(info.value)
-    assert "'broken'" in msg and "'plugin-z'" in msg and "ec_no_such_module_xyz" in msg
+    assert "'broken'" in msg
+    assert "'plugin-z'" in msg
+    assert "ec_no_such_module_xyz" in msg
     assert isinstance(info.value.__cause__, ModuleNotFoundError)
 
 
@@ -183,7 +197,8 @@ def test_robot_lookup_ignores_case_and_cfg_suffix(registries: dict[str, Registry
         assert robots.get(name) is DexforceW1Cfg
     assert robots.names() == ["DexforceW1"]
     RobotRegister(robots, "other")("dexforcew1cfg", "json:dumps")
-    assert robots.get("other:DexforceW1") is json.dumps and robots.get("robots:dexforcew1Cfg") is DexforceW1Cfg
+    assert robots.get("other:DexforceW1") is json.dumps
+    assert robots.get("robots:dexforcew1Cfg") is DexforceW1Cfg
     with pytest.raises(AmbiguousNameError, match="'other:dexforcew1cfg' or 'robots:DexforceW1'"):
         robots.get("DexforceW1Cfg")
 

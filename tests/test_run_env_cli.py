@@ -95,8 +95,11 @@ def test_demo_runs_and_prints_a_summary(capsys: pytest.CaptureFixture) -> None:
     out = capsys.readouterr().out
     assert code == 0
     assert "run-env summary: EmbodiChainDemo-v0" in out
-    assert "episodes     2 (2 env(s))" in out and "successes    0/2" in out
-    assert "env-steps/s" in out and "wall time" in out and "no dataset recorder" in out
+    assert "episodes     2 (2 env(s))" in out
+    assert "successes    0/2" in out
+    assert "env-steps/s" in out
+    assert "wall time" in out
+    assert "no dataset recorder" in out
     assert "Environment initialized" not in out  # --quiet
 
 
@@ -105,7 +108,8 @@ def test_num_envs_overrides_only_when_given(tmp_path: Path, task: Callable) -> N
     given = run_env.prepare(run_env.build_parser().parse_args(["--gym_config", str(config), "--num_envs", "3"]))
     absent = run_env.prepare(run_env.build_parser().parse_args(["--gym_config", str(config)]))
     assert (given.cfg.num_envs, absent.cfg.num_envs) == (3, 2)
-    assert absent.cfg.sim_cfg.headless is True and absent.extras["max_episodes"] == 2
+    assert absent.cfg.sim_cfg.headless is True
+    assert absent.extras["max_episodes"] == 2
     flags = run_env.prepare(run_env.build_parser().parse_args([str(config), "--seed", "5", "--max_steps", "9"]))
     assert (flags.cfg.seed, flags.cfg.max_episode_steps, absent.cfg.seed) == (5, 9, 0)
 
@@ -122,8 +126,11 @@ def test_preview(tmp_path: Path, task: Callable, capsys: pytest.CaptureFixture) 
     config = write_config(tmp_path / "c.json", task(PlainTask))
     assert run_env.main(["--gym_config", str(config), "--preview"]) == 0
     out = capsys.readouterr().out
-    assert "observation space (per env):" in out and "qpos: Box shape=(3,)" in out
-    assert "action space (per env):" in out and "info keys after one step:" in out and "success" in out
+    assert "observation space (per env):" in out
+    assert "qpos: Box shape=(3,)" in out
+    assert "action space (per env):" in out
+    assert "info keys after one step:" in out
+    assert "success" in out
     assert "run-env summary" not in out
 
 
@@ -141,7 +148,9 @@ def test_config_errors_exit_2_with_the_path(tmp_path: Path, task: Callable, caps
     config.write_text(json.dumps(data))
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert f"config error in {config}" in err and message in err and "Traceback" not in err
+    assert f"config error in {config}" in err
+    assert message in err
+    assert "Traceback" not in err
 
 
 def test_missing_config_file_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -154,7 +163,8 @@ def test_bare_task_id_uses_the_env_default_cfg(task: Callable, capsys: pytest.Ca
     assert run_env.main([uid, "--max_episodes", "4", "--quiet", "--headless"]) == 0
     assert "episodes     4 (2 env(s))" in capsys.readouterr().out
     plan = run_env.prepare(run_env.build_parser().parse_args([uid, "--num_envs", "1", "--seed", "3"]))
-    assert plan.cfg is None and plan.make_kwargs == {"num_envs": 1, "seed": 3}  # gym.make kwargs
+    assert plan.cfg is None
+    assert plan.make_kwargs == {"num_envs": 1, "seed": 3}
     assert run_env.main([uid, "--num_envs", "1", "--max_episodes", "1", "--renderer", "rt", "--quiet"]) == 0
     assert "episodes     1 (1 env(s))" in capsys.readouterr().out
 
@@ -173,7 +183,8 @@ def test_demo_action_list_retries_failed_attempts(tmp_path: Path, task: Callable
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 0
     out = capsys.readouterr().out
     # the failed first attempt counts in the success rate; both envs' retries were saved
-    assert "successes    2/4 (50.0%)" in out and "discarded    2 failed demo episode(s)" in out
+    assert "successes    2/4 (50.0%)" in out
+    assert "discarded    2 failed demo episode(s)" in out
     assert "saved        2 episode(s); failed 2" in out
     assert f"data         {tmp_path / 'data'}" in out
     assert sorted(SAVED) == [0, 1]  # the successful attempt of both envs was committed once

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import uuid
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Iterator
 
 import gymnasium as gym
 import pytest
@@ -100,7 +100,8 @@ def test_a_functor_error_names_the_functor_prints_the_traceback_and_the_summary(
                            "functor env.events.drive_damping: damping must be finite")
     assert FINALIZED == [str(tmp_path / "data")]  # the env was closed: the recorder finalized
     out = captured.out
-    assert f"run-env summary: {task_id}" in out and f"data         {tmp_path / 'data'}" in out
+    assert f"run-env summary: {task_id}" in out
+    assert f"data         {tmp_path / 'data'}" in out
     assert "stopped      early: ValueError in functor env.events.drive_damping" in out
 
 
@@ -121,7 +122,9 @@ def test_dataset_preflight_fails_before_the_env_is_built(tmp_path: Path, task_id
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert f"config error in {config}: env.dataset.rec.params.out: dataset folder {tmp_path / 'ro'}" in err
-    assert BUILT == [] and "Traceback" not in err
+    assert BUILT == []
+    assert "Traceback" not in err
     # --filter_dataset_saving records nothing, so the output is not checked
     assert run_env.main(["--gym_config", str(config), "--quiet", "--filter_dataset_saving"]) == 0
-    assert BUILT and FINALIZED == []
+    assert BUILT
+    assert FINALIZED == []

@@ -149,7 +149,8 @@ def test_kinematic_background_moves_per_env() -> None:
                            body_type="kinematic")
     scene = build(3, backgrounds=[table])
     bg = scene["table"]
-    assert "table" in scene.backgrounds and not bg.is_dynamic
+    assert "table" in scene.backgrounds
+    assert not bg.is_dynamic
     pose = bg.get_local_pose()[[1]].clone()
     pose[:, 0] += 0.5
     bg.set_local_pose(pose, env_ids=[1])
@@ -190,14 +191,16 @@ def test_bfs_joint_order_differs_from_mujoco_dfs() -> None:
     assert tree.find_joints("j.1")[0] == [2, 3]
     limits = tree.get_qpos_limits()[0]
     assert limits[1].tolist() == pytest.approx([-0.1, 0.1])
-    assert math.isinf(limits[0, 0]) and limits[0, 0] < 0
+    assert math.isinf(limits[0, 0])
+    assert limits[0, 0] < 0
 
 
 def test_mimic_joint_follows_its_parent_on_teleport() -> None:
     scene = build(2, articulations=[ArticulationCfg(uid="pair", mjcf=MIMIC_MJCF)])
     pair = scene["pair"]
     assert pair.joint_names == ["lead", "follow"]
-    assert pair.mimic_ids == [1] and pair.mimic_parents == [0]
+    assert pair.mimic_ids == [1]
+    assert pair.mimic_parents == [0]
     pair.set_qpos(torch.tensor([[0.4], [-0.6]]), joint_ids=[0], env_ids=[0, 1], target=False)
     q = pair.get_qpos()
     assert q[:, 0].tolist() == pytest.approx([0.4, -0.6])
@@ -211,9 +214,11 @@ def test_robot_mimic_finger_and_active_joints() -> None:
     scene = build(2, robots=[RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(),
                                       control_parts={"arm": ["joint[1-7]"], "hand": ["finger_joint.*"]})])
     arm = scene["arm"]
-    assert arm.dof == 9 and arm.mimic_ids == [8]
+    assert arm.dof == 9
+    assert arm.mimic_ids == [8]
     assert arm.active_joint_ids == list(range(8))
-    assert arm.get_joint_ids("hand") == [7, 8] and arm.get_joint_ids("hand", remove_mimic=True) == [7]
+    assert arm.get_joint_ids("hand") == [7, 8]
+    assert arm.get_joint_ids("hand", remove_mimic=True) == [7]
     arm.set_qpos(torch.tensor([0.03]), joint_ids=[7], target=False)
     assert arm.get_qpos()[:, 8].tolist() == pytest.approx([0.03, 0.03])
     with pytest.raises(KeyError, match="Did you mean 'arm'"):

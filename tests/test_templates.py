@@ -140,7 +140,8 @@ def test_randomization_functors_get_the_prefix(tmp_path: Path) -> None:
     assert new("functor", "cube_mass", "--kind", "randomization", "--no-input", "-o", str(tmp_path)) == 0
     package = tmp_path / "embodichain-randomize-cube-mass"
     plugin = (package / "embodichain_randomize_cube_mass" / "plugin.py").read_text()
-    assert 'FUNCTOR_NAME = "randomize_cube_mass"' in plugin and '"randomization.physics"' in plugin
+    assert 'FUNCTOR_NAME = "randomize_cube_mass"' in plugin
+    assert '"randomization.physics"' in plugin
 
 
 def test_existing_package_dir_needs_overwrite(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -177,7 +178,8 @@ def test_new_without_cookiecutter_names_the_extra(tmp_path: Path, monkeypatch: p
     err = capsys.readouterr().err
     assert 'pip install "embodichain-core[new]"' in err
     assert err.startswith("embodichain new: error: cookiecutter is not installed")
-    assert "Traceback" not in err and list(tmp_path.iterdir()) == []
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
     with pytest.raises(new_cmd.MissingTemplateEngineError, match=r"embodichain-core\[new\]"):
         new_cmd.bake("functor", {"functor_name": "cube_height"}, tmp_path)
     assert new("functor", "Bad-Name", "--no-input", "-o", str(tmp_path)) == 2  # names are still checked first

@@ -53,10 +53,12 @@ def check_batched_env(env: Any, steps: int = 3, seed: int = 0) -> None:
         action = _sample_action(env)
         obs, reward, terminated, truncated, info = env.step(action)
         _check_obs(obs, env.single_observation_space, n, "obs")
-        assert isinstance(reward, torch.Tensor) and reward.shape == (n,), f"reward shape {tuple(reward.shape)}"
+        assert isinstance(reward, torch.Tensor), f"reward must be a torch tensor, got {type(reward).__name__}"
+        assert reward.shape == (n,), f"reward shape {tuple(reward.shape)}, expected ({n},)"
         assert reward.dtype.is_floating_point, "reward must be floating point"
         for name, flag in (("terminated", terminated), ("truncated", truncated)):
-            assert flag.shape == (n,) and flag.dtype == torch.bool, f"{name} must be a bool tensor of shape ({n},)"
+            assert flag.shape == (n,), f"{name} must have shape ({n},), got {tuple(flag.shape)}"
+            assert flag.dtype == torch.bool, f"{name} must be a bool tensor, got {flag.dtype}"
         for key in ("success", "fail", "elapsed_steps"):
             assert key in info, f"info is missing {key!r}"
     _check_partial_reset(env, n)

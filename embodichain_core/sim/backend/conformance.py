@@ -57,7 +57,8 @@ def check_views(factory: Factory) -> None:
     views = {name: sim.view(name) for name in STATE_FIELDS + ("xpos", "xquat", "qfrc_actuator", "sensordata")}
     assert views["qpos"].shape == (NUM_ENVS, model.nq), views["qpos"].shape
     assert views["xpos"].shape == (NUM_ENVS, model.nbody, 3), views["xpos"].shape
-    assert views["qpos"].dtype == sim.dtype and views["qpos"].device == sim.device
+    assert views["qpos"].dtype == sim.dtype
+    assert views["qpos"].device == sim.device
     attribute = getattr(sim, "qpos")  # noqa: B009 (sim.qpos: named views are not protocol members)
     assert attribute is views["qpos"], "sim.qpos and sim.view('qpos') differ"
     sim.step(2)

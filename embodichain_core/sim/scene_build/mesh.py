@@ -16,7 +16,7 @@ import hashlib
 import json
 import os
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -66,7 +66,10 @@ class MeshData:
         """The mesh made of ``faces[face_ids]`` with unused vertices dropped."""
         faces = self.faces[face_ids]
         used, inverse = np.unique(faces.ravel(), return_inverse=True)
-        pick = (lambda a: None if a is None else a[used])
+
+        def pick(a: Optional[np.ndarray]) -> Optional[np.ndarray]:
+            return None if a is None else a[used]
+
         return MeshData(self.vertices[used], inverse.reshape(-1, 3), pick(self.texcoords), pick(self.normals))
 
 

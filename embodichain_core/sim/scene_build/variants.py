@@ -148,7 +148,10 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
                              f"or reserve_scale_variants before build (reserved: {names})")
     model, sim = scene.model, scene.sim
     choice = np.array([names.index(k) for k in keys], dtype=np.int64)
-    find = lambda kind, name: mujoco.mj_name2id(model, kind, name)
+
+    def find(kind: Any, name: str) -> int:
+        return mujoco.mj_name2id(model, kind, name)
+
     mat = find(mujoco.mjtObj.mjOBJ_MATERIAL, record.extra["material"])
     hidden = find(mujoco.mjtObj.mjOBJ_MATERIAL, HIDDEN_MATERIAL)
     for part, fields in (("collision", (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))),

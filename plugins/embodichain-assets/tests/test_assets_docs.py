@@ -23,13 +23,15 @@ def page() -> str:
 @pytest.mark.parametrize("name", [a.name for a in catalog.MESHES] + [catalog.DRAWER])
 def test_every_asset_is_listed_with_its_thumbnail(page, name):
     image = f"images/{slug(name)}.png"
-    assert f"`{name}`" in page and f"]({image})" in page, name
+    assert f"`{name}`" in page, name
+    assert f"]({image})" in page, name
     assert (DOCS / image).is_file(), image
 
 
 def test_textures_and_overview_images_exist(page):
     for image in ("images/asset_coco_background.png", "images/asset_seed_scene.png"):
-        assert f"]({image})" in page and (DOCS / image).is_file()
+        assert f"]({image})" in page
+        assert (DOCS / image).is_file()
 
 
 def test_thumbnail_names_and_contact_sheet():

@@ -78,4 +78,5 @@ def test_mesh_writers_round_trip(tmp_path):
         path = tmp_path / f"tetra{suffix}"
         path.write_bytes(data)
         mesh = load_mesh(path)
-        assert len(mesh.faces) == 4 and mesh.volume == pytest.approx(0.1 ** 3 / 6, rel=1e-5)
+        assert len(mesh.faces) == 4
+        assert mesh.volume == pytest.approx(0.1 ** 3 / 6, rel=1e-5)

@@ -49,12 +49,15 @@ def test_every_name_resolves_into_the_pack(name):
 def test_fork_folder_holds_only_fork_meshes():
     folder = get_data_path("TableWare/tableware/fork/")
     files = sorted(os.listdir(folder))
-    assert "standard_fork_scale.ply" in files and len(files) >= 5
+    assert "standard_fork_scale.ply" in files
+    assert len(files) >= 5
     assert all(os.path.splitext(f)[1] in MESH_SUFFIXES for f in files), files  # the replace functor takes every file
     for name in files:
         lo, hi = load_mesh(os.path.join(folder, name)).bounds
         length, width, thickness = hi - lo
-        assert 0.13 <= length <= 0.22 and 0.02 <= width <= 0.031 and thickness <= 0.021, (name, hi - lo)
+        assert 0.13 <= length <= 0.22, (name, hi - lo)
+        assert 0.02 <= width <= 0.031, (name, hi - lo)
+        assert thickness <= 0.021, (name, hi - lo)
         np.testing.assert_allclose((lo + hi) / 2.0, 0.0, atol=1e-6)  # origin at the bbox centre
 
 
@@ -80,7 +83,8 @@ def test_meshes_are_unions_of_closed_convex_parts(asset):
     if asset.convex_parts:
         assert all(convex), asset.name
     else:  # the mug: convex body + deliberately non-convex handle
-        assert asset.name == catalog.MUG and convex == [True, False]
+        assert asset.name == catalog.MUG
+        assert convex == [True, False]
 
 
 def test_table_and_object_dimensions():
@@ -111,7 +115,8 @@ def test_missing_name_lists_roots_and_closest_names():
     with pytest.raises(DataPathNotFoundError) as info:
         get_data_path("CircleTableSimpel/circle_table_simple.ply")
     message = str(info.value)
-    assert str(DATA_ROOT) in message and "Searched roots:" in message
+    assert str(DATA_ROOT) in message
+    assert "Searched roots:" in message
     assert "'CircleTableSimple/circle_table_simple.ply'" in message
     with pytest.raises(DataPathNotFoundError) as info:
         get_data_path("TableWare/tableware/fork/standard_fork.ply")

@@ -37,7 +37,8 @@ def _half_thickness(fpath: str) -> float:
 def test_round_table_stands_up_with_the_tutorial_pose():
     scene = build_seed_scene()
     bottom, top = _geom_world_z(scene, "table")
-    assert abs(top - TABLE_TOP_Z) < 1e-5 and abs(bottom) < 1e-5  # top surface at 0.82, base on the floor
+    assert abs(top - TABLE_TOP_Z) < 1e-5
+    assert abs(bottom) < 1e-5
     rot = scene.sim.xmat[0, scene.model.body("table").id].reshape(3, 3).numpy()
     np.testing.assert_allclose(rot @ [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], atol=1e-9)  # mesh -X is world up
 
@@ -67,7 +68,8 @@ def test_fork_variants_swap_per_env_and_all_rest_on_the_table():
     z = scene["fork"].get_local_pose()[:, 2].double().numpy()
     expected = np.array([TABLE_TOP_Z + _half_thickness(f) for f in files])
     # every fork lies on the table top; a bent fork's centre sits below its bounding box's half height
-    assert np.all(z > TABLE_TOP_Z) and np.all(z < expected + 1e-3), (z, expected)
+    assert np.all(z > TABLE_TOP_Z), (z, expected)
+    assert np.all(z < expected + 1e-3), (z, expected)
     assert float(scene.sim.qvel[:, :6].abs().max()) < 1e-2
     # each env collides with its own fork only: the enabled collision geoms differ between envs
     contype = scene.sim.model_field("geom_contype")

@@ -36,7 +36,8 @@ def term(func, **params) -> dict:
 def test_unlimited_joints_get_the_default_bounds(build, func, default) -> None:
     env = build(actions=term(func, scale=0.5))
     space = env.single_action_space
-    assert np.allclose(space.high, default / 0.5) and np.allclose(space.low, -default / 0.5)
+    assert np.allclose(space.high, default / 0.5)
+    assert np.allclose(space.low, -default / 0.5)
 
 
 def test_configured_limits_win(build) -> None:
@@ -64,4 +65,5 @@ def test_sampled_actions_keep_every_env_finite(build, func) -> None:
     for _ in range(50):
         obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
         assert not info["diverged"].any()
-        assert torch.isfinite(obs["robot"]["qpos"]).all() and torch.isfinite(reward).all()
+        assert torch.isfinite(obs["robot"]["qpos"]).all()
+        assert torch.isfinite(reward).all()

@@ -58,7 +58,8 @@ def test_qpos_and_denormalized(build) -> None:
     env.reset()
     env.step(torch.tensor([[-1.0, 1.0, 0.3, 0, 0, 0, 0]]).expand(4, NA))
     assert torch.allclose(pos_ctrl(env)[:, :3], torch.tensor([-2.8, 2.8, 0.3]).expand(4, 3), atol=1e-6)
-    assert env.single_action_space.low[0] == -1 and env.single_action_space.low[2] == pytest.approx(-2.8)
+    assert env.single_action_space.low[0] == -1
+    assert env.single_action_space.low[2] == pytest.approx(-2.8)
 
 
 def test_qpos_normalized_as_a_post_term(build) -> None:
@@ -126,7 +127,8 @@ def test_qf_term_drives_effort(build) -> None:
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(robot=toy_ik_arm_cfg(), actions=term(func, **params))
-    assert err.value.path == "env.actions.a" and f"params.{param}" in str(err.value)
+    assert err.value.path == "env.actions.a"
+    assert f"params.{param}" in str(err.value)
     assert func.__name__ in str(err.value)
 
 

@@ -8,7 +8,7 @@ import torch
 from functors_testlib import apply, event, field
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.managers import ActionTermCfg, EventCfg, ObservationCfg
+from embodichain_core.managers import ActionTermCfg, ObservationCfg
 from embodichain_core.managers import SceneEntityCfg as E
 from embodichain_core.sim.cfg import RigidObjectCfg, RigidObjectGroupCfg
 from embodichain_core.sim.shapes import CubeCfg
@@ -60,7 +60,8 @@ CLASSES = [
 def test_event_classes_fail_when_built(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(events=event(func, **params))
-    assert func.__name__ in str(err.value) and f"params.{param}" in str(err.value)
+    assert func.__name__ in str(err.value)
+    assert f"params.{param}" in str(err.value)
 
 
 OBSERVATIONS = [
@@ -79,7 +80,8 @@ def test_observations(build, func, params, param, mode) -> None:
     name = "robot/qpos" if mode == "modify" else "x/y"
     with pytest.raises(ConfigError) as err:
         build(observations={"o": ObservationCfg(func=func, mode=mode, name=name, params=params)})
-    assert err.value.path == f"env.observations.o.params.{param}" and func.__name__ in str(err.value)
+    assert err.value.path == f"env.observations.o.params.{param}"
+    assert func.__name__ in str(err.value)
 
 
 def test_semantic_mask_needs_a_mask(build) -> None:
@@ -95,7 +97,8 @@ def test_semantic_mask_needs_a_mask(build) -> None:
 def test_velocity_and_effort_terms(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(actions={"a": ActionTermCfg(func=func, params=params)})
-    assert err.value.path == "env.actions.a" and f"params.{param}" in str(err.value)
+    assert err.value.path == "env.actions.a"
+    assert f"params.{param}" in str(err.value)
 
 
 def test_group_material_lands_on_every_member(build) -> None:
@@ -108,4 +111,5 @@ def test_group_material_lands_on_every_member(build) -> None:
     mats = [m.material_id for m in env.scene["blocks"].members]
     rgba, metallic = field(env, "mat_rgba")[:, mats], field(env, "mat_metallic")[:, mats]
     assert torch.allclose(rgba[2], torch.tensor([0.1, 0.6, 0.1, 1.0]).expand(2, 4).to(rgba.dtype), atol=1e-6)
-    assert (metallic[2] == 0.5).all() and not torch.allclose(rgba[0], rgba[2])
+    assert (metallic[2] == 0.5).all()
+    assert not torch.allclose(rgba[0], rgba[2])

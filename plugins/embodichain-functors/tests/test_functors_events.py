@@ -44,11 +44,11 @@ def test_replace_assets_gives_each_env_a_mesh_of_the_folder(build, tmp_path) -> 
     for seed in range(6):
         env.reset(seed=seed)
         current = env.scene.current_mesh["fork"]
-        assert len(current) == 4 and set(current) <= set(files)
+        assert len(current) == 4
+        assert set(current) <= set(files)
         seen |= set(current)
         masses = env.scene["fork"].get_mass()
         for i, path in enumerate(current):  # each env simulates its mesh (mass ~ volume)
-            k = files.index(path)
             assert masses[i] == pytest.approx(masses[[current.index(p) for p in current if p == path][0]])
     assert seen == set(files)
 
@@ -63,7 +63,8 @@ def test_replace_assets_only_touches_env_ids_and_keeps_the_material_colour(build
         events.replace_assets_from_group, entity_cfg=E(uid="fork"), folder_path=str(tmp_path / "forks" / "*_2.obj")))
     apply(env, [1])
     current = env.scene.current_mesh["fork"]
-    assert current[1] == files[2] and current[0] == current[2] == current[3] == files[0]
+    assert current[1] == files[2]
+    assert current[0] == current[2] == current[3] == files[0]
     img = env.get_obs()["sensor"]["cam"]["color"][..., :3].float()
     centre = img[:, 14:18, 14:18].mean(dim=(1, 2))
     assert (centre[:, 0] > centre[:, 1] + 40).all()  # the red material shows on every variant
@@ -106,7 +107,8 @@ def test_drop_group_sequentially(build) -> None:
     before = env.scene["blocks"].get_local_pose()
     ids = apply(env, IDS)
     pose = env.scene["blocks"].get_local_pose()
-    assert ((pose[ids, :, 0] - 0.6).abs() < 0.05).all() and ((pose[ids, :, 1] - 0.3).abs() < 0.05).all()
+    assert ((pose[ids, :, 0] - 0.6).abs() < 0.05).all()
+    assert ((pose[ids, :, 1] - 0.3).abs() < 0.05).all()
     assert (pose[ids, 0, 2] < pose[ids, 2, 2]).all()  # the first one fell longest
     assert torch.equal(pose[others(IDS)], before[others(IDS)])
 
@@ -180,7 +182,8 @@ def test_weld_holds_relative_pose_in_chosen_envs_until_removed(build) -> None:
     for _ in range(5):
         env.step(torch.zeros(env.action_space.shape))
     moved = (_ball_in_cube(env) - rel0).norm(dim=-1)
-    assert moved[1] < 5e-3 and (moved[[0, 2, 3]] > 0.03).all()
+    assert moved[1] < 5e-3
+    assert (moved[[0, 2, 3]] > 0.03).all()
     assert env.scene["cube"].get_local_pose()[1, 2] > 0.03  # lifted along with the ball
     apply(env, [1], mode="detach")
     apply(env, [1], mode="detach")  # idempotent
@@ -221,15 +224,18 @@ def test_prepare_and_register_attributes_and_poses(build) -> None:
             {"entity_cfg": E(uid="arm", control_parts=["arm"]), "attrs": ["hand_pose"], "prefix": False}]})})
     env.reset()
     data = env.affordance_datas
-    assert data["cube_pose"].shape == (4, 4, 4) and torch.allclose(data["cube_pose"][:, :3, 3],
+    assert data["cube_pose"].shape == (4, 4, 4)
+    assert torch.allclose(data["cube_pose"][:, :3, 3],
                                                                      torch.tensor(CUBE_POS).expand(4, 3))
     assert torch.allclose(data["ball_pose_in_cube"][:, :3, 3], torch.tensor([-0.1, 0.25, 0.005]).expand(4, 3),
                           atol=1e-5)
     assert torch.allclose(data["cube_grasp_pose"][:, 2, 3], torch.full((4,), CUBE_POS[2] + 0.02))
-    assert data["cube_body_scale"].shape == (4, 3) and data["hand_pose"].shape == (4, 7)
+    assert data["cube_body_scale"].shape == (4, 3)
+    assert data["hand_pose"].shape == (4, 7)
     assert data["arm_pose"].shape == (4, 4, 4)
     assert events.resolve_uids(env, "all_objects") == ["cube", "ball"]
-    assert events.resolve_uids(env, "all_robots") == ["arm"] and events.resolve_uids(env, ["cube"]) == ["cube"]
+    assert events.resolve_uids(env, "all_robots") == ["arm"]
+    assert events.resolve_uids(env, ["cube"]) == ["cube"]
     assert list(events.resolve_dict(env, {"all_objects": {"k": 1}})) == ["cube", "ball"]
 
 

@@ -21,7 +21,8 @@ def test_ranges_are_checked_and_cached() -> None:
     for bad in ([1.0], [[0, 0], [1, 1, 1]], [2.0, 1.0], [0.0, float("nan")], "ab"):
         with pytest.raises(ParamError) as err:
             as_range(bad, "f", "p", 2 if isinstance(bad, list) and isinstance(bad[0], list) else None)
-        assert err.value.path == "f.params.p" and "functor 'f'" in err.value.reason
+        assert err.value.path == "f.params.p"
+        assert "functor 'f'" in err.value.reason
 
 
 def test_uniform_draws_one_row_per_env_from_its_episode_stream() -> None:
@@ -56,15 +57,21 @@ def test_write_model_defers_one_constants_update_for_the_written_envs(build, mon
     write_model(env.sim, torch.tensor([1, 2]), [("body_mass", body, [2.0, 3.0]), ("body_inertia", body, 1e-3),
                                                 ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9)])
     after = field(env, "body_mass")[:, body]
-    assert after[1] == 2.0 and after[2] == 3.0 and after[0] == before[0] and after[3] == before[3]
+    assert after[1] == 2.0
+    assert after[2] == 3.0
+    assert after[0] == before[0]
+    assert after[3] == before[3]
     assert full == closed == []  # deferred: one update before the sim is next used
     env.sim.flush_const()
     # the cube is a free body: its constants come in closed form
-    assert full == [] and len(closed) == 1 and list(closed[0]) == [1, 2]
+    assert full == []
+    assert len(closed) == 1
+    assert list(closed[0]) == [1, 2]
     write_model(env.sim, torch.tensor([0]), [("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.5)])
     env.sim.flush_const()
     assert len(full) + len(closed) == 1  # friction feeds no derived constant
     link = int(env.robot.body_ids[-1])
     write_model(env.sim, torch.tensor([3]), [("body_mass", link, 1.0), ("body_mass", body, 1.0)])
     env.sim.flush_const()
-    assert len(full) == 1 and list(full[0]) == [3]  # a robot link: the whole model's mj_setConst
+    assert len(full) == 1
+    assert list(full[0]) == [3]

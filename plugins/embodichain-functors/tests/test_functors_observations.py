@@ -28,9 +28,12 @@ def test_object_poses_velocity_and_scale(build) -> None:
         "s": add(obs.get_object_body_scale, "object/cube_scale", entity_cfg=E(uid="cube"))})
     o, _ = env.reset()
     objs = o["object"]
-    assert objs["cube"].shape == (4, 4, 4) and torch.allclose(objs["cube"][:, :3, 3], torch.tensor(CUBE_POS).expand(4, 3))
-    assert objs["cube7"].shape == (4, 7) and objs["arm"].shape == (4, 7)
-    assert objs["cube_vel"].shape == (4, 6) and torch.equal(objs["cube_scale"], torch.ones(4, 3))
+    assert objs["cube"].shape == (4, 4, 4)
+    assert torch.allclose(objs["cube"][:, :3, 3], torch.tensor(CUBE_POS).expand(4, 3))
+    assert objs["cube7"].shape == (4, 7)
+    assert objs["arm"].shape == (4, 7)
+    assert objs["cube_vel"].shape == (4, 6)
+    assert torch.equal(objs["cube_scale"], torch.ones(4, 3))
     assert env.single_observation_space["object"]["cube"].shape == (4, 4)
 
 
@@ -105,14 +108,16 @@ def test_joint_drive_attributes(build) -> None:
     env = build(observations={"d": add(obs.get_articulation_joint_drive, "robot/drive", entity_cfg=E(uid="arm"))})
     drive = env.get_obs()["robot"]["drive"]
     assert set(drive) == {"stiffness", "damping", "max_effort", "max_velocity", "friction", "armature"}
-    assert drive["stiffness"].shape == (4, 9) and (drive["stiffness"][:, :8] == 1e4).all()
+    assert drive["stiffness"].shape == (4, 9)
+    assert (drive["stiffness"][:, :8] == 1e4).all()
     assert (drive["stiffness"][:, 8] == 0).all()  # the mimic finger has no drive
 
 
 def test_class_observation_rejects_wrong_entity(build) -> None:
     with pytest.raises(ConfigError) as err:
         build(observations={"d": add(obs.get_articulation_joint_drive, "robot/drive", entity_cfg=E(uid="cube"))})
-    assert err.value.path == "env.observations.d" and "params.entity_cfg" in str(err.value)
+    assert err.value.path == "env.observations.d"
+    assert "params.entity_cfg" in str(err.value)
 
 
 # -- sensors ------------------------------------------------------------------------------------------
@@ -135,7 +140,9 @@ def test_sensor_pose_in_robot_frame_and_intrinsics(build) -> None:
     o = env.get_obs()["sensor_info"]
     assert torch.allclose(o["pose"][0, :3, 3], torch.tensor([0.5, -0.5, 0.5]), atol=1e-5)
     assert torch.allclose(o["pose"][1, :3, 3], torch.tensor([0.4, -0.5, 0.5]), atol=1e-5)  # robot moved +x
-    assert o["k"].shape == (4, 3, 3) and (o["k"][:, 0, 0] == 50).all() and (o["k"][:, 1, 2] == 24).all()
+    assert o["k"].shape == (4, 3, 3)
+    assert (o["k"][:, 0, 0] == 50).all()
+    assert (o["k"][:, 1, 2] == 24).all()
 
 
 def test_stereo_right_view(build) -> None:
@@ -146,7 +153,8 @@ def test_stereo_right_view(build) -> None:
         "k": add(obs.get_sensor_intrinsics, "sensor_info/k", entity_cfg=E(uid="cam"), is_right=True),
         "p": add(obs.get_sensor_pose_in_robot_frame, "sensor_info/p", entity_cfg=E(uid="cam"), is_right=True)})
     o = env.get_obs()["sensor_info"]
-    assert (o["k"][:, 0, 0] == 31).all() and torch.allclose(o["p"][:, 0, 3], torch.full((4,), 0.05), atol=1e-5)
+    assert (o["k"][:, 0, 0] == 31).all()
+    assert torch.allclose(o["p"][:, 0, 3], torch.full((4,), 0.05), atol=1e-5)
 
 
 def test_semantic_mask_foreground_and_background(build) -> None:
@@ -155,8 +163,10 @@ def test_semantic_mask_foreground_and_background(build) -> None:
     o = env.get_obs()
     sem, mask = o["sensor"]["cam"]["semantic"], o["sensor"]["cam"]["mask"]
     cam = env.scene.sensors["cam"]
-    assert sem.shape == (4, 48, 64, 4) and sem.dtype == torch.bool
-    assert torch.equal(sem[..., 1], mask == cam.mask_id_of("cube")) and sem[..., 1].any()
+    assert sem.shape == (4, 48, 64, 4)
+    assert sem.dtype == torch.bool
+    assert torch.equal(sem[..., 1], mask == cam.mask_id_of("cube"))
+    assert sem[..., 1].any()
     assert torch.equal(sem[..., 0], ~sem[..., 1:].any(-1))
     assert not sem[..., 2:].any()  # the arm has no left_/right_ links
 
@@ -173,7 +183,9 @@ def test_semantic_mask_robot_sides(build) -> None:
         "sem": add(obs.compute_semantic_mask, "sensor/cam/semantic", entity_cfg=E(uid="cam"), foreground_uids=[])})
     sem = env.get_obs()["sensor"]["cam"]["semantic"]
     left, right = sem[..., 2], sem[..., 3]
-    assert left.any() and right.any() and not (left & right).any()
+    assert left.any()
+    assert right.any()
+    assert not (left & right).any()
     cols = torch.arange(64).float()
     assert (left.float() * cols).sum() / left.sum() != (right.float() * cols).sum() / right.sum()
 
@@ -182,4 +194,5 @@ def test_sensor_functors_reject_non_sensors(build) -> None:
     with pytest.raises(ConfigError) as err:
         env = build(observations={"k": add(obs.get_sensor_intrinsics, "x/k", entity_cfg=E(uid="cube"))})
         env.get_obs()
-    assert "get_sensor_intrinsics" in str(err.value) and "entity_cfg" in str(err.value)
+    assert "get_sensor_intrinsics" in str(err.value)
+    assert "entity_cfg" in str(err.value)

@@ -21,7 +21,8 @@ def test_rigid_object_mass_absolute_lands_in_chosen_envs(build) -> None:
     mass0, inertia0 = field(env, "body_mass")[:, body], field(env, "body_inertia")[:, body]
     ids = apply(env, IDS)
     mass, inertia = field(env, "body_mass")[:, body], field(env, "body_inertia")[:, body]
-    assert ((mass[ids] >= 2.0) & (mass[ids] <= 3.0)).all() and mass[1] != mass[3]
+    assert ((mass[ids] >= 2.0) & (mass[ids] <= 3.0)).all()
+    assert mass[1] != mass[3]
     assert torch.equal(mass[others(IDS)], mass0[others(IDS)])
     # inertia scales with the mass (same density distribution)
     assert torch.allclose(inertia[ids] / inertia0[ids], (mass[ids] / mass0[ids])[:, None])
@@ -46,7 +47,8 @@ def test_mass_is_reproducible_from_the_seed(build) -> None:
         apply(env, [0, 1, 2, 3])
     body = a.scene["cube"].body_id
     ma, mb, mc = (field(e, "body_mass")[:, body] for e in (a, b, c))
-    assert torch.equal(ma, mb) and not torch.equal(ma, mc)
+    assert torch.equal(ma, mb)
+    assert not torch.equal(ma, mc)
     assert len(set(ma.tolist())) == 4  # every env draws its own value
 
 
@@ -62,7 +64,8 @@ def test_mass_of_a_group_sets_every_member(build) -> None:
     apply(env, [2])
     for member in env.scene["blocks"].members:
         mass = member.get_mass()
-        assert 3.0 <= float(mass[2]) <= 4.0 and float(mass[0]) == pytest.approx(1.0)
+        assert 3.0 <= float(mass[2]) <= 4.0
+        assert float(mass[0]) == pytest.approx(1.0)
 
 
 def test_center_of_mass_offset(build) -> None:
@@ -71,8 +74,10 @@ def test_center_of_mass_offset(build) -> None:
     cube = env.scene["cube"]
     ids = apply(env, IDS)
     com = cube.get_com()
-    assert (com[ids, 0].abs() <= 0.01 + 1e-6).all() and (com[ids, 1].abs() <= 0.02 + 1e-6).all()
-    assert (com[ids, :2].abs() > 0).all() and torch.equal(com[others(IDS)], torch.zeros(2, 3))
+    assert (com[ids, 0].abs() <= 0.01 + 1e-6).all()
+    assert (com[ids, 1].abs() <= 0.02 + 1e-6).all()
+    assert (com[ids, :2].abs() > 0).all()
+    assert torch.equal(com[others(IDS)], torch.zeros(2, 3))
     env.step(torch.zeros(env.action_space.shape))  # the simulation accepts the new inertial frame
 
 
@@ -130,7 +135,8 @@ def test_joint_damping_and_stiffness_on_selected_joints(build) -> None:
     ids = apply(env, IDS)
     damping = field(env, "dof_damping")[:, arm.dof_adr]
     assert ((damping[ids][:, :3] >= 1.0) & (damping[ids][:, :3] <= 2.0)).all()
-    assert (damping[ids][:, 3:] == 0).all() and (damping[others(IDS)] == 0).all()
+    assert (damping[ids][:, 3:] == 0).all()
+    assert (damping[others(IDS)] == 0).all()
     stiffness = field(env, "jnt_stiffness")
     joint7 = int(env.scene.model.dof_jntid[int(arm.dof_adr[6])])
     assert ((stiffness[ids, joint7] >= 5.0) & (stiffness[ids, joint7] <= 6.0)).all()
@@ -145,7 +151,8 @@ def test_joint_drive_gains(build) -> None:
     kp0 = gain(arm.pos_act[0])
     ids = apply(env, IDS)
     kp, kv = gain(arm.pos_act[0]), gain(arm.vel_act[0])
-    assert ((kp[ids] >= 100) & (kp[ids] <= 200)).all() and ((kv[ids] >= 10) & (kv[ids] <= 20)).all()
+    assert ((kp[ids] >= 100) & (kp[ids] <= 200)).all()
+    assert ((kv[ids] >= 10) & (kv[ids] <= 20)).all()
     assert torch.equal(kp[others(IDS)], kp0[others(IDS)])
     assert torch.equal(gain(arm.pos_act[1]), torch.full((4,), float(kp0[0]), dtype=gain(arm.pos_act[1]).dtype))
 
@@ -166,5 +173,6 @@ def test_bad_params_name_functor_and_param(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         env = build(events=event(func, **params))
         apply(env, IDS)
-    assert param in str(err.value) and func.__name__ in str(err.value)
+    assert param in str(err.value)
+    assert func.__name__ in str(err.value)
     assert str(err.value).startswith("env.events.ev")

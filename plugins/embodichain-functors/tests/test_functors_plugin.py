@@ -34,8 +34,10 @@ def test_every_functor_is_registered_by_the_entry_point() -> None:
     registry = functor_registry()
     for name, target, kind, category, description in FUNCTORS:
         entry = registry.entry(name)
-        assert entry.provider == "embodichain-functors" and entry.target == target
-        assert entry.meta["kind"] == kind and entry.meta["category"] == category
+        assert entry.provider == "embodichain-functors"
+        assert entry.target == target
+        assert entry.meta["kind"] == kind
+        assert entry.meta["category"] == category
         assert description == first_doc_line(entry.resolve()), f"{name}: description drifted from the docstring"
 
 
@@ -44,8 +46,10 @@ def test_modules_import_like_the_seed_tutorial() -> None:
     import embodichain_functors.observations as obs
     import embodichain_functors.randomization as rand
 
-    assert callable(rand.randomize_light) and inspect.isclass(events.replace_assets_from_group)
-    assert callable(rand.randomize_rigid_object_mass) and inspect.isclass(rand.randomize_visual_material)
+    assert callable(rand.randomize_light)
+    assert inspect.isclass(events.replace_assets_from_group)
+    assert callable(rand.randomize_rigid_object_mass)
+    assert inspect.isclass(rand.randomize_visual_material)
     assert callable(obs.get_rigid_object_pose)
 
 
@@ -53,7 +57,8 @@ def test_modules_import_like_the_seed_tutorial() -> None:
 def test_every_functor_documents_params_and_an_example(name) -> None:
     obj = functor_registry().get(name)
     doc = inspect.getdoc(obj) or ""
-    assert "Example:" in doc and '"func"' in doc, f"{name}: no example config entry"
+    assert "Example:" in doc, f"{name}: no example config entry"
+    assert '"func"' in doc, f"{name}: no example config entry"
     params = _gen_catalogue().params_of(obj, functor_registry().entry(name).meta["kind"])
     for param in (p.split("=")[0] for p in params):
         assert param in doc, f"{name}: param {param!r} is not documented"
@@ -131,9 +136,11 @@ def test_a_json_config_names_functors_and_draws_are_per_env_and_reproducible() -
             envs[-1].reset()
         a, b = (_state(e) for e in envs)
         assert all(np.array_equal(x, y) for x, y in zip(a, b))  # same seed, same draws
-        assert len(set(a[0].tolist())) == N and len({tuple(p) for p in a[1][:, :2].tolist()}) == N
+        assert len(set(a[0].tolist())) == N
+        assert len({tuple(p) for p in a[1][:, :2].tolist()}) == N
         obs, reward, *_ = envs[0].step(torch.zeros(envs[0].action_space.shape))
-        assert obs["object"]["cube"].shape == (N, 7) and reward.shape == (N,)
+        assert obs["object"]["cube"].shape == (N, 7)
+        assert reward.shape == (N,)
         envs[0].reset(seed=8)
         assert not np.array_equal(_state(envs[0])[0], a[0])  # another seed, other draws
     finally:

@@ -58,11 +58,13 @@ def test_incremental_distance_state_is_cleared_on_reset(build) -> None:
     pose[2:, 0] += 0.1
     cube.set_local_pose(pose)
     t = terms(env)["inc"]
-    assert (t[:2] > 0).all() and (t[2:] < 0).all()
+    assert (t[:2] > 0).all()
+    assert (t[2:] < 0).all()
     assert torch.allclose(t[2:], 2 * torch.tanh(torch.tensor(-1.0)).expand(2), atol=0.05)
     env.reset(options={"reset_ids": [0]})
     t = terms(env)["inc"]
-    assert t[0] == 0 and t[1] == pytest.approx(0.0, abs=0.05)
+    assert t[0] == 0
+    assert t[1] == pytest.approx(0.0, abs=0.05)
 
 
 def test_joint_velocity_and_limit_penalties(build) -> None:
@@ -95,7 +97,8 @@ def test_action_smoothness_zero_first_then_negative_and_reset(build) -> None:
     assert torch.allclose(terms(env, b)["s"], torch.full((4,), -0.3))
     env.reset(options={"reset_ids": [3]})
     t = terms(env, a)["s"]
-    assert t[3] == 0 and torch.allclose(t[:3], torch.full((3,), -0.3))
+    assert t[3] == 0
+    assert torch.allclose(t[:3], torch.full((3,), -0.3))
 
 
 def test_action_smoothness_with_dict_actions() -> None:
@@ -157,11 +160,13 @@ def test_bad_params(build, func, params, param) -> None:
     # the functor's check_params runs when the reward manager is built
     with pytest.raises(ConfigError) as err:
         build(rewards={"r": RewardCfg(func=func, params=params)})
-    assert err.value.path == f"env.rewards.r.params.{param}" and func.__name__ in str(err.value)
+    assert err.value.path == f"env.rewards.r.params.{param}"
+    assert func.__name__ in str(err.value)
 
 
 def test_bad_class_params_at_build(build) -> None:
     with pytest.raises(ConfigError) as err:
         build(rewards={"r": RewardCfg(func=rewards.incremental_distance_to_target, params={
             "source_entity_cfg": E(uid="cube"), "tanh_scale": -1.0})})
-    assert err.value.path == "env.rewards.r" and "params.tanh_scale" in str(err.value)
+    assert err.value.path == "env.rewards.r"
+    assert "params.tanh_scale" in str(err.value)

@@ -58,10 +58,12 @@ def test_seed_tutorial_events(build) -> None:
     meshes = env.scene.current_mesh["fork"]
     assert len(set(meshes)) > 1  # 4 envs, 6 forks: each env draws its own
     masses = env.scene["fork"].get_mass()
-    assert ((masses >= 0.1) & (masses <= 2.0)).all() and len(set(masses.tolist())) == 4
+    assert ((masses >= 0.1) & (masses <= 2.0)).all()
+    assert len(set(masses.tolist())) == 4
     for _ in range(10):  # the interval events fire at steps 5 and 10
         obs_, *_ = env.step(torch.zeros(env.action_space.shape))
     light = env.scene["point"].get_position()
-    assert torch.allclose(light[:, 2], torch.full((4,), 4.0)) and len(set(light[:, 0].tolist())) == 4
+    assert torch.allclose(light[:, 2], torch.full((4,), 4.0))
+    assert len(set(light[:, 0].tolist())) == 4
     img = obs_["sensor"]["cam"]["color"][..., :3].float()
     assert all((img[i] - img[j]).abs().mean() > 1.0 for i in range(4) for j in range(i))  # every env looks different

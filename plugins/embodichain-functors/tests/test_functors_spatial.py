@@ -3,7 +3,6 @@ solver: the robots plugin provides real ones), root poses, virtual targets."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 import torch
 from functors_testlib import CUBE_POS, apply, event, others, toy_ik_arm_cfg
@@ -29,10 +28,12 @@ def test_rigid_object_pose_relative_position_and_rotation(build) -> None:
     ids = apply(env, IDS)
     pose = cube.get_local_pose()
     offset = pose[ids, :3] - torch.tensor(CUBE_POS)
-    assert (offset[:, 0].abs() <= 0.1 + 1e-6).all() and (offset[:, 1].abs() <= 0.2 + 1e-6).all()
+    assert (offset[:, 0].abs() <= 0.1 + 1e-6).all()
+    assert (offset[:, 1].abs() <= 0.2 + 1e-6).all()
     assert torch.allclose(offset[:, 2], torch.zeros(2), atol=1e-6)
     yaw = quat_to_euler_xyz(pose[ids, 3:].double())[:, 2]
-    assert (yaw.abs() <= 90 + 1e-4).all() and (yaw.abs() > 0).all()
+    assert (yaw.abs() <= 90 + 1e-4).all()
+    assert (yaw.abs() > 0).all()
     assert torch.equal(pose[others(IDS)], before[others(IDS)])
     assert torch.equal(cube.get_velocity()[ids], torch.zeros(2, 6))
     assert (cube.get_velocity()[others(IDS)] != 0).any()  # untouched envs keep their state
@@ -45,7 +46,8 @@ def test_rigid_object_pose_absolute_and_physics_steps_only_in_chosen_envs(build)
     before = env.scene["cube"].get_local_pose()
     ids = apply(env, IDS)
     pose = env.scene["cube"].get_local_pose()
-    assert (pose[ids, 2] < 0.3).all() and (pose[ids, 2] > 0.2).all()  # fell for 10 steps
+    assert (pose[ids, 2] < 0.3).all()
+    assert (pose[ids, 2] > 0.2).all()
     assert torch.equal(pose[others(IDS)], before[others(IDS)])
 
 
@@ -56,8 +58,10 @@ def test_robot_qpos_relative_and_clamped(build) -> None:
     before = arm.get_qpos()
     ids = apply(env, IDS)
     q = arm.get_qpos()
-    assert ((q[ids, :3] - before[ids, :3]).abs() <= 0.2 + 1e-6).all() and (q[ids, :3] != before[ids, :3]).all()
-    assert torch.equal(q[ids, 3:], before[ids, 3:]) and torch.equal(q[others(IDS)], before[others(IDS)])
+    assert ((q[ids, :3] - before[ids, :3]).abs() <= 0.2 + 1e-6).all()
+    assert (q[ids, :3] != before[ids, :3]).all()
+    assert torch.equal(q[ids, 3:], before[ids, 3:])
+    assert torch.equal(q[others(IDS)], before[others(IDS)])
     assert torch.allclose(arm.get_qpos(target=True)[ids, :3], q[ids, :3])  # drive targets follow
 
 
@@ -78,7 +82,8 @@ def test_robot_eef_pose_goes_through_ik_for_chosen_envs(build) -> None:
     before = arm.get_qpos()
     ids = apply(env, IDS)
     call = solver.calls[-1]
-    assert len(call["target"]) == 2 and torch.allclose(call["seed"].float(), before[ids][:, :7])
+    assert len(call["target"]) == 2
+    assert torch.allclose(call["seed"].float(), before[ids][:, :7])
     q = arm.get_qpos()
     assert (((q[ids, :3] - before[ids, :3]) >= 0.05 - 1e-5) & ((q[ids, :3] - before[ids, :3]) <= 0.1 + 1e-5)).all()
     dyaw = torch.rad2deg(q[ids, 3] - before[ids, 3])
@@ -135,7 +140,8 @@ def test_target_pose_created_and_written_per_env(build) -> None:
     assert getattr(env, "goal_pose", None) is None
     ids = apply(env, IDS)
     goal = env.goal_pose
-    assert goal.shape == (4, 4, 4) and torch.equal(goal[others(IDS)], torch.eye(4).expand(2, 4, 4))
+    assert goal.shape == (4, 4, 4)
+    assert torch.equal(goal[others(IDS)], torch.eye(4).expand(2, 4, 4))
     assert ((goal[ids, 0, 3] >= 0.3) & (goal[ids, 0, 3] <= 0.6)).all()
     assert torch.allclose(goal[ids, 2, 3], torch.full((2,), 0.05))
 
@@ -174,4 +180,5 @@ def test_get_random_pose_is_reproducible() -> None:
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         apply(build(events=event(func, **params)), IDS)
-    assert err.value.path == f"env.events.ev.params.{param}" and func.__name__ in str(err.value)
+    assert err.value.path == f"env.events.ev.params.{param}"
+    assert func.__name__ in str(err.value)

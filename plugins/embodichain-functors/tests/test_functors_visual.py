@@ -43,10 +43,12 @@ def test_light_position_colour_intensity_per_env(build) -> None:
     before, pos0 = images(env), light.get_position()
     ids = apply(env, IDS)
     pos = light.get_position()
-    assert ((pos[ids, :2].abs() <= 0.5 + 1e-6).all() and torch.allclose(pos[ids, 2], torch.ones(2)))
+    assert ((pos[ids, :2].abs() <= 0.5 + 1e-6).all())
+    assert (torch.allclose(pos[ids, 2], torch.ones(2)))
     assert torch.equal(pos[others(IDS)], pos0[others(IDS)])
     assert torch.allclose(light.get_intensity()[ids], torch.full((2,), 30.0))
-    assert (light.get_color()[ids, 0] == 1).all() and (light.get_color()[others(IDS)] == 1).all()
+    assert (light.get_color()[ids, 0] == 1).all()
+    assert (light.get_color()[others(IDS)] == 1).all()
     # the light_pos0 we write is what mj_setConst derives (so skipping it is exact)
     pos0_field = field(env, "light_pos0").clone()
     env.sim.batch.set_const(None)
@@ -65,7 +67,8 @@ def test_sun_light_draws_one_value_and_ignores_position(build) -> None:
     env = build(cfg)
     apply(env, [1])
     direction = field(env, "light_dir")[:, env.scene["sun"].light_id]
-    assert torch.allclose(direction, direction[:1].expand(4, 3)) and not torch.allclose(direction[0], torch.tensor(
+    assert torch.allclose(direction, direction[:1].expand(4, 3))
+    assert not torch.allclose(direction[0], torch.tensor(
         [0.0, 0, -1], dtype=direction.dtype))
     assert torch.allclose(env.scene["sun"].get_position(), torch.tensor([0.0, 0, 3]).expand(4, 3))
     colour = env.scene["sun"].get_color()
@@ -88,12 +91,14 @@ def test_base_colour_of_the_ground_is_seen_per_env(build) -> None:
     ids = apply(env, IDS)
     mat = env.scene.model.geom_matid[0]
     rgba = field(env, "mat_rgba")[:, mat]
-    assert (rgba[ids, 0] >= 0.9).all() and (rgba[ids, 1] <= 0.1).all()
+    assert (rgba[ids, 0] >= 0.9).all()
+    assert (rgba[ids, 1] <= 0.1).all()
     assert (field(env, "mat_texid")[ids, mat, 1] == -1).all()  # a solid colour replaces the checker
     after = images(env)
     assert changed(before, after) == [i in IDS for i in range(4)]
     redness = (after[..., 0] - after[..., 1]).mean(dim=(1, 2))
-    assert redness[ids].min() > 40 and redness[others(IDS)].max() < 10
+    assert redness[ids].min() > 40
+    assert redness[others(IDS)].max() < 10
 
 
 def test_random_textures_from_a_folder(build, tmp_path) -> None:
@@ -109,7 +114,8 @@ def test_random_textures_from_a_folder(build, tmp_path) -> None:
 
     green = env.scene.model.texture(texture_name(str(tmp_path / "green.png"))).id
     red = env.scene.model.texture(texture_name(str(tmp_path / "red.png"))).id
-    assert set(texid.tolist()) <= {green, red} and env.scene.model.ntex == 3  # checker + 2 (the .txt is skipped)
+    assert set(texid.tolist()) <= {green, red}
+    assert env.scene.model.ntex == 3
     assert (field(env, "mat_rgba")[ids, mat] == 1).all()  # textures are not tinted
     img = images(env)
     for i in ids.tolist():
@@ -123,7 +129,8 @@ def test_texture_probability_zero_keeps_the_original_look(build, tmp_path) -> No
                              random_texture_prob=0.0))
     before = field(env, "mat_rgba"), field(env, "mat_texid")
     apply(env, IDS)
-    assert torch.equal(field(env, "mat_rgba"), before[0]) and torch.equal(field(env, "mat_texid"), before[1])
+    assert torch.equal(field(env, "mat_rgba"), before[0])
+    assert torch.equal(field(env, "mat_texid"), before[1])
 
 
 def test_articulation_links_get_their_own_colours(build) -> None:
@@ -148,7 +155,8 @@ def test_set_material_with_a_texture_at_startup(build, tmp_path) -> None:
                                                   "roughness": 0.3}})})
     mat = env.scene["cube"].material_id
     texid = field(env, "mat_texid")[:, mat, 1]
-    assert (texid >= 0).all() and env.scene.model.texture(int(texid[0])).name.startswith("embodichain_functors/tex")
+    assert (texid >= 0).all()
+    assert env.scene.model.texture(int(texid[0])).name.startswith("embodichain_functors/tex")
     assert torch.allclose(field(env, "mat_roughness")[:, mat], torch.full((4,), 0.3), atol=1e-6)
 
 
@@ -203,7 +211,8 @@ def test_camera_intrinsics_offsets(build) -> None:
     before = images(env)
     ids = apply(env, IDS)
     k = cam.get_intrinsics()
-    assert ((k[ids, 0, 0] >= 60) & (k[ids, 0, 0] <= 70)).all() and (k[others(IDS), 0, 0] == 50).all()
+    assert ((k[ids, 0, 0] >= 60) & (k[ids, 0, 0] <= 70)).all()
+    assert (k[others(IDS), 0, 0] == 50).all()
     assert ((k[ids, 0, 2] - 32).abs() <= 2 + 1e-5).all()
     assert changed(before, images(env)) == [i in IDS for i in range(4)]
 
@@ -226,7 +235,8 @@ def test_camera_functors_reject_non_cameras(build) -> None:
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         apply(build(events=event(func, **params)), IDS)
-    assert f"params.{param}" in str(err.value) and func.__name__ in str(err.value)
+    assert f"params.{param}" in str(err.value)
+    assert func.__name__ in str(err.value)
 
 
 # -- a camera without the sensor API: the MuJoCo camera fields are perturbed per env -----------------
@@ -273,4 +283,5 @@ def test_bare_mujoco_camera_fields_per_env(build, register_plugin) -> None:
     assert ((pos[ids, 2] - 0.5 >= 0.1 - 1e-9) & (pos[ids, 2] - 0.5 <= 0.2 + 1e-9)).all()
     assert torch.equal(pos[others(IDS)], pos0[others(IDS)])
     per_pixel = 0.0064 / 64
-    assert torch.allclose(intr[ids, 0], intr0[ids, 0] + 10 * per_pixel) and torch.equal(intr[others(IDS)], intr0[others(IDS)])
+    assert torch.allclose(intr[ids, 0], intr0[ids, 0] + 10 * per_pixel)
+    assert torch.equal(intr[others(IDS)], intr0[others(IDS)])

@@ -30,7 +30,8 @@ def run(make_env: Any, tmp_path: Path, func: str) -> Any:
 
 def test_async_writes_the_same_dataset_as_sync(make_env: Any, tmp_path: Path) -> None:
     sync, asyn = run(make_env, tmp_path, "LeRobotRecorder"), run(make_env, tmp_path, "AsyncLeRobotRecorder")
-    assert asyn.num_episodes == sync.num_episodes == 3 and len(asyn) == len(sync)
+    assert asyn.num_episodes == sync.num_episodes == 3
+    assert len(asyn) == len(sync)
     assert list(asyn.meta.episodes["length"]) == list(sync.meta.episodes["length"])
     for i in range(len(sync)):
         a, s = asyn[i], sync[i]
@@ -62,10 +63,13 @@ def test_commits_do_not_wait_for_writing_and_finalize_drains(make_env: Any, tmp_
     assert isinstance(rec, AsyncLeRobotRecorder)
     reset(env)
     run_script(env, [["s"], ["."], ["s"], ["."], ["."]])  # two commits while the worker is blocked
-    assert gate.entered.wait(30) and rec.saved_episodes == 0 and rec.pending_episodes >= 1
+    assert gate.entered.wait(30)
+    assert rec.saved_episodes == 0
+    assert rec.pending_episodes >= 1
     gate.release.set()
     path = rec.finalize()  # drains the queue first; the live 2-frame episode is dropped
-    assert rec.saved_episodes == 2 and load(path).num_episodes == 2
+    assert rec.saved_episodes == 2
+    assert load(path).num_episodes == 2
     with pytest.raises(RuntimeError, match="finalized"):
         rec(env, torch.tensor([0]))
 
@@ -108,5 +112,6 @@ def test_construction_only_params_are_accepted(make_env: Any, tmp_path: Path) ->
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", max_pending_episodes=2,
                                                    image_writer_threads=2)))
     rec = env.dataset_manager.get_functor("rec")
-    assert rec.params.max_pending_episodes == 2 and rec.params.image_writer_threads == 2
+    assert rec.params.max_pending_episodes == 2
+    assert rec.params.image_writer_threads == 2
     assert rec._queue.maxsize == 2

@@ -49,15 +49,22 @@ def test_core_and_plugin_loading_import_no_lerobot() -> None:
 def test_info_lists_episodes_frames_features_fps_and_tasks(dataset: Path, capsys: pytest.CaptureFixture) -> None:
     assert embodichain(["dataset", "info", str(dataset)]) == 0
     out = capsys.readouterr().out
-    assert "episodes  2 (length min 2, mean 2.5, max 3)" in out and "frames    5" in out
-    assert "25 fps" in out and "robot_type Arm7" in out and "'Push the cube'" in out
-    assert "observation.state" in out and "success   2/2" in out
+    assert "episodes  2 (length min 2, mean 2.5, max 3)" in out
+    assert "frames    5" in out
+    assert "25 fps" in out
+    assert "robot_type Arm7" in out
+    assert "'Push the cube'" in out
+    assert "observation.state" in out
+    assert "success   2/2" in out
     if have_sensors():
         assert "observation.images.head_right" in out
     assert embodichain(["dataset", "info", str(dataset), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["episodes"] == 2 and summary["episode_lengths"] == [2, 3] and summary["fps"] == 25
-    assert summary["features"]["action"]["shape"] == [7] and summary["tasks"] == ["Push the cube"]
+    assert summary["episodes"] == 2
+    assert summary["episode_lengths"] == [2, 3]
+    assert summary["fps"] == 25
+    assert summary["features"]["action"]["shape"] == [7]
+    assert summary["tasks"] == ["Push the cube"]
 
 
 @pytest.mark.parametrize("fmt", ["png", "mp4"])

@@ -76,7 +76,8 @@ def test_sigkill_inside_a_save_keeps_the_episodes_before_it(tmp_path: Path, mode
     rec = Recording(mode, tmp_path)
     rec.wait_for(2)
     out = rec.finish(sig=None)
-    assert rec.proc.returncode == -signal.SIGKILL and "COMMITTED 3" not in out
+    assert rec.proc.returncode == -signal.SIGKILL
+    assert "COMMITTED 3" not in out
     assert check_loads(the_dataset(tmp_path), 2, 2) == 2
 
 
@@ -93,7 +94,8 @@ def test_ctrl_c_finalizes_with_every_committed_episode(tmp_path: Path) -> None:
     rec = Recording("churn", tmp_path, "AsyncLeRobotRecorder")
     rec.wait_for(3)
     out = rec.finish(signal.SIGINT)
-    assert rec.proc.returncode != 0 and "FINALIZED" in out
+    assert rec.proc.returncode != 0
+    assert "FINALIZED" in out
     saved = int(out.split("FINALIZED")[1].split()[0])
     path = the_dataset(tmp_path)
     assert check_loads(path, max(rec.committed, saved), saved) == saved
@@ -123,7 +125,8 @@ def test_ctrl_c_during_a_save_lands_after_the_episode_is_saved(make_env, tmp_pat
     assert rec.saved_episodes == 2
     env.close()
     path = the_dataset(tmp_path)
-    assert check_loads(path, 2, 2) == 2 and not (path / ".embodichain_staging").exists()
+    assert check_loads(path, 2, 2) == 2
+    assert not (path / ".embodichain_staging").exists()
 
 
 @pytest.mark.parametrize("mode", ["die_in_create", "die_in_first_save", "die_in_first_publish"])
@@ -139,10 +142,12 @@ def test_a_kill_before_the_first_episode_is_saved_leaves_an_incomplete_folder(
 
     rec = Recording(mode, tmp_path)
     out = rec.finish(sig=None)
-    assert rec.proc.returncode == -signal.SIGKILL and "COMMITTED" not in out
+    assert rec.proc.returncode == -signal.SIGKILL
+    assert "COMMITTED" not in out
     path = the_dataset(tmp_path)
     has_info = (path / "meta" / "info.json").is_file()
-    assert has_info == (mode != "die_in_create") and (path / ".embodichain_staging").is_dir()
+    assert has_info == (mode != "die_in_create")
+    assert (path / ".embodichain_staging").is_dir()
     assert (path / "data").is_dir() == (mode == "die_in_first_publish")  # partial data of the 1st episode
     assert folder_status(path).removable
     # `embodichain dataset info` and the loaders refuse it: it is never handed to lerobot
@@ -153,9 +158,11 @@ def test_a_kill_before_the_first_episode_is_saved_leaves_an_incomplete_folder(
     # the next run of the recorder with the same save_path removes it, naming it, and records afresh
     with caplog.at_level(logging.WARNING, logger="embodichain_lerobot"):
         env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
-    assert f"removed incomplete dataset folder {path}" in caplog.text and not path.exists()
+    assert f"removed incomplete dataset folder {path}" in caplog.text
+    assert not path.exists()
     reset(env)
     run_script(env, [["."], ["s"]])
     env.close()
-    assert the_dataset(tmp_path) == path and check_loads(path, 1, 1) == 1
+    assert the_dataset(tmp_path) == path
+    assert check_loads(path, 1, 1) == 1
     assert not (path / ".embodichain_recording").exists()

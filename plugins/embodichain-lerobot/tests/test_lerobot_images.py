@@ -50,8 +50,10 @@ def test_stereo_images_depth_and_masks_round_trip(make_env: Any, tmp_path: Path,
     assert f["observation.images.head"] == {"dtype": "image", "shape": (24, 32, 3),
                                             "names": ["height", "width", "channels"]}
     assert f["observation.images.head_right"]["shape"] == (24, 32, 3)
-    assert f["observation.depth.head"]["dtype"] == "float32" and f["observation.depth.head"]["shape"] == (24, 32, 1)
-    assert f["observation.mask.head_right"]["dtype"] == "int32" and f["observation.mask.head_right"]["shape"] == (24, 32, 1)
+    assert f["observation.depth.head"]["dtype"] == "float32"
+    assert f["observation.depth.head"]["shape"] == (24, 32, 1)
+    assert f["observation.mask.head_right"]["dtype"] == "int32"
+    assert f["observation.mask.head_right"]["shape"] == (24, 32, 1)
     assert ds.meta.camera_keys == ["observation.images.head", "observation.images.head_right"]
     assert ds.num_episodes == len(expected)
     for e, (_, rows) in enumerate(expected):
@@ -75,7 +77,8 @@ def test_unsupported_camera_streams_are_skipped_with_a_warning(make_env: Any, tm
     run_script(env, [["s"]])
     env.close()
     ds = load(env.dataset_manager.finalize()[0])
-    assert "observation.images.wrist" in ds.features and not any("normal" in k for k in ds.features)
+    assert "observation.images.wrist" in ds.features
+    assert not any("normal" in k for k in ds.features)
 
 
 @pytest.mark.parametrize("func", ["LeRobotRecorder", "AsyncLeRobotRecorder"])

@@ -52,28 +52,36 @@ def test_round_trip_through_lerobot_dataset(make_env: Any, tmp_path: Path, num_e
     expected = expected_episodes(script, log, num_envs)
     assert Path(path).name == "arm7_table_top_push_the_cube_000"
     ds = load(path)
-    assert ds.num_episodes == len(expected) and ds.fps == 25 and ds.meta.robot_type == "Arm7"
+    assert ds.num_episodes == len(expected)
+    assert ds.fps == 25
+    assert ds.meta.robot_type == "Arm7"
     assert [int(x) for x in ds.meta.episodes["length"]] == [len(rows) for _, rows in expected]
     assert len(ds) == sum(len(rows) for _, rows in expected)
-    assert ds.features["observation.state"]["names"] == JOINTS and ds.features["action"]["shape"] == (7,)
+    assert ds.features["observation.state"]["names"] == JOINTS
+    assert ds.features["action"]["shape"] == (7,)
     for e, (env_id, rows) in enumerate(expected):
         items = episode_items(ds, e)
         for t, (item, (obs, action)) in enumerate(zip(items, rows)):
-            assert item["task"] == TASK and item["subtask"] == TASK
-            assert int(item["frame_index"]) == t and float(item["timestamp"]) == pytest.approx(t / 25)
+            assert item["task"] == TASK
+            assert item["subtask"] == TASK
+            assert int(item["frame_index"]) == t
+            assert float(item["timestamp"]) == pytest.approx(t / 25)
             np.testing.assert_array_equal(as_np(item["observation.state"]), obs["robot"]["qpos"])
             np.testing.assert_array_equal(as_np(item["observation.qvel"]), obs["robot"]["qvel"])
             np.testing.assert_array_equal(as_np(item["observation.qf"]), obs["robot"]["qf"])
             np.testing.assert_array_equal(as_np(item["action"]), action)
             assert int(item["annotation.episode_step"]) == t
             assert int(item["annotation.segment_end"]) == (t == len(rows) - 1)
-        assert bool(items[-1]["next.done"]) and bool(items[-1]["next.success"])
-        assert int(items[-1]["annotation.terminated"]) == 1 and not bool(items[0]["next.done"])
+        assert bool(items[-1]["next.done"])
+        assert bool(items[-1]["next.success"])
+        assert int(items[-1]["annotation.terminated"]) == 1
+        assert not bool(items[0]["next.done"])
     sidecar = [json.loads(x) for x in (Path(path) / "meta/embodichain_episodes.jsonl").read_text().splitlines()]
     assert [r["env_id"] for r in sidecar] == [i for i, _ in expected]
     assert [r["lerobot_episode_index"] for r in sidecar] == list(range(len(expected)))
     assert sidecar[0]["total_time"] == pytest.approx(len(expected[0][1]) * env.step_dt)
-    assert sidecar[0]["extra"] == {"scene_type": "Table Top"} and sidecar[0]["schema_version"] == 2
+    assert sidecar[0]["extra"] == {"scene_type": "Table Top"}
+    assert sidecar[0]["schema_version"] == 2
     assert not (Path(path) / ".embodichain_staging").exists()
 
 
@@ -93,10 +101,13 @@ def test_discarding_reset_and_partial_episodes_are_not_saved(make_env: Any, tmp_
     env.success_flags[:] = False
     run_script(env, [[".", "."], ["s", "."], [".", "."]])  # env 0: 2 frames; env 1: live at close
     rec = env.dataset_manager.get_functor("rec")
-    assert rec.saved_episodes == 1 and rec.live_length(1) == 3 and rec.discarded_episodes == 2
+    assert rec.saved_episodes == 1
+    assert rec.live_length(1) == 3
+    assert rec.discarded_episodes == 2
     env.close()
     ds = load(env.dataset_manager.finalize()[0])
-    assert ds.num_episodes == 1 and len(ds) == 2
+    assert ds.num_episodes == 1
+    assert len(ds) == 2
 
 
 def test_finalize_is_idempotent_and_empty_runs_leave_nothing(make_env: Any, tmp_path: Path) -> None:
@@ -104,7 +115,8 @@ def test_finalize_is_idempotent_and_empty_runs_leave_nothing(make_env: Any, tmp_
     reset(env)
     run_script(env, [["."]] * 3)
     rec = env.dataset_manager.get_functor("rec")
-    assert rec.finalize() is None and rec.finalize() is None
+    assert rec.finalize() is None
+    assert rec.finalize() is None
     assert list(Path(tmp_path).iterdir()) == []
     with pytest.raises(RuntimeError, match="finalized"):
         rec(env, torch.tensor([0]))
@@ -113,9 +125,11 @@ def test_finalize_is_idempotent_and_empty_runs_leave_nothing(make_env: Any, tmp_
     run_script(env2, [["."], ["s"], ["."]])
     rec2 = env2.dataset_manager.get_functor("rec")
     first = rec2.finalize()
-    assert first is not None and rec2.finalize() == first
+    assert first is not None
+    assert rec2.finalize() == first
     env2.close()
-    assert env2.dataset_manager.finalize() == [first] and load(first).num_episodes == 1
+    assert env2.dataset_manager.finalize() == [first]
+    assert load(first).num_episodes == 1
 
 
 def test_folder_numbers_increase_and_never_overwrite(make_env: Any, tmp_path: Path) -> None:
@@ -158,6 +172,7 @@ def test_extra_observations_and_dict_actions_are_recorded(make_env: Any, tmp_pat
         env.step({"qpos": torch.full((2, 7), 0.1 * t)})
     env.close()
     ds = load(env.dataset_manager.finalize()[0])
-    assert ds.features["row_tag"]["shape"] == (1,) and ds.features["observation.object.cube.pose"]["shape"] == (7,)
+    assert ds.features["row_tag"]["shape"] == (1,)
+    assert ds.features["observation.object.cube.pose"]["shape"] == (7,)
     assert [float(ds[i]["row_tag"]) for i in range(6)] == [0, 1, 2, 10, 11, 12]
     np.testing.assert_allclose(as_np(ds[2]["action"]), np.full(7, 0.2, np.float32))

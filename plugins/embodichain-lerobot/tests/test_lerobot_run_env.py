@@ -59,8 +59,10 @@ def test_data_generation_records_the_successful_demos(tmp_path: Path, task_id: s
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 0
     out = capsys.readouterr().out
     path = tmp_path / "data" / "arm7_empty_reach_000"
-    assert f"data         {path}" in out and "discarded    2 failed demo episode(s)" in out
+    assert f"data         {path}" in out
+    assert "discarded    2 failed demo episode(s)" in out
     ds = load(path)
-    assert ds.num_episodes == 4 and [int(x) for x in ds.meta.episodes["length"]] == [4, 4, 4, 4]
+    assert ds.num_episodes == 4
+    assert [int(x) for x in ds.meta.episodes["length"]] == [4, 4, 4, 4]
     assert {ds[i]["task"] for i in range(len(ds))} == {"reach forward"}
     assert float(ds[3]["action"][0]) == pytest.approx(0.15)

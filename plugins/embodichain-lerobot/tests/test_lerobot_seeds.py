@@ -60,7 +60,9 @@ def test_an_env_without_episode_seeds_records_none(make_env: Callable, tmp_path:
                                                    capsys: pytest.CaptureFixture) -> None:
     monkeypatch.setattr(ScriptedEnv, "episode_seeds", None, raising=False)  # an env from before the seeds
     path, seen = record(make_env, tmp_path, [["s", "s"]])
-    assert seen == [] and [r.get("episode_seed", "absent") for r in read_sidecar(path)] == ["absent"] * 2
+    assert seen == []
+    assert [r.get("episode_seed", "absent") for r in read_sidecar(path)] == ["absent"] * 2
     assert dataset_cli(["info", str(path), "--episodes"]) == 0
     out = capsys.readouterr().out
-    assert "seeds " not in out and out.splitlines()[-1].split() == ["1", "1", "yes", "1", "-"]
+    assert "seeds " not in out
+    assert out.splitlines()[-1].split() == ["1", "1", "yes", "1", "-"]

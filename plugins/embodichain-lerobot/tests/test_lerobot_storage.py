@@ -67,9 +67,12 @@ def test_a_read_only_dataset_folder_fails_before_the_build(tmp_path: Path, task_
                                                            capsys: pytest.CaptureFixture) -> None:
     save_path = read_only_dir / "datasets"
     code, out, err = run(write_config(tmp_path / "c.json", task_id, save_path, "LeRobotRecorder"), capsys)
-    assert code == 2 and "Traceback" not in err and "run-env summary" not in out
+    assert code == 2
+    assert "Traceback" not in err
+    assert "run-env summary" not in out
     assert f"{KEY}: dataset folder {save_path} is not writable (it would be created in {read_only_dir})" in err
-    assert "--filter_dataset_saving" in err and list(read_only_dir.iterdir()) == []
+    assert "--filter_dataset_saving" in err
+    assert list(read_only_dir.iterdir()) == []
 
 
 def test_too_little_free_space_fails_before_the_build(tmp_path: Path, task_id: str,
@@ -79,7 +82,8 @@ def test_too_little_free_space_fails_before_the_build(tmp_path: Path, task_id: s
     code, _, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", "LeRobotRecorder"), capsys)
     assert code == 2
     assert f"{KEY}: only 40 MB free on the filesystem of the dataset folder {tmp_path / 'data'}" in err
-    assert "at least 256 MB (its params.min_free_mb)" in err and not (tmp_path / "data").exists()
+    assert "at least 256 MB (its params.min_free_mb)" in err
+    assert not (tmp_path / "data").exists()
 
 
 def test_a_save_path_below_a_file_is_refused(tmp_path: Path) -> None:
@@ -121,10 +125,14 @@ def test_a_disk_full_mid_run_keeps_the_saved_episodes(tmp_path: Path, task_id: s
         assert "while closing the env: DiskFullError in functor env.dataset.lerobot:" in last
     assert f"no space left on device while saving episode 2 to {path}" in last
     assert "the 2 episode(s) saved before it are intact" in last
-    assert "saved        2 episode(s)" in out and f"data         {path}" in out and "stopped      early" in out
+    assert "saved        2 episode(s)" in out
+    assert f"data         {path}" in out
+    assert "stopped      early" in out
     ds = load(path)
-    assert ds.num_episodes == 2 and len(ds) == 8
-    assert not (path / ".embodichain_staging").exists() and not (path / ".embodichain_recording").exists()
+    assert ds.num_episodes == 2
+    assert len(ds) == 8
+    assert not (path / ".embodichain_staging").exists()
+    assert not (path / ".embodichain_recording").exists()
 
 
 def full_while_adding_frames(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -155,7 +163,8 @@ def test_a_full_disk_stops_between_episodes(make_env: Callable, tmp_path: Path, 
     assert "raised in functor env.dataset.rec (LeRobotRecorder)" in info.value.__notes__
     env.close()
     (path,) = datasets_under(tmp_path)
-    assert rec.saved_episodes == 2 and load(path).num_episodes == 2
+    assert rec.saved_episodes == 2
+    assert load(path).num_episodes == 2
 
 
 def test_a_failed_publish_leaves_no_metadata_line_behind(make_env: Callable, tmp_path: Path,
@@ -180,7 +189,8 @@ def test_a_failed_publish_leaves_no_metadata_line_behind(make_env: Callable, tmp
     (path,) = datasets_under(tmp_path)
     assert len((path / writer.SIDECAR).read_text().splitlines()) == 3  # written before the commit point
     assert [r["lerobot_episode_index"] for r in read_sidecar(path)] == [0, 1]
-    assert dataset_summary(path)["successes"] == 2 and load(path).num_episodes == 2
+    assert dataset_summary(path)["successes"] == 2
+    assert load(path).num_episodes == 2
 
 
 def test_a_live_recording_without_episodes_is_left_alone(make_env: Callable, tmp_path: Path) -> None:
@@ -190,7 +200,9 @@ def test_a_live_recording_without_episodes_is_left_alone(make_env: Callable, tmp
     run_script(env, [["."]])
     writer = rec._ensure_writer()  # the folder exists; no episode is saved yet
     status = folder_status(writer.root)
-    assert status.owner is not None and status.owner["pid"] == os.getpid() and not status.removable
+    assert status.owner is not None
+    assert status.owner["pid"] == os.getpid()
+    assert not status.removable
     assert clean_incomplete(tmp_path, writer.root.name.rsplit("_", 1)[0]) == []
     with pytest.raises(FileNotFoundError, match=f"{writer.root} is being recorded by process {os.getpid()}"):
         check_dataset_dir(writer.root)

@@ -22,7 +22,7 @@ os.environ.setdefault("RAY_AUTH_MODE", "disabled")
 
 sys.path.append(os.path.dirname(__file__))
 
-import pytest
+import pytest  # noqa: E402  (after the environment above: lerobot and Ray read it on import)
 
 TINY = Path(__file__).parent / "data" / "tiny_pick_fork.json"
 

@@ -31,7 +31,8 @@ def test_the_command_is_registered() -> None:
 
     load_plugins()
     entry = command_registry().find("generate")
-    assert entry is not None and entry.target == "embodichain_ray.cli:main"
+    assert entry is not None
+    assert entry.target == "embodichain_ray.cli:main"
 
 
 def test_two_workers_merge_six_loadable_episodes_in_episode_order(tmp_path: Path, tiny_config: Any,
@@ -39,10 +40,12 @@ def test_two_workers_merge_six_loadable_episodes_in_episode_order(tmp_path: Path
     out = tmp_path / "merged"
     assert _generate(tiny_config(), out, 2) == 0
     summary = capsys.readouterr().out
-    assert "6/6 merged" in summary and str(out) in summary
+    assert "6/6 merged" in summary
+    assert str(out) in summary
     assert "worker  episodes  failures  env-steps/s  restarts" in summary
     ds = load(out)
-    assert ds.num_episodes == 6 and ds.num_frames == 60
+    assert ds.num_episodes == 6
+    assert ds.num_frames == 60
     assert tuple(ds[59]["observation.images.eye_in_head"].shape) == (3, 64, 64)
     lines = sidecar(out)
     assert [line["generate"]["episode"] for line in lines] == list(range(6))
@@ -63,9 +66,12 @@ def test_an_invalid_config_fails_like_run_env_before_any_worker_starts(tmp_path:
     out = tmp_path / "never"
     assert _generate(str(bad), out, 2) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("embodichain generate: config error") and err.endswith(expected)
-    assert "fork_mass" in err and not ray.is_initialized()
-    assert not out.exists() and not out.with_name("never.shards").exists()
+    assert err.startswith("embodichain generate: config error")
+    assert err.endswith(expected)
+    assert "fork_mass" in err
+    assert not ray.is_initialized()
+    assert not out.exists()
+    assert not out.with_name("never.shards").exists()
 
 
 def test_counts_and_an_existing_output_are_config_errors(tmp_path: Path, tiny_config: Any, capsys: Any) -> None:
@@ -125,7 +131,9 @@ def test_a_worker_killed_mid_run_still_yields_six_loadable_episodes(tmp_path: Pa
     first = min((shards / "worker-000").glob("*/meta/info.json")).parent.parent
     assert (first / ".embodichain_staging").exists()  # the killed incarnation's shard, never finalized
     rows = [line.split() for line in summary.splitlines() if line.strip().startswith("0 ")]
-    assert rows and rows[0][-1] == "1", summary  # worker 0: one restart
+    assert rows, summary
+    assert rows[0][-1] == "1", summary  # worker 0: one restart
     ds = load(out)
-    assert ds.num_episodes == 6 and ds.num_frames == 240
+    assert ds.num_episodes == 6
+    assert ds.num_frames == 240
     assert [line["generate"]["episode"] for line in sidecar(out)] == list(range(6))

@@ -26,7 +26,8 @@ def test_episode_seeds_are_a_function_of_seed_episode_and_attempt() -> None:
     assert episode_seed(7, 3) == int(derive_seed(7, 3))
     assert episode_seed(7, 3, 2) == int(derive_seed(7, 3, 2))
     table = seed_table(7, 50, 3)
-    assert len(table) == 150 and table[episode_seed(7, 49, 2)] == (49, 2)
+    assert len(table) == 150
+    assert table[episode_seed(7, 49, 2)] == (49, 2)
     assert episode_seed(8, 3) not in table
 
 
@@ -62,10 +63,13 @@ def test_shard_episodes_merge_in_episode_order_with_their_metadata(tmp_path: Pat
     finally:
         shard = worker.close()
     scan = scan_shards(spec.shards, seed_table(spec.seed, 4, 2))
-    assert sorted(scan.episodes) == [0, 1, 2, 3] and scan.duplicates == 1 and scan.unknown == 0
+    assert sorted(scan.episodes) == [0, 1, 2, 3]
+    assert scan.duplicates == 1
+    assert scan.unknown == 0
     merge_episodes([scan.episodes[k] for k in range(4)], spec.output)
     merged = load(spec.output)
-    assert merged.num_episodes == 4 and merged.num_frames == 40
+    assert merged.num_episodes == 4
+    assert merged.num_frames == 40
     lines = sidecar(spec.output)
     assert [line["generate"]["episode"] for line in lines] == [0, 1, 2, 3]
     assert [line["lerobot_episode_index"] for line in lines] == [0, 1, 2, 3]
@@ -75,7 +79,8 @@ def test_shard_episodes_merge_in_episode_order_with_their_metadata(tmp_path: Pat
         for key in ("observation.state", "action"):
             np.testing.assert_array_equal(result[k][key], source[shard_index][key])
     frame = merged[15]  # episode 1, frame 5: its video frame decodes
-    assert int(frame["episode_index"]) == 1 and tuple(frame["observation.images.eye_in_head"].shape) == (3, 64, 64)
+    assert int(frame["episode_index"]) == 1
+    assert tuple(frame["observation.images.eye_in_head"].shape) == (3, 64, 64)
     with pytest.raises(FileExistsError):
         merge_episodes([scan.episodes[0]], spec.output)
 
@@ -116,8 +121,10 @@ def test_merge_only_merges_what_the_shards_hold_without_starting_ray(tmp_path: P
         worker.close()
     argv = ["--gym_config", config, "--seed", "7", "--merge-only", "--shards", str(spec.shards), "--quiet"]
     assert cli.main([*argv, "--episodes", "4", "--output", str(tmp_path / "partial")]) == 1  # 3 of 4
-    assert "3/4 merged" in capsys.readouterr().out and spec.shards.is_dir()
+    assert "3/4 merged" in capsys.readouterr().out
+    assert spec.shards.is_dir()
     assert cli.main([*argv, "--episodes", "3", "--output", str(tmp_path / "all")]) == 0
     assert [line["generate"]["episode"] for line in sidecar(tmp_path / "all")] == [0, 1, 2]
-    assert load(tmp_path / "all").num_episodes == 3 and not spec.shards.exists()
+    assert load(tmp_path / "all").num_episodes == 3
+    assert not spec.shards.exists()
     assert "ray" not in sys.modules or not sys.modules["ray"].is_initialized()

@@ -38,19 +38,27 @@ def test_train_then_play(tmp_path: Path, library: str, checkpoint: str, events: 
     args = ["train-rl", "--task", "PushCube-v1", "--library", library, "--num_envs", "4", "--steps", "150",
             "--max_episode_steps", "8", "--out", str(out)]
     assert embodichain(args) == 0
-    assert (out / checkpoint).is_file() and list((out / events).rglob("events.out.tfevents.*"))
+    assert (out / checkpoint).is_file()
+    assert list((out / events).rglob("events.out.tfevents.*"))
     meta = json.loads((out / "embodichain_rl.json").read_text())
-    assert meta["library"] == library and meta["task"] == "PushCube-v1" and meta["max_episode_steps"] == 8
+    assert meta["library"] == library
+    assert meta["task"] == "PushCube-v1"
+    assert meta["max_episode_steps"] == 8
     with (out / "curve.csv").open() as fh:
         rows = list(csv.DictReader(fh))
-    assert rows and any(r["episodes"] not in ("", "0") for r in rows)
+    assert rows
+    assert any(r["episodes"] not in ("", "0") for r in rows)
     video = tmp_path / f"{library}.mp4"
     assert embodichain(["train-rl", "--play", str(out / checkpoint), "--video", str(video)]) == 0
     frames = [frame for frame in imageio.get_reader(str(video), format="FFMPEG")]  # its len() is inf
     for deterministic in (True, False):
         result = evaluate(out / checkpoint, num_envs=3, deterministic=deterministic)
-        assert result["episodes"] == 3 and 0.0 <= result["success_rate"] <= 1.0 and result["mean_return"] > 0
-    assert len(frames) == 9 and frames[0].shape == (240, 320, 3) and frames[0].std() > 5  # 8 steps + the reset
+        assert result["episodes"] == 3
+        assert 0.0 <= result["success_rate"] <= 1.0
+        assert result["mean_return"] > 0
+    assert len(frames) == 9
+    assert frames[0].shape == (240, 320, 3)
+    assert frames[0].std() > 5
 
 
 def test_bad_arguments(tmp_path: Path) -> None:

@@ -26,17 +26,22 @@ def batch(n: int) -> dict:
 def test_layout_is_sorted_and_keeps_images_apart() -> None:
     flat = ObsFlattener.from_space(SPACE)
     assert flat.state_paths == ["cube_pose", "grid", "robot/qpos", "robot/qvel"]
-    assert flat.state_sizes == [7, 6, 2, 2] and flat.state_dim == 17
-    assert flat.image_paths == ["sensor/cam/color"] and flat.image_shapes == [(4, 5, 3)]
+    assert flat.state_sizes == [7, 6, 2, 2]
+    assert flat.state_dim == 17
+    assert flat.image_paths == ["sensor/cam/color"]
+    assert flat.image_shapes == [(4, 5, 3)]
     state = flat.state(batch(3))
-    assert state.shape == (3, 17) and state.dtype == torch.float32
-    assert state[0, :7].tolist() == list(range(7)) and state[0, 13:].tolist() == [1.0, 1.0, 2.0, 2.0]
+    assert state.shape == (3, 17)
+    assert state.dtype == torch.float32
+    assert state[0, :7].tolist() == list(range(7))
+    assert state[0, 13:].tolist() == [1.0, 1.0, 2.0, 2.0]
     assert flat.images(batch(3))["sensor/cam/color"].shape == (3, 4, 5, 3)
 
 
 def test_skip_round_trip_and_errors() -> None:
     flat = ObsFlattener.from_space(SPACE, skip=("sensor",))
-    assert flat.image_paths == [] and ObsFlattener.from_dict(flat.to_dict()) == flat
+    assert flat.image_paths == []
+    assert ObsFlattener.from_dict(flat.to_dict()) == flat
     obs = batch(2)
     obs["robot"]["qpos"] = torch.zeros(2, 3)
     with pytest.raises(ValueError, match="'robot/qpos' has 3 values per env, the layout expects 2"):

@@ -15,13 +15,20 @@ from embodichain_rl.train_rsl_rl import default_train_cfg
 
 def test_steps_the_batch_and_reports_time_outs(push_cube) -> None:
     vec = RslRlVecEnv(push_cube(3, max_episode_steps=4))
-    assert isinstance(vec, VecEnv) and vec.num_envs == 3 and vec.num_actions == 7 and vec.max_episode_length == 4
+    assert isinstance(vec, VecEnv)
+    assert vec.num_envs == 3
+    assert vec.num_actions == 7
+    assert vec.max_episode_length == 4
     obs = vec.get_observations()
-    assert obs.batch_size == torch.Size([3]) and obs["policy"].shape == (3, vec.flattener.state_dim)
+    assert obs.batch_size == torch.Size([3])
+    assert obs["policy"].shape == (3, vec.flattener.state_dim)
     for step in range(1, 5):
         obs, reward, dones, extras = vec.step(torch.zeros(3, 7))
-        assert reward.shape == (3,) and dones.dtype == torch.long and obs["policy"].ndim == 2
-        assert extras["time_outs"].tolist() == [step == 4] * 3 and dones.tolist() == [int(step == 4)] * 3
+        assert reward.shape == (3,)
+        assert dones.dtype == torch.long
+        assert obs["policy"].ndim == 2
+        assert extras["time_outs"].tolist() == [step == 4] * 3
+        assert dones.tolist() == [int(step == 4)] * 3
         assert "/success" in extras["log"]
     assert vec.episode_length_buf.tolist() == [0, 0, 0]  # autoreset in the same step
     vec.episode_length_buf = torch.tensor([1, 2, 3])
@@ -47,9 +54,11 @@ def test_rsl_rl_ppo_learns_two_iterations(push_cube, tmp_path: Path) -> None:
     after = list(runner.alg.get_policy().parameters())
     assert any(not torch.equal(a, b) for a, b in zip(before, after))
     assert (tmp_path / "model_1.pt").is_file()
-    assert [steps for steps, _ in rows] == [32, 64] and rows[1][1].episodes == 4  # one episode per env ended
+    assert [steps for steps, _ in rows] == [32, 64]
+    assert rows[1][1].episodes == 4
     actions = runner.get_inference_policy()(vec.get_observations())
-    assert actions.shape == (4, 7) and torch.isfinite(actions).all()
+    assert actions.shape == (4, 7)
+    assert torch.isfinite(actions).all()
 
 
 def test_the_env_stays_usable_after_steps_under_inference_mode(push_cube) -> None:

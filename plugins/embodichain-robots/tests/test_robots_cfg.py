@@ -15,9 +15,12 @@ TUTORIAL = {"uid": "dexforce_w1", "version": "v021", "arm_kind": "anthropomorphi
 
 def test_tutorial_dict() -> None:
     cfg = DexforceW1Cfg.from_dict(TUTORIAL)
-    assert cfg.uid == "dexforce_w1" and cfg.version == "v021" and cfg.arm_kind == "anthropomorphic"
+    assert cfg.uid == "dexforce_w1"
+    assert cfg.version == "v021"
+    assert cfg.arm_kind == "anthropomorphic"
     assert cfg.hand_types == {"left": "BRAINCO_HAND", "right": "BRAINCO_HAND"}
-    assert cfg.fix_base and cfg.disable_self_collision
+    assert cfg.fix_base
+    assert cfg.disable_self_collision
     assert cfg.control_parts["left_eef"][0] == "LEFT_HAND_THUMB1"
     assert isinstance(cfg.solver_cfg["left_arm"], IKSolverCfg)
 
@@ -60,20 +63,24 @@ def test_enums_and_case_are_accepted() -> None:
 
 def test_without_default_eef() -> None:
     cfg = DexforceW1Cfg.from_dict({"with_default_eef": False})
-    assert cfg.hand_types == {} and "left_eef" not in cfg.control_parts
+    assert cfg.hand_types == {}
+    assert "left_eef" not in cfg.control_parts
 
 
 def test_drive_pros_deep_merge() -> None:
     cfg = DexforceW1Cfg.from_dict({"drive_pros": {"stiffness": {"LEFT_J1": 5e3}, "max_effort": 50.0}})
     stiffness = cfg.drive_pros.stiffness
-    assert list(stiffness)[0] == "LEFT_J1" and stiffness["(ANKLE|KNEE|BUTTOCK|WAIST)"] == 1e6
-    assert cfg.drive_pros.max_effort == 50.0 and cfg.drive_pros.damping["(NECK1|NECK2)"] == 1e3
+    assert list(stiffness)[0] == "LEFT_J1"
+    assert stiffness["(ANKLE|KNEE|BUTTOCK|WAIST)"] == 1e6
+    assert cfg.drive_pros.max_effort == 50.0
+    assert cfg.drive_pros.damping["(NECK1|NECK2)"] == 1e3
 
 
 def test_solver_cfg_patch_keeps_defaults() -> None:
     tcp = [[1, 0, 0, 0.012], [0, 1, 0, 0.04], [0, 0, 1, 0.11], [0, 0, 0, 1]]
     cfg = DexforceW1Cfg.from_dict({"solver_cfg": {"left_arm": {"tcp": tcp}}})
-    assert cfg.solver_cfg["left_arm"].tcp == tcp and cfg.solver_cfg["left_arm"].root_link_name == "left_arm_base"
+    assert cfg.solver_cfg["left_arm"].tcp == tcp
+    assert cfg.solver_cfg["left_arm"].root_link_name == "left_arm_base"
     assert cfg.solver_cfg["right_arm"].tcp[1][3] == -0.0675
 
 
@@ -92,4 +99,5 @@ def test_registry_lookup_by_robot_type() -> None:
 def test_arm_defaults() -> None:
     cfg = SevenDofArmCfg()
     assert cfg.control_parts == {"arm": ["joint[1-7]"], "eef": ["finger_joint[12]"]}
-    assert len(cfg.init_qpos) == 9 and cfg.solver_cfg["arm"].end_link_name == "hand"
+    assert len(cfg.init_qpos) == 9
+    assert cfg.solver_cfg["arm"].end_link_name == "hand"

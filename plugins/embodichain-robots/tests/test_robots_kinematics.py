@@ -89,7 +89,8 @@ def test_ik_near_seed_is_fast_and_exact() -> None:
     success, sol = solver.get_ik(target, qpos_seed=nudged, num_restarts=0)
     assert bool(success.all())
     pos_err, rot_err = solver.pose_error(target, sol)
-    assert float(pos_err.max()) < 1e-4 and float(rot_err.max()) < 1e-3
+    assert float(pos_err.max()) < 1e-4
+    assert float(rot_err.max()) < 1e-3
 
 
 def test_unreachable_target_fails_and_stays_in_limits() -> None:
@@ -107,7 +108,8 @@ def test_mujoco_reference_solver_agrees() -> None:
     target = solver.get_fk(random_qpos(solver.qpos_limits, 8, seed=4))
     success, q = solver.get_ik(target, qpos_seed=torch.tensor([0.0, -0.785, 0, -2.356, 0, 1.571, 0.785]).repeat(8, 1))
     pos_err, _ = solver.pose_error(target, q)
-    assert success.float().mean() >= 0.75 and float(pos_err[success].max()) < 1e-3
+    assert success.float().mean() >= 0.75
+    assert float(pos_err[success].max()) < 1e-3
 
 
 def test_solver_tcp_api() -> None:

@@ -25,5 +25,6 @@ def test_plugin_import_is_cheap() -> None:
 def test_cli_lists_both_robots() -> None:
     exe = Path(sys.executable).with_name("embodichain")
     out = subprocess.run([str(exe), "list", "robots"], capture_output=True, text=True, check=True, timeout=120)
-    assert "DexforceW1" in out.stdout and "SevenDofArm" in out.stdout
+    assert "DexforceW1" in out.stdout
+    assert "SevenDofArm" in out.stdout
     assert "embodichain-robots" in out.stdout

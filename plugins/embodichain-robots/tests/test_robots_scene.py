@@ -49,7 +49,8 @@ def test_compute_fk_accepts_part_or_full_qpos(w1: object) -> None:
     at_current_base = w1.compute_fk(full[:, ids], name="left_arm")
     assert crouched[0, 2, 3] < at_current_base[0, 2, 3] - 0.05
     pose7 = w1.compute_fk(full[:, ids], name="left_arm", to_matrix=False)
-    assert pose7.shape == (2, 7) and torch.allclose(pose7[:, :3], at_current_base[:, :3, 3])
+    assert pose7.shape == (2, 7)
+    assert torch.allclose(pose7[:, :3], at_current_base[:, :3, 3])
 
 
 def test_compute_ik_round_trip_through_robot(w1: object) -> None:
@@ -57,7 +58,9 @@ def test_compute_ik_round_trip_through_robot(w1: object) -> None:
     q = sample_joint_values(solver.qpos_limits, 2, torch.Generator().manual_seed(5)).float()
     target = w1.compute_fk(q, name="right_arm")
     success, sol = w1.compute_ik(target, name="right_arm")
-    assert sol.shape == (2, 7) and success.dtype == torch.bool and bool(success.all())
+    assert sol.shape == (2, 7)
+    assert success.dtype == torch.bool
+    assert bool(success.all())
     reached = w1.compute_fk(sol, name="right_arm")
     assert torch.allclose(reached[:, :3, 3], target[:, :3, 3], atol=1e-3)
 
@@ -69,7 +72,8 @@ def test_compute_ik_env_subset_and_pose7(arm: object) -> None:
     target[:, 2, 3] -= 0.05
     pose7 = torch.cat((target[:, :3, 3], torch.tensor([[0.0, 1.0, 0.0, 0.0]])), -1)  # gripper pointing down
     success, sol = arm.compute_ik(pose7, joint_seed=arm.get_qpos()[1:], name="arm", env_ids=[1])
-    assert bool(success.all()) and sol.shape == (1, 7)
+    assert bool(success.all())
+    assert sol.shape == (1, 7)
     arm.set_qpos(sol, joint_ids=arm.get_joint_ids("arm"), env_ids=[1], target=False)
     tcp = arm.compute_fk(name="arm", env_ids=[1])
     assert torch.allclose(tcp[0, :3, 3], pose7[0, :3], atol=1e-3)
@@ -92,7 +96,8 @@ def test_init_pos_moves_the_robot(scene_factory: object) -> None:
     assert torch.allclose(ee[:3], torch.tensor([0.0, 1.791, 1.3648]), atol=1e-5)
     target = robot.compute_fk(name="left_arm")
     success, q = robot.compute_ik(target, name="left_arm")
-    assert bool(success.all()) and float(q.abs().max()) < 1e-3
+    assert bool(success.all())
+    assert float(q.abs().max()) < 1e-3
 
 
 def test_fingers_close_and_pips_follow_in_simulation(scene_factory: object) -> None:
@@ -105,4 +110,5 @@ def test_fingers_close_and_pips_follow_in_simulation(scene_factory: object) -> N
     for finger in ("INDEX", "MIDDLE", "RING", "PINKY"):
         prox = qpos[robot.joint_names.index(f"RIGHT_HAND_{finger}")]
         pip = qpos[robot.joint_names.index(f"RIGHT_{finger}_PIP")]
-        assert float(prox) == pytest.approx(0.8, abs=0.02) and float(pip) == pytest.approx(float(prox), abs=0.02)
+        assert float(prox) == pytest.approx(0.8, abs=0.02)
+        assert float(pip) == pytest.approx(float(prox), abs=0.02)

@@ -126,12 +126,15 @@ def test_part_joint_ids(w1: object) -> None:
     assert w1.dof == 40
     assert w1.get_joint_ids("left_arm") == [6, 8, 10, 12, 14, 16, 18]
     assert w1.get_joint_ids("right_arm") == [7, 9, 11, 13, 15, 17, 19]
-    assert w1.get_joint_ids("torso") == [0, 1, 2, 3] and w1.get_joint_ids("head") == [4, 5]
+    assert w1.get_joint_ids("torso") == [0, 1, 2, 3]
+    assert w1.get_joint_ids("head") == [4, 5]
     assert w1.get_joint_ids("dual_arm") == list(range(6, 20, 2)) + list(range(7, 20, 2))
     assert w1.get_joint_ids("full_body") == [0, 1, 2, 3, 4, 5] + list(range(6, 20, 2)) + list(range(7, 20, 2))
-    assert len(w1.mimic_ids) == 8 and len(w1.get_joint_ids("left_eef")) == 6
+    assert len(w1.mimic_ids) == 8
+    assert len(w1.get_joint_ids("left_eef")) == 6
     assert sorted(w1.get_joint_ids("left_eef")) == [20, 21, 22, 23, 24, 34]
-    assert w1.joint_names[24] == "LEFT_HAND_THUMB2" and w1.joint_names[29] == "RIGHT_HAND_THUMB2"
+    assert w1.joint_names[24] == "LEFT_HAND_THUMB2"
+    assert w1.joint_names[29] == "RIGHT_HAND_THUMB2"
     assert set(w1.control_parts) == {"torso", "head", "left_arm", "right_arm", "dual_arm", "left_eef",
                                       "right_eef", "full_body"}
 

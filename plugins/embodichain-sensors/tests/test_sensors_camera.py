@@ -32,16 +32,20 @@ def test_cube_projects_where_the_intrinsics_say(scene_factory):
     _, (cam,) = scene_factory(down_camera())
     cam.update()
     data = cam.get_data()
-    assert data["color"].shape == (1, H, W, 4) and data["color"].dtype == torch.uint8
-    assert data["depth"].shape == (1, H, W) and data["depth"].dtype == torch.float32
-    assert data["mask"].shape == (1, H, W) and data["mask"].dtype == torch.int32
+    assert data["color"].shape == (1, H, W, 4)
+    assert data["color"].dtype == torch.uint8
+    assert data["depth"].shape == (1, H, W)
+    assert data["depth"].dtype == torch.float32
+    assert data["mask"].shape == (1, H, W)
+    assert data["mask"].dtype == torch.int32
     _, rot = geo.look_at(np.array(EYE), np.array([EYE[0], EYE[1], 0.0]), np.array([1.0, 0.0, 0.0]))
     top = (CUBE_POS[0], CUBE_POS[1], CUBE_POS[2] + CUBE_SIZE / 2)
     u, v, z = project_opencv(top, EYE, rot, INTR)
     ui, vi = int(round(u)), int(round(v))
     mask, depth = data["mask"][0].numpy(), data["depth"][0].numpy()
     assert cam.uid_of_mask_id(int(mask[vi, ui])) == "cube"
-    assert abs(float(depth[vi, ui]) - z) < 1e-3 and abs(z - (EYE[2] - top[2])) < 1e-9
+    assert abs(float(depth[vi, ui]) - z) < 1e-3
+    assert abs(z - (EYE[2] - top[2])) < 1e-9
     # the silhouette of the box is the hull of its projected corners: pixel centres inside it
     uv = np.array([project_opencv(c, EYE, rot, INTR)[:2] for c in cube_corners()])
     want = (math.ceil(uv[:, 0].min()), math.floor(uv[:, 0].max()), math.ceil(uv[:, 1].min()), math.floor(uv[:, 1].max()))
@@ -79,10 +83,12 @@ def test_intrinsics_and_pose_queries(scene_factory):
     assert k.shape == (2, 3, 3)
     assert torch.allclose(k[1], torch.tensor([[220.0, 0, 97.3], [0, 200.0, 44.8], [0, 0, 1]]))
     pose = cam.get_arena_pose()
-    assert pose.shape == (2, 7) and torch.allclose(pose[:, :3], torch.tensor([EYE, EYE], dtype=torch.float32))
+    assert pose.shape == (2, 7)
+    assert torch.allclose(pose[:, :3], torch.tensor([EYE, EYE], dtype=torch.float32))
     assert cam.get_arena_pose(to_matrix=True).shape == (2, 4, 4)
     cam.set_intrinsics((110.0, 100.0, 80.0, 60.0), env_ids=[1])
-    assert torch.allclose(cam.get_intrinsics()[0], k[0]) and cam.get_intrinsics()[1, 0, 0] == 110.0
+    assert torch.allclose(cam.get_intrinsics()[0], k[0])
+    assert cam.get_intrinsics()[1, 0, 0] == 110.0
     cam.update()
     masks = cam.get_data()["mask"]
     assert (masks[0] == cam.mask_id_of("cube")).sum() > 2 * (masks[1] == cam.mask_id_of("cube")).sum()
@@ -93,7 +99,8 @@ def test_look_at_and_set_local_pose_per_env(scene_factory):
     cam.look_at(eye=(3.0, 3.0, 3.0), target=(3.0, 3.0, 0.0), env_ids=[0])
     cam.update()
     masks = cam.get_data()["mask"]
-    assert not (masks[0] == cam.mask_id_of("cube")).any() and (masks[1] == cam.mask_id_of("cube")).any()
+    assert not (masks[0] == cam.mask_id_of("cube")).any()
+    assert (masks[1] == cam.mask_id_of("cube")).any()
     cam.set_local_pose(torch.tensor([[*EYE, 0.0, 1.0, 0.0, 0.0]]), env_ids=[0])  # looks down, x flipped
     assert torch.allclose(cam.get_local_pose()[0, :3], torch.tensor(EYE, dtype=torch.float32))
 
@@ -159,7 +166,8 @@ def test_one_renderer_per_sensor_reused(scene_factory, monkeypatch):
     _, (cam,) = scene_factory(down_camera(), num_envs=3)
     for _ in range(3):
         cam.update()
-    assert len(made) == 1 and cam.get_data()["color"].shape[0] == 3
+    assert len(made) == 1
+    assert cam.get_data()["color"].shape[0] == 3
 
 
 def test_config_validation():
@@ -172,4 +180,6 @@ def test_config_validation():
     cfg = CameraCfg.from_dict({"sensor_type": "Camera", "uid": "cam_high", "width": 96, "height": 54,
                                "intrinsics": [48.8, 48.8, 48, 27],
                                "extrinsics": {"eye": [1, 0, 1], "target": [0, 0, 0], "up": [0, 0, 1]}})
-    assert isinstance(cfg, CameraCfg) and cfg.extrinsics.eye == (1, 0, 1) and cfg.fx == 48.8
+    assert isinstance(cfg, CameraCfg)
+    assert cfg.extrinsics.eye == (1, 0, 1)
+    assert cfg.fx == 48.8

@@ -39,23 +39,27 @@ def test_forces_while_resting_and_none_when_lifted():
     assert {k: tuple(v.shape) for k, v in data.items()} == {
         "position": (2, K, 3), "normal": (2, K, 3), "force": (2, K, 3), "friction": (2, K, 3),
         "impulse": (2, K), "distance": (2, K), "user_ids": (2, K, 2), "is_valid": (2, K)}
-    assert data["is_valid"].dtype == torch.bool and data["user_ids"].dtype == torch.int32
+    assert data["is_valid"].dtype == torch.bool
+    assert data["user_ids"].dtype == torch.int32
     valid = data["is_valid"]
     assert valid.sum(dim=1).min() >= 1
     total = (data["force"] * valid[..., None]).sum(dim=1)  # on the cube (side 0), newtons
     mass = float(scene.model.body_mass[scene["cube"].body_id])
     assert torch.allclose(total, torch.tensor([0.0, 0.0, 9.81 * mass]).expand(2, 3), atol=0.05 * 9.81 * mass)
     first = data["user_ids"][0, 0].tolist()
-    assert sensor.actor_name(first[0]) == "cube" and sensor.uid_of_actor(first[1]) == "table"
+    assert sensor.actor_name(first[0]) == "cube"
+    assert sensor.uid_of_actor(first[1]) == "table"
     assert torch.allclose(data["normal"][valid], torch.tensor([0.0, 0.0, 1.0]), atol=1e-6)
-    assert (data["impulse"][valid] > 0).all() and (data["force"][~valid] == 0).all()
+    assert (data["impulse"][valid] > 0).all()
+    assert (data["force"][~valid] == 0).all()
     # lift the cube: contacts vanish
     pose = scene["cube"].get_local_pose()
     pose[:, 2] += 0.5
     scene["cube"].set_local_pose(pose)
     scene.sim.forward()
     sensor.update()
-    assert not sensor.get_data()["is_valid"].any() and sensor.get_data()["force"].abs().sum() == 0
+    assert not sensor.get_data()["is_valid"].any()
+    assert sensor.get_data()["force"].abs().sum() == 0
 
 
 def test_filters_need_both_or_either_and_fixed_k():
@@ -70,7 +74,8 @@ def test_filters_need_both_or_either_and_fixed_k():
         s.update()
     b, e, a = (s.get_data()["is_valid"] for s in sensors)
     assert not b.any()  # the table is not watched
-    assert e.shape == (1, 2) and e.all()  # 4 corner contacts, truncated to K = 2
+    assert e.shape == (1, 2)
+    assert e.all()
     assert a.sum() >= 4
 
 
@@ -91,7 +96,8 @@ def test_articulation_link_filter():
     valid = base_data["is_valid"][0]
     assert valid.any()
     names = {sensors[1].actor_name(i) for i in base_data["user_ids"][0][valid][:, 0].tolist()}
-    assert names == {"block/block"} and sensors[1].uid_of_actor(base_data["user_ids"][0, 0, 1]) == "default_plane"
+    assert names == {"block/block"}
+    assert sensors[1].uid_of_actor(base_data["user_ids"][0, 0, 1]) == "default_plane"
 
 
 def test_unknown_uids_and_bad_k():

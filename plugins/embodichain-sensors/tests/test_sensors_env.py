@@ -53,12 +53,14 @@ def test_sensor_observations_are_batched():
         obs, _ = env.reset(seed=0)
         sensor = obs["sensor"]
         assert sensor["cam_high"]["color"].shape == (2, 48, 64, 4)
-        assert sensor["cam_high"]["depth"].shape == (2, 48, 64) and sensor["cam_high"]["mask"].shape == (2, 48, 64)
+        assert sensor["cam_high"]["depth"].shape == (2, 48, 64)
+        assert sensor["cam_high"]["mask"].shape == (2, 48, 64)
         assert sensor["eye_in_head"]["color_right"].shape == (2, 32, 48, 4)
         assert sensor["eye_in_head"]["disparity"].shape == (2, 32, 48, 1)
         assert sensor["touch"]["is_valid"].shape == (2, 4)
         space = env.single_observation_space["sensor"]
-        assert space["cam_high"]["color"].shape == (48, 64, 4) and space["touch"]["force"].shape == (4, 3)
+        assert space["cam_high"]["color"].shape == (48, 64, 4)
+        assert space["touch"]["force"].shape == (4, 3)
         cam = env.sensors["cam_high"]
         assert cam.uid_of_mask_id(int(sensor["cam_high"]["mask"][0, 24, 32])) in {"cube", "default_plane", "arm"}
         obs, *_ = env.step(torch.zeros(env.action_space.shape))
@@ -69,4 +71,5 @@ def test_sensor_observations_are_batched():
         assert env.get_sensor("eye_in_head").get_intrinsics()[0].shape == (2, 3, 3)
     finally:
         env.close()
-    assert env.sensors["cam_high"]._renderer is None and env.sensors["eye_in_head"]._renderer is None
+    assert env.sensors["cam_high"]._renderer is None
+    assert env.sensors["eye_in_head"]._renderer is None

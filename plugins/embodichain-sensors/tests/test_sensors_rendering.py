@@ -18,7 +18,8 @@ from sensors_helpers import make_scene
 
 def test_user_value_is_respected():
     env = {"MUJOCO_GL": "osmesa"}
-    assert rendering.configure_gl(env) == "osmesa" and env == {"MUJOCO_GL": "osmesa"}
+    assert rendering.configure_gl(env) == "osmesa"
+    assert env == {"MUJOCO_GL": "osmesa"}
 
 
 @pytest.mark.parametrize("found, want", [
@@ -43,8 +44,10 @@ def test_a_broken_backend_names_what_to_install(monkeypatch):
     with pytest.raises(rendering.RenderingBackendError) as err:
         rendering.create_gl_context(64, 64)
     text = str(err.value)
-    assert "MUJOCO_GL=" in text and "cannot open shared object" in text
-    assert "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri" in text and "libosmesa6" in text
+    assert "MUJOCO_GL=" in text
+    assert "cannot open shared object" in text
+    assert "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri" in text
+    assert "libosmesa6" in text
 
 
 def test_sim_import_chooses_the_backend_before_mujoco():
@@ -54,7 +57,8 @@ def test_sim_import_chooses_the_backend_before_mujoco():
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     chosen, seen = out.stdout.split()
-    assert chosen == seen and chosen in rendering.HEADLESS_BACKENDS
+    assert chosen == seen
+    assert chosen in rendering.HEADLESS_BACKENDS
 
 
 @pytest.mark.slow

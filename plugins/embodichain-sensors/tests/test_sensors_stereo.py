@@ -66,7 +66,9 @@ def test_rig_geometry_and_intrinsics(scene_factory):
     # the baseline runs along the camera's +X (image right): world -y for this camera
     assert torch.allclose(right[0, :3] - left[0, :3], torch.tensor([0.0, -BASELINE, 0.0]), atol=1e-6)
     k_left, k_right = cam.get_intrinsics()
-    assert k_left[0, 0, 0] == FX and k_right[0, 0, 0] == 200.0 and k_right[0, 0, 2] == 80.0
+    assert k_left[0, 0, 0] == FX
+    assert k_right[0, 0, 0] == 200.0
+    assert k_right[0, 0, 2] == 80.0
 
 
 def test_disparity_needs_depth():
@@ -82,7 +84,9 @@ def test_seed_eye_in_head_on_an_eyes_link(scene_factory):
                           extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"))
     scene, (cam,) = scene_factory(cfg, robot=True)
     data = cam.get_data()
-    assert data["color"].shape == (1, 540, 960, 4) and data["mask_right"].shape == (1, 540, 960, 1)
+    assert data["color"].shape == (1, 540, 960, 4)
+    assert data["mask_right"].shape == (1, 540, 960, 1)
     eyes = scene["arm"].get_link_pose("eyes")
     assert torch.allclose(cam.get_arena_pose()[:, :3], eyes[:, :3], atol=1e-6)
-    assert scene.model.vis.global_.offwidth >= 960 and scene.model.vis.global_.offheight >= 540
+    assert scene.model.vis.global_.offwidth >= 960
+    assert scene.model.vis.global_.offheight >= 540

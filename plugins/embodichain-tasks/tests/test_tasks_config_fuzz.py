@@ -75,7 +75,8 @@ def _check_all(base: dict, corpus: list[Mutation]) -> None:
 
 
 def test_corpus_is_large_and_deterministic() -> None:
-    assert len(CORPUS) >= 150 and len(REJECTED) >= 150
+    assert len(CORPUS) >= 150
+    assert len(REJECTED) >= 150
     assert [m.id for m in CORPUS] == [m.id for m in mutations()]
     assert len({m.id for m in CORPUS}) == len(CORPUS)
     kinds = {m.label for m in CORPUS}
@@ -110,7 +111,8 @@ def test_two_bad_values_at_once_still_give_a_config_error(base_config: dict) -> 
         results = [outcome(first, err), outcome(second, err)]
         if "ok" not in results:
             failures[f"{first.id} + {second.id}"] = results[0]
-    assert len(_pairs()) >= 100 and not failures, failures
+    assert len(_pairs()) >= 100
+    assert not failures, failures
 
 
 def test_outcome_classifies_results() -> None:
@@ -120,5 +122,6 @@ def test_outcome_classifies_results() -> None:
     assert outcome(bad, ConfigError("rigid_object[0].attrs", "bad")).startswith("the error does not name")
     assert outcome(bad, ConfigError("rigid_object[0].attrs.mass", "must be >= 0")) == "ok"
     good = Mutation("light.direct[0].intensity", "zero", 0.0, "ok")
-    assert outcome(good, None) == "ok" and outcome(good, ConfigError("x", "y")).startswith("rejected")
+    assert outcome(good, None) == "ok"
+    assert outcome(good, ConfigError("x", "y")).startswith("rejected")
     assert math.isnan(apply({"a": {"b": [1, 2]}}, Mutation("a.b[1]", "nan", math.nan, "error"))["a"]["b"][1])

@@ -20,7 +20,9 @@ def test_defaults_are_embodichain_s() -> None:
     args = parse()
     assert (args.num_envs, args.device, args.headless, args.renderer) == (1, "cpu", False, "auto")
     assert (args.gym_config, args.max_episodes, args.seed) == ("", None, None)
-    assert not (args.preview or args.filter_visual_rand or args.filter_dataset_saving)
+    assert not (args.preview)
+    assert not (args.filter_visual_rand)
+    assert not (args.filter_dataset_saving)
     assert launcher_overrides(args) == {}
 
 

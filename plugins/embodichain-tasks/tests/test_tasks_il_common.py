@@ -19,7 +19,8 @@ def test_frame_from_axes_is_a_rotation_with_the_given_axes() -> None:
     assert torch.allclose(rot.transpose(-1, -2) @ rot, eye, atol=1e-12)
     assert torch.allclose(torch.linalg.det(rot), torch.ones(2, dtype=torch.float64))
     assert torch.allclose(rot[:, :, 2], torch.nn.functional.normalize(approach.double(), dim=-1))
-    assert rot[0, 1, 1] > 0.9 and rot[1, 2, 1] > 0.99  # closing axes kept (orthogonalized)
+    assert rot[0, 1, 1] > 0.9
+    assert rot[1, 2, 1] > 0.99
 
 
 def test_top_down_grasp_frame_closes_across_the_object() -> None:
@@ -44,18 +45,23 @@ def test_yaw_of_folds_half_turns(yaw: float) -> None:
 def test_interpolation_is_smooth_and_ends_at_the_goal() -> None:
     start, goal = torch.zeros(2, 3), torch.ones(2, 3)
     path = common.interpolate_joints(start, goal, 10)
-    assert path.shape == (10, 2, 3) and torch.allclose(path[-1], goal)
+    assert path.shape == (10, 2, 3)
+    assert torch.allclose(path[-1], goal)
     steps = (path[1:] - path[:-1])[:, 0, 0]
-    assert (steps > 0).all() and steps[0] < steps[4] and steps[-1] < steps[4]  # slow start and end
+    assert (steps > 0).all()
+    assert steps[0] < steps[4]
+    assert steps[-1] < steps[4]
 
 
 def test_w1_init_qpos_mirrors_the_arms_and_opens_the_grippers() -> None:
     qpos = common.w1_init_qpos()
     assert len(qpos) == 24  # W1 with two DH grippers, EmbodiChain breadth-first order
-    assert qpos[:4] == list(common.W1_CROUCH) and qpos[4:6] == list(common.W1_HEAD)
+    assert qpos[:4] == list(common.W1_CROUCH)
+    assert qpos[4:6] == list(common.W1_HEAD)
     right = qpos[7:20:2]
     assert right == [round(v, 4) for v in common.W1_RIGHT_READY_DOWN]
-    assert qpos[6:20:2] == [-v for v in right] and qpos[20:] == [0.0] * 4
+    assert qpos[6:20:2] == [-v for v in right]
+    assert qpos[20:] == [0.0] * 4
 
 
 def test_w1_robot_cfg_and_tune_contacts_compile_into_the_model() -> None:
@@ -74,10 +80,12 @@ def test_w1_robot_cfg_and_tune_contacts_compile_into_the_model() -> None:
                                                               "condim": 4, "friction": [1.2, 0.01, 0.0001]})})
     env = EmbodiedEnv(cfg, num_envs=1)
     model = env.sim.get_model(0)
-    assert model.opt.impratio == 20.0 and model.opt.cone == 1  # elliptic
+    assert model.opt.impratio == 20.0
+    assert model.opt.cone == 1
     cube = env.scene["cube"].body_id
     geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == cube and model.geom_contype[g]]
-    assert geoms and all(model.geom_condim[g] == 4 and model.geom_friction[g][0] == 1.2 for g in geoms)
+    assert geoms
+    assert all(model.geom_condim[g] == 4 and model.geom_friction[g][0] == 1.2 for g in geoms)
     assert env.active_joint_ids == env.robot.get_joint_ids("right_arm") + env.robot.get_joint_ids("right_eef")
     qpos = env.robot.get_qpos()[0]
     assert torch.allclose(qpos, torch.tensor(common.w1_init_qpos()), atol=1e-5)
@@ -97,7 +105,8 @@ def test_demo_builder_rows_follow_the_active_joints() -> None:
     demo.set_gripper(1.0, 3)
     demo.hold(2)
     rows = demo.actions()
-    assert len(rows) == len(demo) == 10 and rows[0].shape == (2, 9)
+    assert len(rows) == len(demo) == 10
+    assert rows[0].shape == (2, 9)
     assert bool(demo.ik_ok.all())
     reached = env.robot.compute_fk(rows[4][:, :7], name="right_arm")
     assert torch.allclose(reached[:, :3, 3].double(), lower[:, :3, 3], atol=1e-3)

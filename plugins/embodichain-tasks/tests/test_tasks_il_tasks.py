@@ -47,7 +47,8 @@ def run_demo(env: Any, max_steps: int | None = None) -> tuple[torch.Tensor, list
 @pytest.mark.parametrize("task_id", IDS)
 def test_gym_make_and_five_demo_steps(task_id: str, num_envs: int, check_batched_env: Any) -> None:
     env = gym.make(task_id, num_envs=num_envs, verbose=False).unwrapped
-    assert isinstance(env, TASKS[task_id][0]) and env.num_envs == num_envs
+    assert isinstance(env, TASKS[task_id][0])
+    assert env.num_envs == num_envs
     assert env.single_action_space.shape == (ACTION_DIM,)
     check_batched_env(env)
     _, actions = run_demo(env, max_steps=5)
@@ -62,7 +63,8 @@ def test_gym_make_and_five_demo_steps(task_id: str, num_envs: int, check_batched
 def test_builds_from_the_json_config(task_id: str, num_envs: int, check_batched_env: Any) -> None:
     _, cfg_cls, config = TASKS[task_id]
     loaded_id, cfg, extras = load_gym_config(str(config), {"num_envs": num_envs, "verbose": False}, cfg_cls=cfg_cls)
-    assert loaded_id == task_id and extras["max_episodes"] == 2
+    assert loaded_id == task_id
+    assert extras["max_episodes"] == 2
     env = gym.make(loaded_id, cfg=cfg).unwrapped
     assert env.num_envs == num_envs
     check_batched_env(env)
@@ -95,7 +97,8 @@ def test_pick_fork_success_needs_a_lifted_and_held_fork() -> None:
     env = gym.make("PickFork-v1", num_envs=2, verbose=False).unwrapped
     env.reset(seed=0)
     success, fail, metrics = env.compute_task_state()
-    assert not success.any() and not fail.any()
+    assert not success.any()
+    assert not fail.any()
     assert (metrics["fork_height"].abs() < 0.01).all()  # resting on the table
     fork = env.scene["fork"]
     pose = fork.get_local_pose().clone()

@@ -11,7 +11,10 @@ MAIN_JOB = Path(embodichain_tasks.__file__).parent / "configs" / "main_job.json"
 
 def test_main_job_records_pick_fork_demos_with_the_stereo_camera_as_video():
     task_id, cfg, extras = load_gym_config(str(MAIN_JOB))
-    assert task_id == "PickFork-v1" and cfg.num_envs == 2 and extras["max_episodes"] >= 2
+    assert task_id == "PickFork-v1"
+    assert cfg.num_envs == 2
+    assert extras["max_episodes"] >= 2
     recorder = cfg.dataset["lerobot"]
-    assert recorder.func == "LeRobotRecorder" and recorder.params["use_videos"] is True
+    assert recorder.func == "LeRobotRecorder"
+    assert recorder.params["use_videos"] is True
     assert [s.sensor_type for s in cfg.sensor] == ["StereoCamera"]

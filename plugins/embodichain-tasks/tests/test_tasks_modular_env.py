@@ -78,7 +78,8 @@ def test_one_episode_in_process_events_act() -> None:
         env.reset()
         meshes.append(list(base.scene.current_mesh["fork"]))
     drawn = {m for ms in meshes for m in ms}
-    assert len(drawn) >= 3 and all(Path(m).parent.name == "fork" for m in drawn)
+    assert len(drawn) >= 3
+    assert all(Path(m).parent.name == "fork" for m in drawn)
     assert any(meshes[k][i] != meshes[k + 1][i] for k in range(3) for i in range(2))
     env.close()
 
@@ -109,7 +110,8 @@ def test_gym_make_with_the_tutorial_cfg(num_envs: int, check_batched_env: Any) -
 
 def test_json_config_is_equivalent_to_the_tutorial_cfg() -> None:
     task_id, cfg, extras = load_gym_config(str(CONFIG_DIR / "modular_env.json"))
-    assert task_id == "ModularEnv-v1" and cfg.max_episode_steps == 100
+    assert task_id == "ModularEnv-v1"
+    assert cfg.max_episode_steps == 100
     assert normalized_cfg(cfg) == normalized_cfg(ExampleCfg())
 
 
@@ -124,13 +126,15 @@ def test_builds_from_the_json_config(num_envs: int, check_batched_env: Any) -> N
 
 def test_run_env_few_steps(embodichain_cli: Any) -> None:
     out = embodichain_cli("run-env", "ModularEnv-v1", "--max_episodes", "1", "--num_envs", "1", "--max_steps", "5")
-    assert "run-env summary: ModularEnv-v1" in out.stdout and "episodes     1 (1 env(s))" in out.stdout
+    assert "run-env summary: ModularEnv-v1" in out.stdout
+    assert "episodes     1 (1 env(s))" in out.stdout
 
 
 @pytest.mark.slow
 def test_run_env_one_episode(embodichain_cli: Any) -> None:
     out = embodichain_cli("run-env", "ModularEnv-v1", "--max_episodes", "1", "--num_envs", "1")
-    assert "episodes     1 (1 env(s))" in out.stdout and "env steps    100" in out.stdout
+    assert "episodes     1 (1 env(s))" in out.stdout
+    assert "env steps    100" in out.stdout
 
 
 @pytest.mark.slow

@@ -27,7 +27,8 @@ def test_two_iterations_write_the_curve_plot_and_policy(tmp_path: Path, capsys) 
     assert (out / "curve.csv").read_text().splitlines()[0].startswith("iteration,env_steps,wall_s")
     assert (out / "learning_curve.png").read_bytes()[:8] == PNG_MAGIC
     saved = torch.load(out / "policy.pt", weights_only=False)
-    assert set(saved) == {"agent", "obs_norm", "config"} and saved["config"]["num_envs"] == 4
+    assert set(saved) == {"agent", "obs_norm", "config"}
+    assert saved["config"]["num_envs"] == 4
     assert "mean return: first" in capsys.readouterr().out
 
 
@@ -56,7 +57,8 @@ def test_running_norm_and_flatten() -> None:
     norm = RunningNorm(7)
     x = torch.randn(1000, 7) * 3 + 5
     y = norm(x)
-    assert y.mean(0).abs().max() < 0.1 and (y.std(0) - 1).abs().max() < 0.1
+    assert y.mean(0).abs().max() < 0.1
+    assert (y.std(0) - 1).abs().max() < 0.1
 
 
 def test_png_plotter_draws_the_series(tmp_path: Path) -> None:

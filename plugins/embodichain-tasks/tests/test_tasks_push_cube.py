@@ -30,7 +30,8 @@ def env() -> Any:
 @pytest.mark.parametrize("num_envs", [1, 3])
 def test_gym_make_default_cfg(num_envs: int, check_batched_env: Any) -> None:
     env = gym.make("PushCube-v1", num_envs=num_envs, verbose=False)
-    assert isinstance(env.unwrapped, PushCubeEnv) and env.unwrapped.num_envs == num_envs
+    assert isinstance(env.unwrapped, PushCubeEnv)
+    assert env.unwrapped.num_envs == num_envs
     check_batched_env(env)
     env.close()
 
@@ -53,15 +54,19 @@ def test_json_config_is_equivalent_to_the_python_cfg() -> None:
 
 def test_run_env(embodichain_cli: Any) -> None:
     out = embodichain_cli("run-env", "PushCube-v1", "--max_episodes", "1", "--num_envs", "1")
-    assert "run-env summary: PushCube-v1" in out.stdout and "env steps    100" in out.stdout
+    assert "run-env summary: PushCube-v1" in out.stdout
+    assert "env steps    100" in out.stdout
 
 
 def test_spaces_and_observations(env: Any) -> None:
     obs, _ = env.reset(seed=0)
     assert env.single_action_space.shape == (7,)
-    assert float(env.single_action_space.low.min()) == -1.0 and float(env.single_action_space.high.max()) == 1.0
-    assert obs["cube_pose"].shape == (4, 7) and obs["goal_position"].shape == (4, 3)
-    assert obs["eef_position"].shape == (4, 3) and obs["robot"]["qpos"].shape == (4, 7)
+    assert float(env.single_action_space.low.min()) == -1.0
+    assert float(env.single_action_space.high.max()) == 1.0
+    assert obs["cube_pose"].shape == (4, 7)
+    assert obs["goal_position"].shape == (4, 3)
+    assert obs["eef_position"].shape == (4, 3)
+    assert obs["robot"]["qpos"].shape == (4, 7)
     assert torch.allclose(obs["goal_position"], env.goal_pose[:, :3, 3])
 
 

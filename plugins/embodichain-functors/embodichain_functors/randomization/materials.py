@@ -90,7 +90,10 @@ def own_link_materials(spec: mujoco.MjSpec, uid: str, links: list[str]) -> None:
 def material_groups(scene: Any, uid: str, functor: str) -> list[list[int]]:
     """Material ids of an entity, grouped by part drawn independently (member, link)."""
     model = scene.model
-    find = lambda name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_MATERIAL, name)
+
+    def find(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_MATERIAL, name)
+
     if uid == GROUND_UID:
         return [[find(f"{GROUND_UID}/mat")]]
     entity = scene.get(uid)
