@@ -174,8 +174,16 @@ def test_different_seed_differs_and_reset_seed_reseeds(make_env) -> None:
 
 
 def test_no_seed_draws_one_and_records_it(make_env) -> None:
-    env = make_env(seed=None)
-    assert isinstance(env.cfg.seed, int)
+    env, other = make_env(seeded_cfg(None)), make_env(seeded_cfg(None))
+    seed = env.cfg.seed
+    assert isinstance(seed, int)
+    assert 0 <= seed < 2**31
+    assert other.cfg.seed != seed  # drawn per env (equal with probability 2**-31)
+    # the recorded seed repeats the run: same episode streams, same randomized first observation
+    replay = make_env(seeded_cfg(seed))
+    first, again = env.reset()[0], replay.reset()[0]
+    assert env.episode_seeds.tolist() == replay.episode_seeds.tolist()
+    assert torch.equal(first["object"]["cube_pose"], again["object"]["cube_pose"])
 
 
 # -- timing ---------------------------------------------------------------------------------------
@@ -304,10 +312,21 @@ def test_gym_make_vec_vector_entry_point(registered_id: str) -> None:
     try:
         assert isinstance(venv.unwrapped, RegisteredEnv)
         assert venv.num_envs == 3
-        obs, _ = venv.reset()
+        obs, _ = venv.reset(seed=3)
         assert obs["robot"]["qpos"].shape == (3, 7)
-        _, reward, terminated, truncated, _ = venv.step(torch.zeros(3, 7))
+        action = torch.linspace(-0.2, 0.2, 21).reshape(3, 7)
+        obs, reward, terminated, truncated, _ = venv.step(action)
         assert reward.shape == terminated.shape == truncated.shape == (3,)
+        # the vector env is the batched env itself: the same values as one built directly
+        direct = RegisteredEnv(base_cfg(num_envs=3))
+        direct.reset(seed=3)
+        want_obs, want_reward, want_terminated, want_truncated, _ = direct.step(action)
+        direct.close()
+        assert torch.equal(obs["robot"]["qpos"], want_obs["robot"]["qpos"])
+        assert torch.equal(reward, want_reward)
+        assert torch.equal(terminated, want_terminated)
+        assert torch.equal(truncated, want_truncated)
+        assert not torch.equal(obs["robot"]["qpos"][0], obs["robot"]["qpos"][2])  # the rows are the envs'
     finally:
         venv.close()
 

@@ -68,11 +68,23 @@ def test_gym_make_runs_the_plugin_task():
 
 def test_make_vec_uses_the_batched_env():
     env = gym.make_vec("FixtureReach-v0", num_envs=2, vectorization_mode="vector_entry_point", verbose=False)
-    obs, _ = env.reset(seed=0)
-    obs, reward, terminated, truncated, info = env.step(torch.zeros(2, 3))
-    assert reward.shape == (2,)
-    assert env.num_envs == 2
-    env.close()
+    direct = gym.make("FixtureReach-v0", num_envs=2, verbose=False)
+    action = torch.tensor([[0.1, -0.2, 0.3], [-0.3, 0.2, 0.0]])
+    try:
+        assert env.num_envs == 2
+        first, _ = env.reset(seed=0)
+        want_first, _ = direct.reset(seed=0)
+        obs, reward, terminated, truncated, info = env.step(action)
+        want_obs, want_reward, *_ = direct.step(action)
+        assert reward.shape == (2,)
+        # the same values as the batched env made directly, per env
+        assert torch.equal(first["object"]["cube_pos"], want_first["object"]["cube_pos"])
+        assert torch.equal(obs["object"]["cube_pos"], want_obs["object"]["cube_pos"])
+        assert torch.equal(reward, want_reward)
+        assert first["object"]["cube_pos"][0, 0] != first["object"]["cube_pos"][1, 0]  # rows are the envs'
+    finally:
+        env.close()
+        direct.close()
 
 
 def test_episode_limit_truncates_every_env():

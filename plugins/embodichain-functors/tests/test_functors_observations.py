@@ -35,6 +35,23 @@ def test_object_poses_velocity_and_scale(build) -> None:
     assert objs["cube_vel"].shape == (4, 6)
     assert torch.equal(objs["cube_scale"], torch.ones(4, 3))
     assert env.single_observation_space["object"]["cube"].shape == (4, 4)
+    # values, not only shapes: a velocity set on envs 1 and 3 is read back in the world frame
+    velocity = torch.tensor([[0.1, -0.2, 0.3, 0.5, 0.0, -0.4], [0.0, 0.2, 0.0, 0.0, 0.3, 0.0]])
+    pose = env.scene["cube"].get_local_pose().clone()
+    pose[[1, 3], 3:] = torch.tensor([0.9238795, 0.0, 0.0, 0.3826834])  # 45 degrees about z
+    env.scene["cube"].set_local_pose(pose[[1, 3]], [1, 3])
+    env.scene["cube"].set_velocity(velocity, [1, 3])
+    objs = env.get_obs()["object"]
+    assert torch.allclose(objs["cube_vel"][[1, 3]], velocity, atol=1e-5)
+    assert torch.equal(objs["cube_vel"][[0, 2]], torch.zeros(2, 6))
+    assert torch.allclose(objs["cube7"][[1, 3], 3:], pose[[1, 3], 3:].float(), atol=1e-6)
+
+
+def test_object_body_scale_reads_the_configured_scale(build) -> None:
+    cfg = scene_cfg(observations={"s": add(obs.get_object_body_scale, "object/s", entity_cfg=E(uid="cube"))})
+    cfg.rigid_object[0].body_scale = (2.0, 1.0, 0.5)
+    o, _ = build(cfg).reset()
+    assert torch.equal(o["object"]["s"], torch.tensor([[2.0, 1.0, 0.5]]).expand(4, 3))
 
 
 def test_missing_uid_is_a_config_error(build) -> None:
