@@ -91,7 +91,8 @@ class Camera(BaseSensor):
     def build(self, builder: Any) -> None:
         """Resolve the parent and add one MuJoCo camera per view to the spec."""
         cfg, spec = self.cfg, builder.spec
-        where = f"sensor {self.uid!r}: extrinsics.parent"
+        path = getattr(builder.records.get(self.uid), "path", "")  # claimed with its config path (sensor[0])
+        where = f"{path}.extrinsics.parent" if path else f"sensor {self.uid!r}: extrinsics.parent"
         self.mount = resolve_mount(spec, cfg.extrinsics.parent, builder.records, where)
         body = spec.worldbody if self.mount.body is None else spec.body(self.mount.body)
         for k, view in enumerate(self.views):

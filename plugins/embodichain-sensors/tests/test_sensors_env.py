@@ -73,3 +73,15 @@ def test_sensor_observations_are_batched():
         env.close()
     assert env.sensors["cam_high"]._renderer is None
     assert env.sensors["eye_in_head"]._renderer is None
+
+
+def test_an_unknown_parent_names_the_sensor_entry_of_the_config():
+    import pytest
+
+    from embodichain_core.config.errors import ConfigError
+
+    cfg = make_cfg()
+    cfg.sensor[1].extrinsics.parent = "eyez"
+    with pytest.raises(ConfigError, match=r"^sensor\[1\]\.extrinsics\.parent: no link, body or site named 'eyez'") as err:
+        EmbodiedEnv(cfg)
+    assert "'arm/eyes'" in str(err.value)  # the closest valid choice is offered
