@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 import torch
 
+from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.entities.base import env_index
 from embodichain_core.sim.sensor_base import BaseSensor
 from embodichain_core.utils.math import compose_frames, matrix_to_quat, quat_normalize, quat_to_matrix
@@ -93,7 +94,10 @@ class Camera(BaseSensor):
         cfg, spec = self.cfg, builder.spec
         path = getattr(builder.records.get(self.uid), "path", "")  # claimed with its config path (sensor[0])
         where = f"{path}.extrinsics.parent" if path else f"sensor {self.uid!r}: extrinsics.parent"
-        self.mount = resolve_mount(spec, cfg.extrinsics.parent, builder.records, where)
+        try:
+            self.mount = resolve_mount(spec, cfg.extrinsics.parent, builder.records, where)
+        except ConfigError as err:  # name the sensor too, next to its config path
+            raise ConfigError(err.path, f"sensor {self.uid!r}: {err.reason}") from err
         body = spec.worldbody if self.mount.body is None else spec.body(self.mount.body)
         for k, view in enumerate(self.views):
             view.camera = self.uid if len(self.views) == 1 else f"{self.uid}/{('left', 'right')[k]}"

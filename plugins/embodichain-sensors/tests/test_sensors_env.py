@@ -82,6 +82,6 @@ def test_an_unknown_parent_names_the_sensor_entry_of_the_config():
 
     cfg = make_cfg()
     cfg.sensor[1].extrinsics.parent = "eyez"
-    with pytest.raises(ConfigError, match=r"^sensor\[1\]\.extrinsics\.parent: no link, body or site named 'eyez'") as err:
+    with pytest.raises(ConfigError, match=r"^sensor\[1\]\.extrinsics\.parent: sensor 'eye_in_head': no link, body or site named 'eyez'") as err:
         EmbodiedEnv(cfg)
     assert "'arm/eyes'" in str(err.value)  # the closest valid choice is offered
