@@ -51,3 +51,20 @@ def pytest_configure(config: Any) -> None:
     config.addinivalue_line("filterwarnings", "ignore:Converting input from bool:RuntimeWarning")
     # PyAV decoding (torchcodec needs system FFmpeg) goes through torchvision's deprecated reader
     config.addinivalue_line("filterwarnings", "ignore:The video decoding and encoding capabilities:UserWarning")
+
+
+@pytest.fixture
+def task_id() -> Iterator[str]:
+    """A fresh task id registered for ``DemoPush`` (the scripted demo env of the run-env tests)."""
+    import uuid
+
+    import gymnasium as gym
+    from test_lerobot_run_env import DemoPush
+
+    from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+
+    uid = f"LeRobotDemo{uuid.uuid4().hex[:8]}-v0"
+    register_env(uid)(DemoPush)
+    yield uid
+    gym.registry.pop(uid, None)
+    REGISTERED_ENVS.pop(uid, None)

@@ -5,11 +5,9 @@ summary prints the dataset path."""
 from __future__ import annotations
 
 import json
-import uuid
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
-import gymnasium as gym
 import pytest
 import torch
 
@@ -17,7 +15,6 @@ from lerobot_helpers import load, seven_dof_arm_mjcf
 
 from embodichain_core.cli import run_env
 from embodichain_core.envs import EmbodiedEnv
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
 
 
 class DemoPush(EmbodiedEnv):
@@ -30,15 +27,6 @@ class DemoPush(EmbodiedEnv):
     def compute_task_state(self, **kwargs: Any) -> tuple:
         success = (self.elapsed_steps >= 4) & (getattr(self, "attempts", 0) >= 2)
         return success, torch.zeros_like(success), {}
-
-
-@pytest.fixture
-def task_id() -> Iterator[str]:
-    uid = f"LeRobotDemo{uuid.uuid4().hex[:8]}-v0"
-    register_env(uid)(DemoPush)
-    yield uid
-    gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 def write_config(path: Path, task: str, save_path: Path, func: str) -> Path:

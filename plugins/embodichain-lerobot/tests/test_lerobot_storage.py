@@ -8,33 +8,21 @@ import errno
 import os
 import stat
 import tempfile
-import uuid
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-import gymnasium as gym
 import pytest
 
 from lerobot_helpers import arm_cfg, datasets_under, load, recorder_cfg, reset, run_script
-from test_lerobot_run_env import DemoPush, write_config
+from test_lerobot_run_env import write_config
 
 from embodichain_core.cli import run_env
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
 from embodichain_lerobot import storage
 from embodichain_lerobot.folders import clean_incomplete, folder_status
 from embodichain_lerobot.reading import check_dataset_dir
 from embodichain_lerobot.storage import DiskFullError
 
 KEY = "env.dataset.lerobot.params.save_path"
-
-
-@pytest.fixture
-def task_id() -> Iterator[str]:
-    uid = f"LeRobotStorage{uuid.uuid4().hex[:8]}-v0"
-    register_env(uid)(DemoPush)
-    yield uid
-    gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 @pytest.fixture
