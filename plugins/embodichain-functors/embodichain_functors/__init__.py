@@ -9,7 +9,9 @@ or import them::
     import embodichain_functors.rewards as rewards
     import embodichain_functors.actions as actions
 
-See docs/functors.md and docs/functor_catalogue.md.
+Each kind has one home, the module above (a package re-exports its topic modules);
+:mod:`embodichain_functors.catalogue` registers every functor with one line. See
+docs/functors.md (section "Adding a functor") and docs/functor_catalogue.md.
 """
 
 __version__ = "0.1.0"

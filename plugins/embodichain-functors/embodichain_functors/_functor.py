@@ -25,5 +25,6 @@ class CheckedFunctor(Functor):
             reason = err.reason.split(": ", 1)[-1]
             raise ValueError(f"params.{err.param}: {reason}") from None
 
-    def check(self, env: Any, **params: Any) -> None:
-        """Validate the params (raise :class:`ParamError`); called once by ``__init__``."""
+    def check(self, *args: Any, **params: Any) -> None:
+        """Validate the params (raise :class:`ParamError`); called once by ``__init__`` as
+        ``check(env, **cfg.params)``."""

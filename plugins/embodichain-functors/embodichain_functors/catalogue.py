@@ -1,145 +1,139 @@
-"""The functors this plugin registers: ``(name, "module:attr", kind, category, description)``.
+"""The functors this plugin registers: one line each, ``name: category``, under its public module.
 
-:mod:`embodichain_functors.plugin` registers these lazily (no functor module is
-imported until a config names one). Each description is the first line of the
-functor's docstring (a test keeps them equal); ``scripts/gen_catalogue.py``
-documents the registry built from this table.
+:mod:`embodichain_functors.plugin` registers them lazily, as ``"module:name"`` targets: no
+functor module is imported until a config names one. A functor's description is the
+first line of its docstring, read from the module's source files without importing
+them (:func:`first_doc_lines`); ``scripts/gen_catalogue.py`` builds
+docs/functor_catalogue.md from the registry.
+
+Adding a functor: write it in its kind's module (listed in that module's ``__all__``,
+which the public package re-exports) and add its line to :data:`REGISTRATIONS`.
 """
 
 from __future__ import annotations
 
-_E = "embodichain_functors.events"
-_R = "embodichain_functors.randomization"
-_O = "embodichain_functors.observations"
-_W = "embodichain_functors.rewards"
-_A = "embodichain_functors.actions"
+import functools
+import re
+from pathlib import Path
 
-#: name -> (module, kind, category, description)
-_TABLE: dict[str, tuple[str, str, str, str]] = {
-    'replace_assets_from_group': (_E, 'event', 'asset',
-        'Give each env a random mesh from a folder for a mesh rigid object, on every call.'),
-    'drop_rigid_object_group_sequentially': (_E, 'event', 'asset',
-        'Drop the members of a group one by one at a random point around ``drop_position``.'),
-    'prepare_extra_attr': (_E, 'event', 'registration',
-        'Compute extra per-entity attributes into ``env.extra_attrs[uid][name]``.'),
-    'register_entity_attrs': (_E, 'event', 'registration',
-        'Copy entity attributes (or ``prepare_extra_attr`` values) into ``env.<registration>``.'),
-    'register_entity_pose': (_E, 'event', 'registration',
-        "Register an entity's pose, other poses relative to it, and its object-frame poses in the env frame."),
-    'register_info_to_env': (_E, 'event', 'registration',
-        'Run :func:`register_entity_attrs` and :func:`register_entity_pose` for several entities.'),
-    'set_detached_uids_for_env_reset': (_E, 'event', 'reset',
-        'Exclude entities from the automatic reset to their initial state (typically at startup).'),
-    'wait_for_dynamic_objects_to_settle': (_E, 'event', 'reset',
-        'Simulate ``env_ids`` (only them) until every dynamic object rests.'),
-    'create_rigid_constraint': (_E, 'event', 'constraint',
-        'Weld two rigid objects together in ``env_ids`` (typically a custom mode like ``"attach"``).'),
-    'remove_rigid_constraint': (_E, 'event', 'constraint',
-        'Release the rigid constraint ``name`` in ``env_ids`` (idempotent).'),
-    'randomize_rigid_object_mass': (_R, 'event', 'randomization.physics',
-        'Draw a mass per env for a rigid object (or every member of a group).'),
-    'randomize_rigid_object_center_of_mass': (_R, 'event', 'randomization.physics',
-        'Offset the centre of mass of a dynamic rigid object per env (body frame, metres).'),
-    'randomize_articulation_mass': (_R, 'event', 'randomization.physics',
-        'Draw link masses per env and per link for an articulation or robot.'),
-    'randomize_rigid_object_friction': (_R, 'event', 'randomization.physics',
-        "Draw the sliding friction coefficient of a rigid object's collision geoms per env."),
-    'randomize_joint_damping': (_R, 'event', 'randomization.physics',
-        'Draw passive joint damping (MuJoCo ``dof_damping``) per env and joint.'),
-    'randomize_joint_stiffness': (_R, 'event', 'randomization.physics',
-        'Draw passive joint spring stiffness (MuJoCo ``jnt_stiffness``) per env and joint.'),
-    'randomize_joint_drive': (_R, 'event', 'randomization.physics',
-        'Draw joint drive gains (PD stiffness, damping) and effort limits per env and joint.'),
-    'randomize_rigid_object_pose': (_R, 'event', 'randomization.spatial',
-        'Place a rigid object at a random pose per env around its configured initial pose.'),
-    'randomize_robot_qpos': (_R, 'event', 'randomization.spatial',
-        'Draw joint positions per env (teleported, drive targets set along, clamped to the limits).'),
-    'randomize_robot_eef_pose': (_R, 'event', 'randomization.spatial',
-        "Move a robot's end effector to a random pose around its current one, through IK."),
-    'randomize_articulation_root_pose': (_R, 'event', 'randomization.spatial',
-        "Place an articulation's root at a random pose per env around its configured pose."),
-    'randomize_target_pose': (_R, 'event', 'randomization.spatial',
-        'Draw a virtual goal pose per env into ``env.<store_key>`` ((N, 4, 4), created on first use).'),
-    'planner_grid_cell_sampler': (_R, 'event', 'randomization.spatial',
-        'Place objects at the centres of distinct random cells of an xy grid, per env.'),
-    'randomize_anchor_height': (_R, 'event', 'randomization.spatial',
-        'Shift an anchor (a table) to a random height per env, and everything on it along.'),
-    'randomize_light': (_R, 'event', 'randomization.visual',
-        "Randomize a light's position, colour, intensity and direction per env."),
-    'randomize_visual_material': (_R, 'event', 'randomization.visual',
-        'Per env and per part, a random texture (with a probability) or a random base colour.'),
-    'set_rigid_object_visual_material': (_R, 'event', 'randomization.visual',
-        'Give a rigid object (or every member of a group) a fixed material in ``env_ids``.'),
-    'set_rigid_object_group_visual_material': (_R, 'event', 'randomization.visual',
-        'Give every member of a rigid-object group a fixed material in ``env_ids``.'),
-    'randomize_camera_extrinsics': (_R, 'event', 'randomization.visual',
-        "Perturb a camera's configured extrinsics per env (offsets from the configuration)."),
-    'randomize_camera_intrinsics': (_R, 'event', 'randomization.visual',
-        "Add per-env offsets (pixels) to a camera's configured intrinsics ``(fx, fy, cx, cy)``."),
-    'randomize_rigid_object_scale': (_R, 'event', 'randomization.geometry',
-        'Scale a rigid object by a per-env factor of its configured size.'),
-    'randomize_rigid_objects_scale': (_R, 'event', 'randomization.geometry',
-        'Scale several rigid objects per env, each its own factor or one shared factor.'),
-    'get_object_pose': (_O, 'observation', 'observation.object',
-        'Pose of any entity in the env frame: (N, 4, 4), or (N, 7) xyz + wxyz.'),
-    'get_rigid_object_pose': (_O, 'observation', 'observation.object',
-        'Pose of a rigid object (or group): (N, 4, 4), or (N, 7) xyz + wxyz with ``to_matrix=False``.'),
-    'get_rigid_object_velocity': (_O, 'observation', 'observation.object',
-        'World-frame (N, 6) linear + angular velocity of a rigid object (zeros if kinematic).'),
-    'get_object_body_scale': (_O, 'observation', 'observation.object',
-        '(N, 3) body scale of a rigid object (per env after ``randomize_rigid_object_scale``).'),
-    'normalize_robot_joint_data': (_O, 'observation', 'observation.robot',
-        "(modify) Map joint data from the robot's limits to ``range`` (returns a new tensor)."),
-    'get_robot_eef_pose': (_O, 'observation', 'observation.robot',
-        'End-effector pose of a control part by forward kinematics: (N, 4, 4) or (N, 3).'),
-    'get_sensor_pose_in_robot_frame': (_O, 'observation', 'observation.sensor',
-        "(N, 4, 4) camera pose in the robot's base frame (stereo: left or right view)."),
-    'get_sensor_intrinsics': (_O, 'observation', 'observation.sensor',
-        '(N, 3, 3) intrinsic matrix of a camera (stereo: left or right view).'),
-    'compute_semantic_mask': (_O, 'observation', 'observation.sensor',
-        'Boolean ``(N, H, W, 4)`` semantic mask of a camera: background, foreground, robot left, robot right.'),
-    'target_position': (_O, 'observation', 'observation.task',
-        '(N, 3) target position read from ``env.<target_pose_key>`` ((N, 3) or (N, 4, 4)); zeros before it exists.'),
-    'get_rigid_object_physics_attributes': (_O, 'observation', 'observation.physics',
-        "A rigid object's ``{mass (N,), friction (N,), damping (N, 6), inertia (N, 3)}``."),
-    'get_articulation_joint_drive': (_O, 'observation', 'observation.physics',
-        "An articulation's joint drives: stiffness, damping, effort and velocity limits, friction, armature."),
-    'distance_between_objects': (_W, 'reward', 'reward.distance',
-        '``-d`` (or ``exp(-d^2 / 2 sigma^2)``) of the distance between two entities.'),
-    'distance_to_target': (_W, 'reward', 'reward.distance',
-        "``-d`` (or ``exp(-d^2 / 2 sigma^2)``) of an entity's distance to ``env.<target_pose_key>``."),
-    'incremental_distance_to_target': (_W, 'reward', 'reward.distance',
-        '``tanh(s * (d_prev - d))``: positive when an entity gets closer to its target.'),
-    'reaching_behind_object': (_W, 'reward', 'reward.distance',
-        '``1 - tanh(s * ||ee - p||)``: reach the point behind the object, seen from the goal.'),
-    'orientation_alignment': (_W, 'reward', 'reward.distance',
-        '``(trace(R_s R_t^T) - 1) / 2`` in [-1, 1]: 1 when two entities are aligned.'),
-    'joint_velocity_penalty': (_W, 'reward', 'reward.penalty',
-        "``-||qvel||`` of a robot's joints (``joint_ids`` win over ``part_name``; all joints by default)."),
-    'joint_limit_penalty': (_W, 'reward', 'reward.penalty',
-        'Sum over joints of ``-(margin - dist)`` where the normalized distance to a limit is below ``margin``.'),
-    'action_smoothness_penalty': (_W, 'reward', 'reward.penalty',
-        '``-||a_t - a_{t-1}||`` of the (processed) action; 0 on the first step of an episode.'),
-    'success_reward': (_W, 'reward', 'reward.task',
-        '1 where ``info["success"]``, else 0 (0 everywhere when the key is missing).'),
-    'DeltaQposTerm': (_A, 'action', 'action.joint',
-        'Joint position targets = current positions of the active joints + ``scale * action``.'),
-    'QposTerm': (_A, 'action', 'action.joint',
-        'Joint position targets = ``scale * action`` (policy range: the joint limits / scale).'),
-    'QposDenormalizedTerm': (_A, 'action', 'action.joint',
-        'Map ``scale * action`` from ``range`` to the joint limits for ``joint_ids``.'),
-    'QposNormalizedTerm': (_A, 'action', 'action.joint',
-        'Map joint positions from the joint limits to ``range`` for ``joint_ids`` (usually ``mode="post"``).'),
-    'QvelTerm': (_A, 'action', 'action.joint',
-        "Joint velocity targets = ``scale * action``, driven by the joints' velocity drives."),
-    'QfTerm': (_A, 'action', 'action.joint',
-        'Joint efforts = ``scale * action``, applied as joint forces (``qfrc_applied``).'),
-    'EefPoseTerm': (_A, 'action', 'action.eef',
-        "An end-effector pose target solved to joint targets by the robot's batched IK."),
+#: public module -> (functor kind, {registered name: category}); the name is the attribute.
+REGISTRATIONS: dict[str, tuple[str, dict[str, str]]] = {
+    "embodichain_functors.events": ("event", {
+        "replace_assets_from_group": "asset",
+        "drop_rigid_object_group_sequentially": "asset",
+        "prepare_extra_attr": "registration",
+        "register_entity_attrs": "registration",
+        "register_entity_pose": "registration",
+        "register_info_to_env": "registration",
+        "set_detached_uids_for_env_reset": "reset",
+        "wait_for_dynamic_objects_to_settle": "reset",
+        "create_rigid_constraint": "constraint",
+        "remove_rigid_constraint": "constraint",
+    }),
+    "embodichain_functors.randomization": ("event", {
+        "randomize_rigid_object_mass": "randomization.physics",
+        "randomize_rigid_object_center_of_mass": "randomization.physics",
+        "randomize_articulation_mass": "randomization.physics",
+        "randomize_rigid_object_friction": "randomization.physics",
+        "randomize_joint_damping": "randomization.physics",
+        "randomize_joint_stiffness": "randomization.physics",
+        "randomize_joint_drive": "randomization.physics",
+        "randomize_rigid_object_pose": "randomization.spatial",
+        "randomize_robot_qpos": "randomization.spatial",
+        "randomize_robot_eef_pose": "randomization.spatial",
+        "randomize_articulation_root_pose": "randomization.spatial",
+        "randomize_target_pose": "randomization.spatial",
+        "planner_grid_cell_sampler": "randomization.spatial",
+        "randomize_anchor_height": "randomization.spatial",
+        "randomize_light": "randomization.visual",
+        "randomize_visual_material": "randomization.visual",
+        "set_rigid_object_visual_material": "randomization.visual",
+        "set_rigid_object_group_visual_material": "randomization.visual",
+        "randomize_camera_extrinsics": "randomization.visual",
+        "randomize_camera_intrinsics": "randomization.visual",
+        "randomize_rigid_object_scale": "randomization.geometry",
+        "randomize_rigid_objects_scale": "randomization.geometry",
+    }),
+    "embodichain_functors.observations": ("observation", {
+        "get_object_pose": "observation.object",
+        "get_rigid_object_pose": "observation.object",
+        "get_rigid_object_velocity": "observation.object",
+        "get_object_body_scale": "observation.object",
+        "normalize_robot_joint_data": "observation.robot",
+        "get_robot_eef_pose": "observation.robot",
+        "get_sensor_pose_in_robot_frame": "observation.sensor",
+        "get_sensor_intrinsics": "observation.sensor",
+        "compute_semantic_mask": "observation.sensor",
+        "target_position": "observation.task",
+        "get_rigid_object_physics_attributes": "observation.physics",
+        "get_articulation_joint_drive": "observation.physics",
+    }),
+    "embodichain_functors.rewards": ("reward", {
+        "distance_between_objects": "reward.distance",
+        "distance_to_target": "reward.distance",
+        "incremental_distance_to_target": "reward.distance",
+        "reaching_behind_object": "reward.distance",
+        "orientation_alignment": "reward.distance",
+        "joint_velocity_penalty": "reward.penalty",
+        "joint_limit_penalty": "reward.penalty",
+        "action_smoothness_penalty": "reward.penalty",
+        "success_reward": "reward.task",
+    }),
+    "embodichain_functors.actions": ("action", {
+        "DeltaQposTerm": "action.joint",
+        "QposTerm": "action.joint",
+        "QposDenormalizedTerm": "action.joint",
+        "QposNormalizedTerm": "action.joint",
+        "QvelTerm": "action.joint",
+        "QfTerm": "action.joint",
+        "EefPoseTerm": "action.eef",
+    }),
 }
 
-FUNCTORS: list[tuple[str, str, str, str, str]] = [
-    (name, f"{module}:{name}", kind, category, description)
-    for name, (module, kind, category, description) in _TABLE.items()
-]
-""":data:`_TABLE` as ``(name, "module:attr", kind, category, description)`` rows."""
+_PACKAGE = Path(__file__).resolve().parent
+_TOP_LEVEL = re.compile(r"^(?:class|def)[ \t]+(\w+)", re.MULTILINE)
+_NEXT_TOP_LEVEL = re.compile(r"^\S", re.MULTILINE)
+_DOCSTRING = re.compile(r"[rRuU]?(\"\"\"|''')(.*?)\1", re.DOTALL)
+
+
+def source_files(module: str) -> list[Path]:
+    """The source files of a public module of this package (every file of a package)."""
+    path = _PACKAGE.joinpath(*module.split(".")[1:])
+    return sorted(path.glob("*.py")) if path.is_dir() else [path.with_suffix(".py")]
+
+
+def doc_lines_of_file(path: Path) -> dict[str, str]:
+    """``{name: first docstring line}`` of the top-level functions and classes of a source file.
+
+    The file is read as text (nothing is imported); the line is the first non-empty
+    line of the docstring (``""`` without one), escape sequences left as written (the
+    plugin's tests compare every registered description with the imported docstring).
+    """
+    text = path.read_text(encoding="utf-8")
+    lines: dict[str, str] = {}
+    for match in _TOP_LEVEL.finditer(text):
+        end = _NEXT_TOP_LEVEL.search(text, match.end())
+        doc = _DOCSTRING.search(text, match.end(), end.start() if end else len(text))
+        first = next((line.strip() for line in (doc.group(2) if doc else "").splitlines() if line.strip()), "")
+        lines.setdefault(match.group(1), first)
+    return lines
+
+
+@functools.lru_cache(maxsize=None)
+def first_doc_lines(module: str) -> dict[str, str]:
+    """:func:`doc_lines_of_file` of every source file of a public module (the first definition wins)."""
+    lines: dict[str, str] = {}
+    for path in source_files(module):
+        for name, line in doc_lines_of_file(path).items():
+            lines.setdefault(name, line)
+    return lines
+
+
+def _rows() -> list[tuple[str, str, str, str, str]]:
+    return [(name, f"{module}:{name}", kind, category, first_doc_lines(module).get(name, ""))
+            for module, (kind, functors) in REGISTRATIONS.items() for name, category in functors.items()]
+
+
+FUNCTORS: list[tuple[str, str, str, str, str]] = _rows()
+"""Every registration as ``(name, "module:attr", kind, category, description)``; an empty
+description (no docstring found) is filled from the docstring when the target is imported."""

@@ -1,37 +1,59 @@
-"""Reward functors ``f(env, obs, action, info, **params) -> (N,)``.
-
-The stateful ones (``incremental_distance_to_target``, ``action_smoothness_penalty``)
-are class functors whose state is cleared for the envs being reset.
-
-Example:
-    >>> import embodichain_functors.rewards as rewards
-    >>> RewardCfg(func=rewards.distance_to_target, weight=0.8,
-    ...           params={"source_entity_cfg": SceneEntityCfg(uid="cube"), "target_pose_key": "goal_pose"})
-"""
+"""Distance and alignment rewards ``f(env, obs, action, info, **params) -> (N,)``, and the
+entity position helpers they share (robots with ``control_parts`` use their end effector)."""
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence
+from typing import Any, Optional
 
 import torch
 
 from embodichain_core.sim.entities.robot import Robot
+from embodichain_core.utils.math import quat_to_matrix
 
 from embodichain_functors._common import ParamError, check_positive, validated
+from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._kinematics import check_ik, default_part, eef_pose
-from embodichain_functors.reward_functors import (
-    action_smoothness_penalty,
-    incremental_distance_to_target,
-    position_of,
-    rotation_of,
-    target_positions,
-)
+from embodichain_functors.rewards.penalty import robot_checker
 
-__all__ = [
-    "distance_between_objects", "distance_to_target", "incremental_distance_to_target", "joint_velocity_penalty",
-    "joint_limit_penalty", "action_smoothness_penalty", "orientation_alignment", "reaching_behind_object",
-    "success_reward",
-]
+__all__ = ["distance_between_objects", "distance_to_target", "incremental_distance_to_target",
+           "reaching_behind_object", "orientation_alignment", "position_of", "rotation_of", "target_positions"]
+
+
+def _pose_matrix(env: Any, entity_cfg: Any) -> torch.Tensor:
+    """(N, 4, 4) pose of an entity; a robot with ``control_parts`` gives that part's end effector."""
+    entity = env.scene[entity_cfg.uid]
+    parts = getattr(entity_cfg, "control_parts", None)
+    if isinstance(entity, Robot) and parts:
+        return eef_pose(entity, parts if isinstance(parts, str) else parts[0])
+    if hasattr(entity, "get_arena_pose"):
+        return entity.get_arena_pose(to_matrix=True)
+    return entity.get_local_pose(to_matrix=True)
+
+
+def position_of(env: Any, entity_cfg: Any) -> torch.Tensor:
+    """(N, 3) position of an entity in the env frame."""
+    entity = env.scene[entity_cfg.uid]
+    if isinstance(entity, Robot) or hasattr(entity, "get_arena_pose"):
+        return _pose_matrix(env, entity_cfg)[:, :3, 3].float()
+    return entity.get_local_pose()[:, :3].float()
+
+
+def rotation_of(env: Any, entity_cfg: Any) -> torch.Tensor:
+    """(N, 3, 3) orientation of an entity in the env frame."""
+    entity = env.scene[entity_cfg.uid]
+    if isinstance(entity, Robot) or hasattr(entity, "get_arena_pose"):
+        return _pose_matrix(env, entity_cfg)[:, :3, :3].float()
+    return quat_to_matrix(entity.get_local_pose()[:, 3:7]).float()
+
+
+def target_positions(env: Any, key: str, functor: str) -> torch.Tensor:
+    """(N, 3) positions of ``env.<key>`` ((N, 3), (N, 7) or (N, 4, 4)); a missing key raises."""
+    target = getattr(env, key, None)
+    if target is None:
+        raise KeyError(f"{functor}: env.{key} does not exist yet; set it (e.g. with randomize_target_pose, "
+                       f"store_key={key!r}) before rewards are computed")
+    target = torch.as_tensor(target, dtype=torch.float32)
+    return target[:, :3, 3] if target.dim() == 3 else target[:, :3]
 
 
 def _check_entities(functor: str, *keys: str) -> Any:
@@ -96,70 +118,50 @@ def distance_to_target(env: Any, obs: Any, action: Any, info: dict, source_entit
     return _shape(d, exponential, sigma)
 
 
-def _robot(env: Any, robot_uid: Optional[str]) -> Robot:
-    return env.robot if robot_uid is None else env.scene[robot_uid]
+class incremental_distance_to_target(CheckedFunctor):
+    """``tanh(s * (d_prev - d))``: positive when an entity gets closer to its target.
 
+    Progress is weighted by ``positive_weight`` and regress by ``negative_weight``.
+    The previous distance is kept per env and cleared when the env resets, so the
+    first step of every episode gives 0.
 
-def _check_robot(functor: str) -> Any:
-    def check(env: Any, robot_uid: Optional[str] = None, part_name: Optional[str] = None, **_: Any) -> None:
-        if robot_uid is not None and robot_uid not in env.scene.robots:
-            raise ParamError(functor, "robot_uid", f"no robot {robot_uid!r} (robots: {list(env.scene.robots)})")
-        robot = _robot(env, robot_uid)
-        if part_name is not None and part_name not in (robot.control_parts or {}):
-            raise ParamError(functor, "part_name", f"robot {robot.uid!r} has no control part {part_name!r}")
-    return check
-
-
-def _joints(robot: Robot, joint_ids: Any, part_name: Optional[str]) -> Any:
-    if joint_ids is not None:
-        return joint_ids if isinstance(joint_ids, slice) else list(joint_ids)
-    return robot.get_joint_ids(part_name) if part_name else slice(None)
-
-
-@validated(_check_robot("joint_velocity_penalty"), lead=3)
-def joint_velocity_penalty(env: Any, obs: Any, action: Any, info: dict, robot_uid: Optional[str] = None,
-                           joint_ids: Optional[Sequence[int]] = None, part_name: Optional[str] = None) -> torch.Tensor:
-    """``-||qvel||`` of a robot's joints (``joint_ids`` win over ``part_name``; all joints by default).
-
-    Args:
-        env: the env.
-        obs, action, info: step data (unused).
-        robot_uid: the robot (the env's robot by default).
-        joint_ids: robot joint ids.
-        part_name: a control part.
+    Args (params):
+        source_entity_cfg: the entity.
+        target_pose_key: env attribute with the targets (a missing one raises).
+        tanh_scale: ``s`` (1/metres).
+        positive_weight: weight of progress.
+        negative_weight: weight of regress.
+        use_xy_only: ignore z.
 
     Example:
-        ``{"func": "joint_velocity_penalty", "weight": 0.005, "params": {"part_name": "arm"}}``
+        ``{"func": "incremental_distance_to_target", "weight": 1.0, "params": {"source_entity_cfg":
+        {"uid": "cube"}, "target_pose_key": "goal_pose", "tanh_scale": 10.0}}``
     """
-    robot = _robot(env, robot_uid)
-    return -robot.get_qvel()[:, _joints(robot, joint_ids, part_name)].norm(dim=-1)
 
+    def __init__(self, cfg: Any, env: Any):
+        super().__init__(cfg, env)
+        self._prev = torch.zeros(env.num_envs)
+        self._valid = torch.zeros(env.num_envs, dtype=torch.bool)
 
-@validated(_check_robot("joint_limit_penalty"), lead=3)
-def joint_limit_penalty(env: Any, obs: Any, action: Any, info: dict, robot_uid: Optional[str] = None,
-                        joint_ids: Any = None, margin: float = 0.1) -> torch.Tensor:
-    """Sum over joints of ``-(margin - dist)`` where the normalized distance to a limit is below ``margin``.
+    def check(self, env: Any, source_entity_cfg: Any = None, tanh_scale: Any = 10.0, **_: Any) -> None:
+        if getattr(source_entity_cfg, "uid", None) not in env.scene:
+            raise ParamError(type(self).__name__, "source_entity_cfg", f"no entity {source_entity_cfg!r} in the scene")
+        check_positive(tanh_scale, type(self).__name__, "tanh_scale")
 
-    Distances are fractions of each joint's range; unlimited joints never count.
+    def reset(self, env_ids: Optional[torch.Tensor] = None) -> None:
+        """Forget the previous distance of ``env_ids`` (all when ``None``)."""
+        self._valid[slice(None) if env_ids is None else torch.as_tensor(env_ids).long()] = False
 
-    Args:
-        env: the env.
-        obs, action, info: step data (unused).
-        robot_uid: the robot (the env's robot by default).
-        joint_ids: robot joint ids (all by default).
-        margin: fraction of the range near each limit that is penalized.
-
-    Example:
-        ``{"func": "joint_limit_penalty", "weight": 0.1, "params": {"margin": 0.05}}``
-    """
-    robot = _robot(env, robot_uid)
-    cols = _joints(robot, joint_ids, None)
-    q, lim = robot.get_qpos()[:, cols], robot.get_qpos_limits()[:, cols]
-    span = lim[..., 1] - lim[..., 0]
-    finite = torch.isfinite(span) & (span > 0)
-    span = torch.where(finite, span, torch.ones_like(span))
-    dist = torch.minimum(q - lim[..., 0], lim[..., 1] - q) / span
-    return -((margin - dist).clamp_min(0.0) * finite).sum(dim=-1)
+    def __call__(self, env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any,
+                 target_pose_key: str = "target_pose", tanh_scale: float = 10.0, positive_weight: float = 1.0,
+                 negative_weight: float = 1.0, use_xy_only: bool = False) -> torch.Tensor:
+        delta = position_of(env, source_entity_cfg) - target_positions(env, target_pose_key, type(self).__name__)
+        d = (delta[:, :2] if use_xy_only else delta).norm(dim=-1)
+        gain = torch.tanh(tanh_scale * (self._prev - d))
+        out = torch.where(gain > 0, positive_weight * gain, negative_weight * gain)
+        out = torch.where(self._valid, out, torch.zeros_like(out))
+        self._prev, self._valid = d.clone(), torch.ones_like(self._valid)
+        return out
 
 
 @validated(_check_entities("orientation_alignment", "source_entity_cfg", "target_entity_cfg"), lead=3)
@@ -182,29 +184,12 @@ def orientation_alignment(env: Any, obs: Any, action: Any, info: dict, source_en
     return ((trace - 1.0) / 2.0).clamp(-1.0, 1.0)
 
 
-def success_reward(env: Any, obs: Any, action: Any, info: dict) -> torch.Tensor:
-    """1 where ``info["success"]``, else 0 (0 everywhere when the key is missing).
-
-    Args:
-        env: the env.
-        obs, action: step data (unused).
-        info: the step info.
-
-    Example:
-        ``{"func": "success_reward", "weight": 10.0}``
-    """
-    success = info.get("success") if isinstance(info, dict) else None
-    if success is None:
-        return torch.zeros(env.num_envs)
-    return torch.as_tensor(success).reshape(-1).float().expand(env.num_envs).clone()
-
-
 def _check_behind(env: Any, object_cfg: Any, part_name: Optional[str] = None, distance_scale: float = 5.0,
                   **_: Any) -> None:
     if getattr(object_cfg, "uid", None) not in env.scene:
         raise ParamError("reaching_behind_object", "object_cfg", f"no entity {object_cfg!r} in the scene")
     check_positive(distance_scale, "reaching_behind_object", "distance_scale")
-    _check_robot("reaching_behind_object")(env, part_name=part_name)
+    robot_checker("reaching_behind_object")(env, part_name=part_name)
     check_ik(env.robot, default_part(env, env.robot, part_name), "reaching_behind_object", "part_name")
 
 

@@ -1,1 +1,0 @@
-"""Implementation modules of :mod:`embodichain_functors.events` (import from there)."""

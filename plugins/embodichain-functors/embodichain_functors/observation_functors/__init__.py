@@ -1,1 +1,0 @@
-"""Implementation modules of :mod:`embodichain_functors.observations` (import from there)."""
