@@ -24,19 +24,25 @@ def seven_dof_arm_mjcf() -> str:
 
 
 # -- timing --------------------------------------------------------------------------------------
-def time_once(fn: Callable[[], Any]) -> float:
-    """Wall-clock seconds of one call of ``fn``."""
-    start = time.perf_counter()
+#: ``wall``: elapsed time; ``cpu``: CPU time of this process, all its threads summed (what a busy
+#: neighbour does not inflate; equal to the wall time of an idle box for one-threaded work).
+CLOCKS: dict[str, Callable[[], float]] = {"wall": time.perf_counter, "cpu": time.process_time}
+
+
+def time_once(fn: Callable[[], Any], clock: str = "wall") -> float:
+    """Seconds of one call of ``fn`` on ``clock`` (see :data:`CLOCKS`)."""
+    now = CLOCKS[clock]
+    start = now()
     fn()
-    return time.perf_counter() - start
+    return now() - start
 
 
 def interleaved_timings(fns: Mapping[str, Callable[[], Any]], repeats: int,
-                        warmup: int = 1) -> dict[str, list[float]]:
+                        warmup: int = 1, clock: str = "wall") -> dict[str, list[float]]:
     """Call every function ``warmup`` times, then ``repeats`` rounds of all of them in turn.
 
-    Returns ``{name: [seconds per round]}``. Interleaving makes background load
-    (other processes on a shared box) hit every contender alike.
+    Returns ``{name: [seconds per round]}`` on ``clock`` (see :data:`CLOCKS`). Interleaving
+    makes background load (other processes on a shared box) hit every contender alike.
     """
     for _ in range(max(0, warmup)):
         for fn in fns.values():
@@ -44,7 +50,7 @@ def interleaved_timings(fns: Mapping[str, Callable[[], Any]], repeats: int,
     out: dict[str, list[float]] = {name: [] for name in fns}
     for _ in range(max(1, repeats)):
         for name, fn in fns.items():
-            out[name].append(time_once(fn))
+            out[name].append(time_once(fn, clock))
     return out
 
 

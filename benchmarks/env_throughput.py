@@ -190,7 +190,7 @@ def make_actions(env: EmbodiedEnv, period: int = ACTION_PERIOD) -> list[torch.Te
 # -- measurement ------------------------------------------------------------------------------------
 def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] = None, repeats: int = 7,
             warmup_steps: int = 20, target_seconds: float = 0.6, episode_length: int = 100, seed: int = 0,
-            breakdown: bool = True) -> dict[str, Any]:
+            breakdown: bool = True, clock: str = "wall") -> dict[str, Any]:
     """One configuration: env and raw timings, interleaved; returns the JSON record.
 
     With ``breakdown``, a second, instrumented pass times the MuJoCo calls inside
@@ -238,7 +238,7 @@ def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] 
         steps = int(min(20000, max(20, round(target_seconds / max(per_call, 1e-6)))))
 
     times = interleaved_timings({"env": lambda: run_env(steps), "raw": lambda: run_raw(steps)},
-                                repeats=repeats, warmup=0)
+                                repeats=repeats, warmup=0, clock=clock)
     t_env, t_raw = median(times["env"]), median(times["raw"])
     env_sps = steps * num_envs / t_env
     raw_sps = steps * num_envs / t_raw
@@ -380,6 +380,9 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--target-seconds", type=float, default=0.6, help="length of one timed run when --steps is not given")
     p.add_argument("--warmup-steps", type=int, default=None, help="untimed env.step calls first (default 20)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                   help="time the runs on the wall clock, or by CPU time of this process (all threads summed: "
+                        "steadier on a busy box; the same as wall time of an idle box at 1 env)")
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output (default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true",
                    help="smoke run: num_envs 2, 5 steps, 1 repeat (structure check, not a measurement)")
@@ -459,7 +462,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     load_before = _loadavg()
     for n in args.num_envs:
         rec = measure(n, args.sim_steps_per_control, args.steps, args.repeats, args.warmup_steps,
-                      args.target_seconds, args.episode_length, args.seed, args.breakdown)
+                      args.target_seconds, args.episode_length, args.seed, args.breakdown, args.clock)
         records.append(rec)
         print(f"num_envs={n:<4d} env {rec['env_steps_per_s']:>9,.0f} steps/s  raw {rec['raw_steps_per_s']:>9,.0f} "
               f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call", flush=True)
@@ -474,6 +477,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             "warmup_steps": args.warmup_steps,
             "quick": bool(args.quick),
             "seed": args.seed,
+            "clock": args.clock,
             "scene": "7-DoF arm + gripper, 3 dynamic cubes, kinematic table, 1 point light, no cameras",
             "managers": "2 reset events, 1 interval event, 3 observation add functors, 3 reward terms",
             "raw_batch": "persistent=True, stage=mjSTAGE_VEL, nthread=min(cpu_count, num_envs)",

@@ -17,11 +17,19 @@ Each round steps every contender ``--steps`` times (interleaved; medians over
   written (the async queue drained) at the end of the round;
 * ``ratio``: ``env_steps_per_s`` over the ``none`` contender's.
 
-Needs embodichain-sensors and embodichain-lerobot (lerobot 0.4.x).
+The ``main_job`` case (:mod:`record_main_job`) runs ``make run``'s config recorded and
+unrecorded (``--filter_dataset_saving``), each in its own process, and reports the
+end-to-end ratio (the final flush included) and the build times; ``main_job_depth_masks``
+records it with and without the camera's depth and masks and reports the size ratio and
+the ``embodichain dataset preview`` times.
+
+Needs embodichain-sensors and embodichain-lerobot (lerobot 0.4.x); the main job case
+also embodichain-tasks.
 
 Usage:
-    python benchmarks/record_throughput.py [--num-envs 1 4] [--storage video image] [--steps 150]
-        [--episode-length 50] [--repeats 3] [--out benchmarks/results/record_throughput.json] [--quick]
+    python benchmarks/record_throughput.py [--case stereo main_job] [--num-envs 1 4]
+        [--storage video image] [--steps 150] [--episode-length 50] [--repeats 3]
+        [--main-job-episodes 4] [--out benchmarks/results/record_throughput.json] [--quick]
 """
 
 from __future__ import annotations
@@ -44,6 +52,7 @@ import embodichain_core.sim  # noqa: E402,F401  (chooses MUJOCO_GL before mujoco
 import torch  # noqa: E402
 
 from common import machine_info, median, print_table, seven_dof_arm_mjcf, spread, write_json  # noqa: E402
+from record_main_job import measure_depth_masks, measure_main_job  # noqa: E402
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg  # noqa: E402
 from embodichain_core.managers import DatasetFunctorCfg  # noqa: E402
@@ -68,8 +77,7 @@ def make_cfg(num_envs: int, func: Optional[str], save_path: str, storage: str, s
              depth: bool, episode_length: int) -> EmbodiedEnvCfg:
     """The benchmark env: arm, cube, light, stereo camera; a recorder unless ``func`` is None.
 
-    ``max_episode_steps`` stays just above the episode length: with a dataset section the
-    core preallocates its rollout buffer for ``(num_envs, max_episode_steps)`` frames.
+    ``max_episode_steps`` stays just above the episode length (the episodes end by success).
     """
     from embodichain_sensors.cfg import StereoCameraCfg
 
@@ -161,6 +169,11 @@ def rows(results: list[dict]) -> list[dict]:
 
 def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--case", nargs="+", choices=("stereo", "main_job", "main_job_depth_masks"),
+                   default=["stereo", "main_job", "main_job_depth_masks"],
+                   help="stereo: the 128x128 stereo env; main_job: make run's config (each twin in a process); "
+                        "main_job_depth_masks: dataset size with depth and masks, preview times")
+    p.add_argument("--main-job-episodes", type=int, default=4, help="saved episodes per main job run")
     p.add_argument("--num-envs", type=int, nargs="+", default=[1, 4])
     p.add_argument("--storage", nargs="+", choices=("video", "image"), default=["video", "image"])
     p.add_argument("--steps", type=int, default=150, help="env.step calls per contender per round")
@@ -173,6 +186,7 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     args = p.parse_args(argv)
     if args.quick:
         args.num_envs, args.steps, args.episode_length, args.repeats = [1], 12, 5, 1
+        args.main_job_episodes = 2
     return args
 
 
@@ -181,7 +195,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     workdir = tempfile.mkdtemp(prefix="record_throughput_")
     results = []
     try:
-        for storage in args.storage:
+        for storage in args.storage if "stereo" in args.case else ():
             for n in args.num_envs:
                 results.append(measure(n, storage, args.steps, args.episode_length, args.repeats,
                                        tuple(args.size), args.depth, workdir))
@@ -189,6 +203,17 @@ def main(argv: Optional[list[str]] = None) -> int:
                                                  ("recorder", "recorder", ""), ("env_steps_per_s", "steps/s", ".1f"),
                                                  ("end_to_end_steps_per_s", "end-to-end/s", ".1f"),
                                                  ("ratio", "vs none", ".2f"), ("episodes_saved", "episodes", "")])
+        if "main_job" in args.case:
+            results.append(measure_main_job(args.main_job_episodes, args.repeats, workdir))
+            print_table([{"twin": k, **v} for k, v in results[-1]["contenders"].items()],
+                        [("twin", "main job", ""), ("build_s", "build s", ".2f"), ("env_steps_per_s", "steps/s", ".1f"),
+                         ("end_to_end_steps_per_s", "end-to-end/s", ".1f"), ("ratio", "vs unrecorded", ".2f"),
+                         ("episodes_saved", "episodes", "")])
+        if "main_job_depth_masks" in args.case:
+            results.append(measure_depth_masks(min(2, args.main_job_episodes), workdir))
+            print_table(results[-1:], [("bytes_without", "bytes without", "d"), ("bytes_with", "with depth+masks", "d"),
+                                       ("size_ratio", "ratio", ".2f"), ("preview_png_s", "preview png s", ".2f"),
+                                       ("preview_mp4_s", "preview mp4 s", ".2f")])
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     settings = {k: v for k, v in vars(args).items() if k != "out"}

@@ -25,23 +25,26 @@ import argparse
 import itertools
 from typing import Any, Iterator, Optional
 
-__all__ = ["add_env_launcher_args_to_parser", "launcher_overrides", "episode_loop", "RENDERERS",
+__all__ = ["add_env_launcher_args_to_parser", "launcher_overrides", "episode_loop", "RENDERERS", "BACKENDS",
            "LAUNCHER_DEFAULTS"]
 
 #: Renderer names accepted by ``--renderer`` (EmbodiChain's; all render with MuJoCo here).
 RENDERERS = ("auto", "hybrid", "fast-rt", "rt")
+
+#: Simulation backends accepted by ``--backend`` (``sim_cfg.backend``; docs/backends.md).
+BACKENDS = ("mujoco_batch", "warp")
 
 #: The value of each launcher argument when it is not given (EmbodiChain's defaults). A
 #: default never overrides a gym config: only given values do (:func:`launcher_overrides`).
 LAUNCHER_DEFAULTS: dict[str, Any] = {
     "num_envs": 1, "device": "cpu", "headless": False, "renderer": "auto", "gym_config": "",
     "max_episodes": None, "preview": False, "filter_visual_rand": False, "filter_dataset_saving": False,
-    "seed": None,
+    "seed": None, "backend": None,
 }
 
 #: Launcher arguments that map onto a gym-config override of the same name.
 OVERRIDE_KEYS = ("num_envs", "headless", "device", "renderer", "max_episodes", "seed", "filter_visual_rand",
-                 "filter_dataset_saving")
+                 "filter_dataset_saving", "backend")
 
 #: Attribute of the parsed namespace holding the names of the arguments given on the command line.
 GIVEN_ATTR = "_launcher_given"
@@ -78,7 +81,8 @@ def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_
 
     Arguments (defaults from :data:`LAUNCHER_DEFAULTS`): ``--num_envs`` (1), ``--device``
     ("cpu"), ``--headless``, ``--renderer`` (one of :data:`RENDERERS`; "auto"),
-    ``--gym_config`` (""), ``--max_episodes`` (None: run until interrupted), ``--preview``,
+    ``--gym_config`` (""), ``--backend`` (one of :data:`BACKENDS`; None: the config's),
+    ``--max_episodes`` (None: run until interrupted), ``--preview``,
     ``--filter_visual_rand``, ``--filter_dataset_saving``, ``--seed`` (None). The parsed
     namespace remembers which were given: :func:`launcher_overrides` returns only those,
     so a gym config is overridden only by values given on the command line.
@@ -98,6 +102,9 @@ def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_
         help=f"simulation device, sim_cfg.sim_device (default: the config's, else {d['device']})")
     add("--renderer", action=_Value, default=d["renderer"], choices=RENDERERS,
         help=f"render_cfg.renderer (default: the config's, else {d['renderer']})")
+    add("--backend", action=_Value, default=d["backend"], choices=BACKENDS,
+        help="simulation backend, sim_cfg.backend: mujoco_batch (CPU threads) or warp (MuJoCo Warp on "
+             "--device cpu/cuda) (default: the config's, else mujoco_batch)")
     add("--max_episodes", action=_Value, type=int, default=d["max_episodes"], metavar="N",
         help="stop after this many episodes, summed over envs (default: the config's; scripts: "
              "run until interrupted)")
@@ -117,7 +124,7 @@ def launcher_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
     Returns:
         Only the keys given on the command line, among ``num_envs``, ``headless``,
-        ``device``, ``renderer``, ``max_episodes``, ``seed``, ``filter_visual_rand``,
+        ``device``, ``renderer``, ``backend``, ``max_episodes``, ``seed``, ``filter_visual_rand``,
         ``filter_dataset_saving`` (``--preview`` forces it to ``True``).
     """
     given = getattr(args, GIVEN_ATTR, set())

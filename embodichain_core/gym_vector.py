@@ -4,14 +4,16 @@ imported when used).
 
 An embodichain env is already batched, so ``gym.make_vec(task_id, num_envs=N)`` builds one
 env with ``num_envs=N`` (:func:`make_vec_env`, the ``"vector_entry_point"`` mode, the
-default). gymnasium's ``"sync"`` and ``"async"`` modes instead stack N copies of
-``gym.make(task_id)``, each a batch of one (observations ``(1, ...)``, reward ``(1,)``),
-which gives ``(N, 1)`` rewards (async) and ``(N, 1, ...)`` spaces. Pass
-``wrappers=[UnbatchedEnv]`` to get gymnasium's single-env layout in those modes:
+default). gymnasium's ``"sync"`` and ``"async"`` modes instead stack N single envs. Tasks
+are registered with a :class:`BatchedEnvSpec`, so those single envs are
+:class:`UnbatchedEnv` s (gymnasium's single-env layout), and every mode gives rewards and
+flags of shape ``(N,)``; ``gym.make(task_id)`` still builds the batched env (a batch of
+one). ``"async"`` needs the ``"spawn"`` start method (MuJoCo's threads do not survive a
+``fork``):
 
 Example:
     >>> venv = gym.make_vec("PushCube-v1", num_envs=4, vectorization_mode="async",
-    ...                     wrappers=[UnbatchedEnv])  # doctest: +SKIP
+    ...                     vector_kwargs={"context": "spawn"})  # doctest: +SKIP
     >>> _, reward, *_ = venv.step(venv.action_space.sample())  # doctest: +SKIP
     >>> reward.shape  # doctest: +SKIP
     (4,)
@@ -19,12 +21,15 @@ Example:
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import importlib
 from typing import Any
 
 import gymnasium as gym
+from gymnasium.envs.registration import EnvSpec
 
-__all__ = ["make_vec_env", "UnbatchedEnv"]
+__all__ = ["make_vec_env", "UnbatchedEnv", "BatchedEnvSpec", "SingleEnvEntryPoint", "batched_spec"]
 
 
 def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
@@ -67,12 +72,20 @@ class UnbatchedEnv(gym.Wrapper):
     returned is the episode's last one (``info["final_obs"]``), and the caller (a gymnasium
     vector env) resets as after any single env's episode.
 
+    Wrapping an ``UnbatchedEnv`` again changes nothing (``make_vec(..., wrappers=[UnbatchedEnv])``
+    of a task whose sub-envs are already unbatched).
+
     Args:
         env: the env, built with ``num_envs=1`` (``gym.make(task_id)``).
     """
 
     def __init__(self, env: gym.Env):
         super().__init__(env)
+        self._passthrough = isinstance(env, UnbatchedEnv)
+        if self._passthrough:
+            self.observation_space, self.action_space = env.observation_space, env.action_space
+            self.metadata = env.metadata
+            return
         batched: Any = env.unwrapped
         if int(getattr(batched, "num_envs", 1)) != 1:
             raise ValueError(f"UnbatchedEnv needs num_envs=1, got {batched.num_envs}")
@@ -82,6 +95,8 @@ class UnbatchedEnv(gym.Wrapper):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
         """Reset; the observation and info without the batch dim."""
+        if self._passthrough:
+            return self.env.reset(seed=seed, options=options)
         obs, info = self.env.reset(seed=seed, options=options)
         return _row(obs), _row(info)
 
@@ -90,6 +105,8 @@ class UnbatchedEnv(gym.Wrapper):
         import numpy as np
         import torch
 
+        if self._passthrough:
+            return self.env.step(action)
         batch = torch.as_tensor(np.asarray(action, dtype=np.float32)).reshape(1, -1)
         out: Any = self.env.step(batch)
         obs, reward, info = out[0], out[1], out[4]
@@ -97,3 +114,51 @@ class UnbatchedEnv(gym.Wrapper):
         if (terminated or truncated) and "final_obs" in info:
             obs, info = info["final_obs"], info.get("final_info", info)
         return _row(obs), float(reward[0]), terminated, truncated, _row(info)
+
+
+class SingleEnvEntryPoint:
+    """gymnasium entry point of one sub-env of a ``"sync"``/``"async"`` vector env: the
+    task's batched env with ``num_envs=1``, wrapped in :class:`UnbatchedEnv`.
+
+    Args:
+        entry_point: the task's own entry point (``"module:Class"`` or a callable).
+    """
+
+    def __init__(self, entry_point: Any):
+        self.entry_point = entry_point
+
+    def __call__(self, **kwargs: Any) -> gym.Env:
+        """Build the sub-env with the ``gym.make`` kwargs."""
+        from gymnasium.envs.registration import load_env_creator
+
+        entry = self.entry_point
+        creator = entry if callable(entry) else load_env_creator(entry)
+        return UnbatchedEnv(creator(**kwargs))
+
+    def __repr__(self) -> str:
+        return f"SingleEnvEntryPoint({self.entry_point!r})"
+
+
+class BatchedEnvSpec(EnvSpec):
+    """The gymnasium spec of a batched task.
+
+    ``gym.make(spec)`` builds the batched env as any spec does. ``gym.make_vec`` works on a
+    deep copy of the registered spec; the copy this class makes is a plain ``EnvSpec``
+    whose entry point is a :class:`SingleEnvEntryPoint`, so the sub-envs of gymnasium's
+    ``"sync"`` and ``"async"`` vector envs are unbatched single envs, and the vector env
+    returns ``(N,)`` rewards and flags. The ``"vector_entry_point"`` mode is unchanged.
+    """
+
+    def __deepcopy__(self, memo: dict) -> EnvSpec:
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(EnvSpec) if f.init}
+        values = {k: v if k in ("entry_point", "vector_entry_point") else copy.deepcopy(v, memo)
+                  for k, v in values.items()}
+        values["entry_point"] = SingleEnvEntryPoint(self.entry_point)
+        return EnvSpec(**values)
+
+
+def batched_spec(spec: EnvSpec) -> BatchedEnvSpec:
+    """``spec`` as a :class:`BatchedEnvSpec` (same fields; returned as is when it is one)."""
+    if isinstance(spec, BatchedEnvSpec):
+        return spec
+    return BatchedEnvSpec(**{f.name: getattr(spec, f.name) for f in dataclasses.fields(EnvSpec) if f.init})

@@ -36,7 +36,7 @@ HEADER = f"""# CLI reference
 `embodichain --help` stays fast; `embodichain <command> --help` prints a command's own help.
 Plugins can add commands with the `embodichain_register_commands` hook (see
 [plugins.md](plugins.md)); `embodichain list commands` lists every installed one. This page
-covers the built-in commands.
+covers the built-in commands and some commands of the bundled plugins.
 """
 
 
@@ -159,19 +159,46 @@ def _top_level() -> list[str]:
     return lines + ["", "`--version` prints the installed version of `embodichain-core`.", ""]
 
 
+#: Commands of the bundled plugins documented here too: name -> (target, help, plugin).
+PLUGIN_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "eval-policy": ("embodichain_lerobot.eval_cli:main",
+                    "Evaluate a trained LeRobot policy (lerobot-train folder) in a task", "embodichain-lerobot"),
+}
+
+
+def _command(name: str, target: str, help_text: str) -> list[str]:
+    """The section of one command: from its parser, else a pointer to ``--help``."""
+    parser = command_parser(target)
+    if parser is None:
+        return [f"## `embodichain {name}`", "", _escape(help_text) + ".", "",
+                f"Its module (`{target}`) has no parser to document in this installation; "
+                f"run `embodichain {name} --help`.", ""]
+    return render_parser(f"embodichain {name}", parser)
+
+
+def _plugin_commands() -> list[str]:
+    """The table of the documented plugin commands and their sections."""
+    if not PLUGIN_COMMANDS:
+        return []
+    lines = ["## Commands of the bundled plugins", "",
+             "These come with the plugins in `plugins/` (each installs with its plugin).", "",
+             "| Command | Plugin | What |", "|---|---|---|"]
+    for name, (_, help_text, plugin) in PLUGIN_COMMANDS.items():
+        lines.append(f"| [`{name}`](#{_slug('embodichain ' + name)}) | `{plugin}` | {_escape(help_text)} |")
+    lines.append("")
+    for name, (target, help_text, _) in PLUGIN_COMMANDS.items():
+        lines += _command(name, target, help_text)
+    return lines
+
+
 def render() -> str:
     """The whole page."""
     from embodichain_core.plugins.builtin import BUILTIN_COMMANDS
 
     lines = [HEADER, *_top_level()]
     for name, (target, help_text) in BUILTIN_COMMANDS.items():
-        parser = command_parser(target)
-        if parser is None:
-            lines += [f"## `embodichain {name}`", "", _escape(help_text) + ".", "",
-                      f"Its module (`{target}`) has no parser to document in this installation; "
-                      f"run `embodichain {name} --help`.", ""]
-        else:
-            lines += render_parser(f"embodichain {name}", parser)
+        lines += _command(name, target, help_text)
+    lines += _plugin_commands()
     return "\n".join(lines).rstrip() + "\n"
 
 

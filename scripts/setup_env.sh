@@ -35,6 +35,26 @@ if ! grep -q -E "libOSMesa|libEGL_mesa|libEGL_nvidia" <<<"$GL_LIBS"; then
   fi
 fi
 
+# FFmpeg shared libraries: lerobot's default video backend (torchcodec) decodes the
+# recorded mp4 files with them (PyAV bundles its own, under other names, which
+# torchcodec cannot use). Debian 12 ships FFmpeg 5.1 (~165 MB). Only when libavcodec
+# is missing, and only when we may install packages (root with apt).
+FFMPEG_PKGS="libavutil57 libavcodec59 libavformat59 libavdevice59 libavfilter8 libswscale6 libswresample4"
+if ! grep -q "libavcodec\.so\." <<<"$GL_LIBS"; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = "0" ]; then
+    echo "[setup] installing FFmpeg shared libraries (torchcodec decodes the dataset videos with them)"
+    # shellcheck disable=SC2086
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+        $FFMPEG_PKGS >/dev/null) \
+      || echo "[setup] warning: could not install FFmpeg's libraries; LeRobotDataset(...) then needs" \
+              "video_backend='pyav' (apt-get install --no-install-recommends $FFMPEG_PKGS)"
+  else
+    echo "[setup] warning: no FFmpeg shared libraries found; LeRobotDataset(...) with the default video" \
+         "backend (torchcodec) cannot decode videos; install them (apt-get install --no-install-recommends" \
+         "$FFMPEG_PKGS, or your system's FFmpeg 4-8 libraries) or pass video_backend='pyav'"
+  fi
+fi
+
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi

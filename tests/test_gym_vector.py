@@ -1,23 +1,28 @@
 """``gym.make_vec`` in every vectorization mode gives rewards and flags of shape
 ``(num_envs,)``: the vector entry point (the batched env itself), and gymnasium's sync and
-async vector envs over ``UnbatchedEnv`` (single-env layout, last observation on done)."""
+async vector envs, whose sub-envs are ``UnbatchedEnv`` s (single-env layout, last
+observation on done) with or without ``wrappers=[UnbatchedEnv]``."""
+
+import copy
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import torch
 
-from embodichain_core.gym_vector import UnbatchedEnv
+from embodichain_core.gym_vector import BatchedEnvSpec, SingleEnvEntryPoint, UnbatchedEnv
 
 pytestmark = pytest.mark.usefixtures("fixture_plugins")
 TASK = "FixtureReach-v0"  # 3 actions, 15-step episodes (tests/fixture_plugins)
 
 
-@pytest.mark.parametrize("mode, vector_kwargs", [("sync", {}), ("async", {"context": "spawn"})])
-def test_gymnasium_vector_envs_over_unbatched_envs(mode: str, vector_kwargs: dict) -> None:
+@pytest.mark.parametrize("mode, vector_kwargs, wrappers", [
+    ("sync", {}, []), ("async", {"context": "spawn"}, []), ("sync", {}, [UnbatchedEnv])])
+def test_gymnasium_vector_envs_over_unbatched_envs(mode: str, vector_kwargs: dict, wrappers: list) -> None:
     venv = gym.make_vec(TASK, num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs,
-                        wrappers=[UnbatchedEnv], verbose=False)
+                        wrappers=wrappers, verbose=False)
     try:
+        assert venv.single_observation_space["object"]["cube_pos"].shape == (3,)
         assert venv.single_action_space.shape == (3,)
         assert venv.action_space.shape == (2, 3)
         obs, _ = venv.reset(seed=0)
@@ -50,3 +55,19 @@ def test_unbatched_env_layout_and_errors() -> None:
     assert info["elapsed_steps"] == 15  # the info of the episode's last step, not of the reset
     with pytest.raises(ValueError, match="num_envs=1"):
         UnbatchedEnv(gym.make(TASK, num_envs=2, verbose=False))
+
+
+def test_gym_make_stays_batched_and_only_make_vec_copies_unbatch() -> None:
+    spec = gym.registry[TASK]
+    assert isinstance(spec, BatchedEnvSpec)
+    env = gym.make(TASK, verbose=False)
+    assert not isinstance(env, UnbatchedEnv)
+    assert env.unwrapped.num_envs == 1
+    _, reward, *_ = env.step(torch.zeros(1, 3))
+    assert reward.shape == (1,)
+    env.close()
+    copied = copy.deepcopy(spec)  # what gym.make_vec builds its sub-envs from
+    assert isinstance(copied.entry_point, SingleEnvEntryPoint)
+    assert copied.entry_point.entry_point == spec.entry_point
+    assert copied.kwargs == spec.kwargs
+    assert copied.vector_entry_point is spec.vector_entry_point

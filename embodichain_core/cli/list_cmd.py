@@ -1,4 +1,4 @@
-"""``embodichain list {plugins,tasks,functors,robots,sensors,assets,commands}``.
+"""``embodichain list {plugins,tasks,functors,robots,solvers,sensors,assets,commands}``.
 
 Prints an aligned table (or JSON with ``--json``) of what the installed plugins
 registered, with the provider of every row. Lazy targets are shown as ``"module:attr"``
@@ -23,7 +23,7 @@ from typing import Any, Callable, Sequence
 
 from embodichain_core.plugins.registry import Entry, TargetImportError, describe_target
 
-WHAT = ("plugins", "tasks", "functors", "robots", "sensors", "assets", "commands")
+WHAT = ("plugins", "tasks", "functors", "robots", "solvers", "sensors", "assets", "commands")
 
 #: (header, key) of the table columns of every listing.
 COLUMNS: dict[str, list[tuple[str, str]]] = {
@@ -34,6 +34,7 @@ COLUMNS: dict[str, list[tuple[str, str]]] = {
     "functors": [("NAME", "name"), ("KIND", "kind"), ("CATEGORY", "category"), ("PROVIDER", "provider"),
                  ("DESCRIPTION", "description")],
     "robots": [("NAME", "name"), ("CONFIG CLASS", "cfg_class"), ("PROVIDER", "provider")],
+    "solvers": [("NAME", "name"), ("SOLVER CLASS", "solver_class"), ("PROVIDER", "provider")],
     "sensors": [("SENSOR TYPE", "name"), ("CONFIG CLASS", "cfg_class"), ("SENSOR CLASS", "sensor_class"),
                 ("PROVIDER", "provider")],
     "assets": [("NAME", "name"), ("ROOT", "root"), ("PROVIDER", "provider")],
@@ -205,6 +206,10 @@ def _robot_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "cfg_class": entry.target_repr}
 
 
+def _solver_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+    return {**_base(entry), "solver_class": entry.target_repr}
+
+
 def _sensor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "cfg_class": entry.target_repr,
             "sensor_class": describe_target(entry.meta.get("sensor_class"))}
@@ -223,6 +228,7 @@ _ROWS: dict[str, Callable[[Entry, bool], dict[str, Any]]] = {
     "tasks": _task_row,
     "functors": _functor_row,
     "robots": _robot_row,
+    "solvers": _solver_row,
     "sensors": _sensor_row,
     "assets": _asset_row,
     "commands": _command_row,

@@ -207,10 +207,11 @@ def prepare(args: argparse.Namespace) -> RunPlan:
     register_demo_task()
     config = _config_arg(args)
     task_id = args.task if args.task != config else None
-    config = config or _task_default_config(task_id) or (None if task_id else str(DEMO_CONFIG))
+    config = config or _task_default_config(task_id)
     overrides = overrides_from_args(args)
-    if config is None:
+    if not config and task_id:  # a task without a config file
         return _bare_task_plan(task_id, overrides)
+    config = config or str(DEMO_CONFIG)
     if isinstance(config, (str, os.PathLike)):
         data = load_config_file(config)
         resolve_relative_paths(data, os.path.dirname(os.path.abspath(config)))
@@ -241,7 +242,7 @@ def _bare_task_plan(task_id: str, overrides: dict) -> RunPlan:
         return RunPlan(task_id, None, extras, {k: v for k, v in given.items() if k not in SIM_KEYS})
     cls = _task_cfg_class(task_id)
     missing = cls().validate("cfg") if cls is not None else ["(no config class)"]
-    if missing:
+    if cls is None or missing:
         raise ConfigError("", f"task {task_id!r} has no complete default config (unset: "
                               f"{', '.join(m.removeprefix('cfg.') for m in missing)}); "
                               f"pass --gym_config to use --{' --'.join(sim)}")

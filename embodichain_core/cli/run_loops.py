@@ -98,8 +98,8 @@ def written_episodes(base: Any) -> Optional[int]:
     manager = getattr(base, "dataset_manager", None)
     if manager is None:
         return None
-    counts = [getattr(e.func, "saved_episodes", None) for e in manager.entries.values()]
-    counts = [c for c in counts if isinstance(c, int) and not isinstance(c, bool)]
+    reported = [getattr(e.func, "saved_episodes", None) for e in manager.entries.values()]
+    counts = [c for c in reported if isinstance(c, int) and not isinstance(c, bool)]
     return max(counts) if counts else int(manager.committed_episodes)
 
 

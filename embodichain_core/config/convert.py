@@ -8,10 +8,13 @@ import inspect
 import types
 import typing
 from dataclasses import MISSING
-from typing import Any, Literal, Union
+from typing import TYPE_CHECKING, Any, Literal, TypeGuard, Union
 
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.utils.suggest import did_you_mean
+
+if TYPE_CHECKING:  # configclass imports this module
+    from embodichain_core.utils.configclass import ConfigClass
 
 _NONE = type(None)
 
@@ -93,8 +96,12 @@ def _convert_dict(value: Any, args: tuple, path: str) -> Any:
     return {k: convert_value(v, item, join_path(path, str(k))) for k, v in value.items()}
 
 
+def _is_config_type(hint: type) -> TypeGuard[type[ConfigClass]]:
+    return bool(getattr(hint, "__configclass__", False))
+
+
 def _convert_class(value: Any, hint: type, path: str) -> Any:
-    if getattr(hint, "__configclass__", False):
+    if _is_config_type(hint):
         if isinstance(value, hint):
             return value
         try:

@@ -32,7 +32,7 @@ from embodichain_core.config.convert import convert_value
 from embodichain_core.config.errors import ConfigError, join_path, unknown_key
 from embodichain_core.config.resources import MAX_NUM_ENVS
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
-from embodichain_core.managers.cfg import FUNCTOR_CFG_TYPES, DatasetFunctorCfg
+from embodichain_core.managers.cfg import FUNCTOR_CFG_TYPES, DatasetFunctorCfg, FunctorCfg
 from embodichain_core.utils.configclass import _type_hints, is_configclass
 
 __all__ = ["load_config_file", "gym_config_to_cfg", "load_gym_config", "apply_overrides",
@@ -45,6 +45,7 @@ SCENE_SECTIONS = ("robot", "sensor", "light", "background", "rigid_object", "rig
                   "articulation", "articulation_cfg")
 #: Flat top-level simulation keys -> ``sim_cfg`` field (``renderer`` -> ``render_cfg.renderer``).
 SIM_KEYS: dict[str, str] = {"headless": "headless", "device": "sim_device", "gpu_id": "gpu_id",
+                            "backend": "backend",
                             "arena_space": "arena_space", "physics_dt": "physics_dt",
                             "physics_substeps": "physics_substeps", "physics_config": "physics_config",
                             "render_cfg": "render_cfg"}
@@ -234,7 +235,7 @@ def _apply_env_section(cfg: Any, env: Any, hints: dict, given: dict[str, str]) -
             setattr(cfg, key, convert_value(value, hints[key], path))
 
 
-def _functor_section(value: Any, cfg_type: type, path: str) -> Optional[dict]:
+def _functor_section(value: Any, cfg_type: type[FunctorCfg], path: str) -> Optional[dict]:
     """``{name: functor mapping}`` -> ``{name: XxxCfg}``; ``None`` entries disable a functor."""
     if value is None:
         return None

@@ -146,6 +146,9 @@ def check_articulation(cfg: Any, path: str) -> None:
     if cfg.init_qpos is not None:
         check_vector(cfg.init_qpos, len(cfg.init_qpos), join_path(path, "init_qpos"))
     check_drive(cfg.drive_pros, join_path(path, "drive_pros"))
+    from embodichain_core.config.solver_check import check_solver_cfg
+
+    check_solver_cfg(cfg, path)
 
 
 def check_drive(drive: Any, path: str) -> None:

@@ -19,6 +19,7 @@ from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.config.physical import check_scene
 from embodichain_core.config.resources import MAX_NUM_ENVS, check_memory
 from embodichain_core.config.sections import check_sections
+from embodichain_core.utils.suggest import did_you_mean
 
 __all__ = ["validate_env_cfg", "check_run_settings", "check_sim", "MAX_SIM_STEPS_PER_CONTROL",
            "MAX_PHYSICS_SUBSTEPS", "MAX_EPISODE_STEPS", "MAX_PHYSICS_DT"]
@@ -73,6 +74,25 @@ def check_run_settings(cfg: Any, num_envs: Optional[int] = None) -> None:
         raise ConfigError("env.control_parts", f"expected a list of control part names, got {parts!r}")
 
 
+def check_backend(sim: Any, path: str) -> None:
+    """``backend`` is one of the simulation backends; ``warp`` runs on cpu or cuda[:N] and
+    not with the PGS solver (MuJoCo Warp has none)."""
+    backends = ("mujoco_batch", "warp")
+    backend = getattr(sim, "backend", "mujoco_batch")
+    if backend not in backends:
+        raise ConfigError(join_path(path, "backend"),
+                          f"unknown backend {backend!r}.{did_you_mean(str(backend), backends)}")
+    if backend != "warp":
+        return
+    device = str(sim.sim_device)
+    if not (device == "cpu" or device == "cuda" or (device.startswith("cuda:") and device[5:].isdigit())):
+        raise ConfigError(join_path(path, "sim_device"), f"{device!r} is not a device of backend 'warp'; "
+                          "use 'cpu', 'cuda' or 'cuda:N'")
+    if sim.physics_config.solver == "PGS":
+        raise ConfigError(join_path(path, "physics_config", "solver"), "'PGS' is not available on backend 'warp'; "
+                          "use 'Newton' or 'CG'")
+
+
 def check_sim(sim: Any, path: str) -> None:
     """``SimulationManagerCfg``: time step, substeps, solver, gravity, window and render sizes."""
     check_number(sim.physics_dt, join_path(path, "physics_dt"), low=0.0, high=MAX_PHYSICS_DT, low_open=True,
@@ -83,6 +103,7 @@ def check_sim(sim: Any, path: str) -> None:
         check_int(getattr(sim, name), join_path(path, name), low=1, high=_MAX_SIDE)
     for name in ("gpu_id", "thread_mode", "cpu_num"):
         check_int(getattr(sim, name), join_path(path, name), low=0, high=4096)
+    check_backend(sim, path)
     phys, where = sim.physics_config, join_path(path, "physics_config")
     check_vector(phys.gravity, 3, join_path(where, "gravity"), what="m/s^2")
     check_int(phys.iterations, join_path(where, "iterations"), low=1, high=10_000)

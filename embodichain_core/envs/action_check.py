@@ -116,6 +116,9 @@ class ActionChecker:
 
     @staticmethod
     def _check_finite(tensor: torch.Tensor, what: str) -> None:
+        if tensor.device.type == "cpu" and tensor.dtype is torch.float32:
+            if np.isfinite(tensor.detach().numpy()).all():  # numpy: ~1 us where torch takes ~6 us
+                return
         finite = torch.isfinite(tensor).all(dim=-1)
         if not bool(finite.all()):
             bad = torch.nonzero(~finite).flatten().tolist()

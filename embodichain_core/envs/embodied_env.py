@@ -74,10 +74,13 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self.physics_dt, self.sim_steps_per_control = resolve_timing(self.cfg)
         self.step_dt = self.physics_dt * self.sim_steps_per_control
         self.metadata["render_fps"] = self.control_frequency
-        self.device = torch.device(self.cfg.sim_cfg.sim_device if self.cfg.sim_cfg.sim_device != "cuda" else "cpu")
+        sim_device = self.cfg.sim_cfg.sim_device
+        on_warp = getattr(self.cfg.sim_cfg, "backend", "mujoco_batch") == "warp"  # its tensors live on sim_device
+        self.device = torch.device(sim_device if sim_device != "cuda" or on_warp else "cpu")
         self._seed_rng(self.cfg.seed)
         self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
         self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
+        self._elapsed_np = self._elapsed_steps.numpy()  # same memory: the cheap increment of phase 5
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
         # scene, managers, spaces, the action check
         env_build.build_managers(self, env_build.setup_scene(self, build_scene))
@@ -110,7 +113,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         # 4. interval events
         self.event_manager.apply("interval")
         # 5. counters: this step counts from here on
-        self._elapsed_steps += 1
+        self._elapsed_np += 1
         # 6. observations
         obs = self.get_obs()
         # 7. task state and info
@@ -121,16 +124,15 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self.last_action = command
         if self.action_manager is not None and self.action_manager.terms("post"):
             self.last_action = self.action_manager.process_action(command, "post")
-        # 10. dones
-        terminated, truncated = self._dones(obs, info, diverged)
+        # 10. dones (``dones`` is None when no env is done)
+        terminated, truncated, dones = self._dones(obs, info, diverged)
         # 11. recording
         if self.rollout_buffer is not None:
             self.rollout_buffer.add(obs, action, reward, terminated, truncated, info["success"])
         if self.dataset_manager is not None:
             self.dataset_manager.record_step(obs, action, reward, terminated, truncated, info)
         # 12. autoreset of the done envs (gymnasium SAME_STEP)
-        dones = terminated | truncated
-        if dones.any():
+        if dones is not None:
             obs = self._auto_reset(obs, dones, info)
         return obs, reward, terminated, truncated, info
 
@@ -183,32 +185,12 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._apply_joint_command("qpos", command)
 
     def _apply_joint_command(self, key: str, value: Any) -> None:
-        value = torch.as_tensor(value)
-        if value.dim() == 1:
-            value = value.unsqueeze(0).expand(self.num_envs, -1)
-        n_active, dof = len(self.active_joint_ids), self.robot.dof
-        if value.shape[-1] == dof and dof != n_active:
-            value = value[:, self.active_joint_ids]
-        elif value.shape[-1] != n_active:
-            raise ValueError(f"{key} command has {value.shape[-1]} values per env; expected {n_active} "
-                             f"(active joints) or {dof} (all joints)")
-        value = value.to(torch.float64)
-        if key == "qf":
-            self.sim.qfrc_applied[:, self._active_dof_adr] = value
-            return
-        columns, actuators = self._drive_targets[key]
-        self.sim.ctrl[:, actuators] = value[:, columns]
+        self._robot_io.write(key, value)  # addresses and drive targets resolved at build
 
     def get_obs(self, **kwargs: Any) -> dict:
         """Phase 6: ``robot`` (active joints' qpos, qvel, qf), ``sensor`` (per uid), then
         the observation functors."""
-        sim = self.sim
-        dof = self._active_dof_adr
-        obs: dict[str, Any] = {"robot": {
-            "qpos": sim.qpos[:, self._active_qpos_adr].float(),
-            "qvel": sim.qvel[:, dof].float(),
-            "qf": (sim.qfrc_actuator[:, dof] + sim.qfrc_applied[:, dof]).float(),
-        }}
+        obs: dict[str, Any] = {"robot": self._robot_io.observe()}
         if self.sensors:
             obs["sensor"] = {}
             for uid, sensor in self.sensors.items():
@@ -224,22 +206,29 @@ class EmbodiedEnv(TaskApi, gym.Env):
             info["rewards"] = terms
         return reward
 
-    def _dones(self, obs: Any, info: dict, diverged: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
+    def _dones(self, obs: Any, info: dict,
+               diverged: list[int]) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
-        ``truncated = check_truncated | time limit | diverged``."""
-        terminated = info["success"] | info["fail"]
+        ``truncated = check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
+        success = info["success"]
         if self.cfg.ignore_terminations:
-            terminated = torch.zeros_like(terminated)
-        truncated = self.check_truncated(obs, info) | (self._elapsed_steps >= self.max_episode_steps)
+            terminated = torch.zeros_like(success)
+        else:
+            terminated = success | info["fail"]
+        truncated = torch.from_numpy(self._elapsed_np >= self.max_episode_steps)  # numpy: half a torch op
+        if getattr(self.check_truncated, "__func__", None) is not TaskApi.check_truncated:  # not the default (none)
+            truncated = self.check_truncated(obs, info) | truncated
         mask = torch.zeros(self.num_envs, dtype=torch.bool)
         if diverged:
             mask[diverged] = True
             warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
+            truncated = truncated | mask
         info["diverged"] = mask
-        truncated = truncated | mask
         dones = terminated | truncated
-        self._episode_success[dones] = info["success"][dones]
-        return terminated, truncated
+        if not bool(dones.any()):
+            return terminated, truncated, None
+        self._episode_success[dones] = success[dones]
+        return terminated, truncated, dones
 
     def _auto_reset(self, obs: Any, dones: torch.Tensor, info: dict) -> Any:
         """Phase 12: reset the done envs; the terminal step stays in ``info``."""

@@ -19,6 +19,7 @@ import torch
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.cfg import EnvCfg
+from embodichain_core.envs.robot_io import RobotIO
 from embodichain_core.envs.scene_setup import filter_functors, resolve_active_joints
 from embodichain_core.managers.action_manager import ActionManager
 from embodichain_core.managers.dataset_manager import DatasetManager
@@ -82,13 +83,10 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
     env.sensors = env.scene.sensors
     env.active_joint_ids = resolve_active_joints(env.cfg, env.robot)
     aid = torch.as_tensor(env.active_joint_ids, dtype=torch.long)
-    env._active_qpos_adr = env.robot.qpos_adr[aid]
-    env._active_dof_adr = env.robot.dof_adr[aid]
-    # per command kind: (driven columns of the action, their actuator ids), resolved once
-    env._drive_targets = {
-        key: ((acts >= 0), acts[acts >= 0])
-        for key, acts in (("qpos", env.robot.pos_act[aid]), ("qvel", env.robot.vel_act[aid]))
-    }
+    # addresses, drive targets and fast paths of the active joints, resolved once
+    env._robot_io = RobotIO(env.sim, env.robot, env.active_joint_ids, env.num_envs)
+    env._active_qpos_adr, env._active_dof_adr = env._robot_io.qpos_adr, env._robot_io.dof_adr
+    env._drive_targets = env._robot_io.drive_targets
     limits = env.robot.get_qpos_limits()[0, aid].numpy()
     env.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
     return events

@@ -2,7 +2,9 @@
 
 The episode limit stays inside the env: ``max_episode_steps`` is never given to
 gymnasium (its ``TimeLimit`` would collapse batched truncation); it becomes the
-env's limit unless the config sets another.
+env's limit unless the config sets another. The spec is a
+:class:`~embodichain_core.gym_vector.BatchedEnvSpec`: ``gym.make_vec`` gives ``(N,)``
+rewards in every vectorization mode.
 
 Example:
     >>> @register_env("MyTask-v0", max_episode_steps=200)
@@ -21,7 +23,7 @@ from typing import Any, Callable, Optional
 
 import gymnasium as gym
 
-from embodichain_core.gym_vector import make_vec_env
+from embodichain_core.gym_vector import batched_spec, make_vec_env
 
 REGISTERED_ENVS: dict[str, "EnvSpec"] = {}
 
@@ -100,6 +102,7 @@ def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bo
             defaults["_registered_max_episode_steps"] = int(max_episode_steps)
         gym.register(uid, entry_point=_entry(cls), disable_env_checker=True, order_enforce=False,
                      vector_entry_point=functools.partial(make_vec_env, _entry(cls)), kwargs=defaults)
+        gym.envs.registry[uid] = batched_spec(gym.envs.registry[uid])  # unbatched sync/async sub-envs
         REGISTERED_ENVS[uid] = EnvSpec(uid, cls, max_episode_steps, dict(kwargs))
         return cls
 

@@ -21,9 +21,14 @@ def get_nested(obs: dict, name: str) -> Any:
     return node
 
 
+_PARTS: dict[str, list[str]] = {}  # "a/b/c" -> its parts, split once per name
+
+
 def set_nested(obs: dict, name: str, value: Any) -> None:
     """Write ``value`` at ``a/b/c``, creating intermediate dicts."""
-    parts = name.split("/")
+    parts = _PARTS.get(name)
+    if parts is None:
+        parts = _PARTS[name] = name.split("/")
     node = obs
     for part in parts[:-1]:
         node = node.setdefault(part, {})

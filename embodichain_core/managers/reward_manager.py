@@ -28,21 +28,27 @@ class RewardManager(ManagerBase[RewardCfg]):
         """Return ``(total, {term: unweighted value})`` starting from the task's ``base`` reward."""
         total = base.clone()
         terms: dict[str, torch.Tensor] = {}
-        n = self._env.num_envs
+        env = self._env
+        n = env.num_envs
         for name, entry in self.entries.items():
+            cfg = entry.cfg
             try:
-                value = entry.func(self._env, obs, action, info, **entry.cfg.params)
+                value = entry.func(env, obs, action, info, **cfg.params)
             except Exception as err:
                 tag_functor_error(err, entry.path, entry.func)
                 raise
-            value = torch.as_tensor(value, dtype=torch.float32)
+            if type(value) is not torch.Tensor or value.dtype is not torch.float32:
+                value = torch.as_tensor(value, dtype=torch.float32)
             if value.dim() == 0:
                 value = value.expand(n)
             if value.shape != (n,):
                 raise ValueError(f"{entry.path}: a reward term must have shape ({n},), got {tuple(value.shape)}")
             terms[name] = value
-            weighted = float(entry.cfg.weight) * value
-            total = weighted.clone() if entry.cfg.mode == "replace" else total + weighted
+            weighted = float(cfg.weight) * value
+            if cfg.mode == "replace":
+                total = weighted  # a fresh tensor: the product
+            else:
+                total += weighted  # total is this call's own tensor (a clone, or a product)
         return total, terms
 
     def summary_rows(self) -> list[tuple[str, str, str]]:

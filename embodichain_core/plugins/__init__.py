@@ -26,6 +26,7 @@ from embodichain_core.plugins.hookspecs import (
     FunctorRegister,
     RobotRegister,
     SensorRegister,
+    SolverRegister,
     TaskRegister,
     hookimpl,
     hookspec,
@@ -60,7 +61,7 @@ from embodichain_core.plugins.registry import (
 
 __all__ = [
     "hookimpl", "hookspec", "FUNCTOR_KINDS", "VISUAL_RANDOMIZATION", "KINDS",
-    "FunctorRegister", "RobotRegister", "SensorRegister", "AssetRegister", "TaskRegister",
+    "FunctorRegister", "RobotRegister", "SolverRegister", "SensorRegister", "AssetRegister", "TaskRegister",
     "CommandRegister", "Entry", "Registry", "RegistryError", "DuplicateRegistrationError",
     "UnknownNameError", "TargetImportError", "AmbiguousNameError", "NameClash", "NameClashWarning",
     "PRIORITY_ENV", "plugin_priority", "known_providers", "name_clashes", "EmbodichainPluginManager", "PluginInfo",
@@ -68,6 +69,7 @@ __all__ = [
     "register_plugin", "unregister_plugin", "isolated_plugins", "list_plugins",
     "failed_plugins", "get_registry", "functor_registry", "robot_registry", "sensor_registry",
     "asset_registry", "task_registry", "command_registry", "get_functor", "get_robot_cfg_class",
+    "solver_registry", "get_solver_class",
     "get_sensor_classes", "get_asset_root", "asset_roots", "is_visual_randomization",
 ]
 
@@ -80,6 +82,11 @@ def functor_registry() -> Registry:
 def robot_registry() -> Registry:
     """Robot config classes; lookups ignore case and a trailing ``Cfg``."""
     return get_registry("robots")
+
+
+def solver_registry() -> Registry:
+    """Kinematics solver classes by ``class_type``; lookups ignore case and a trailing ``Cfg``."""
+    return get_registry("solvers")
 
 
 def sensor_registry() -> Registry:
@@ -110,6 +117,11 @@ def get_functor(name: str) -> Any:
 def get_robot_cfg_class(name: str) -> Any:
     """The robot config class for a ``class_type``/``robot_type`` (``"DexforceW1"``)."""
     return robot_registry().get(name)
+
+
+def get_solver_class(name: str) -> Any:
+    """The solver class registered as ``name`` (a ``solver_cfg.<part>.class_type``)."""
+    return solver_registry().get(name)
 
 
 def get_sensor_classes(sensor_type: str) -> tuple[Any, Any]:

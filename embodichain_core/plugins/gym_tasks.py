@@ -12,7 +12,9 @@ Every task is registered with gymnasium twice:
 
 gymnasium gets string entry points (imported only by ``gymnasium.make``),
 ``disable_env_checker=True``, ``order_enforce=False`` and never
-``max_episode_steps`` (the episode limit lives inside the env, as a kwarg). An id
+``max_episode_steps`` (the episode limit lives inside the env, as a kwarg), in a
+:class:`~embodichain_core.gym_vector.BatchedEnvSpec` (``gym.make_vec`` in the ``"sync"``
+and ``"async"`` modes stacks unbatched single envs). An id
 gymnasium already knows from elsewhere (not from a plugin) is left alone, with a
 :class:`~embodichain_core.plugins.names.NameClashWarning` unless it has the same
 entry point.
@@ -130,9 +132,7 @@ class TaskRegistry(Registry):
 
     def _put(self, gym_id: str, entries: list[Entry]) -> None:
         import gymnasium
-        from gymnasium.envs.registration import EnvSpec
-
-        from embodichain_core.gym_vector import make_vec_env
+        from embodichain_core.gym_vector import BatchedEnvSpec, make_vec_env
 
         existing = gymnasium.registry.get(gym_id)
         if existing is not None and gym_id not in self._owned:
@@ -146,7 +146,7 @@ class TaskRegistry(Registry):
         else:
             target, kwargs = BareTaskEntryPoint(self, gym_id), {}
             vector = target.make_vec
-        spec = EnvSpec(gym_id, entry_point=target, disable_env_checker=True, order_enforce=False,
+        spec = BatchedEnvSpec(gym_id, entry_point=target, disable_env_checker=True, order_enforce=False,
                        max_episode_steps=None, kwargs=dict(kwargs), vector_entry_point=vector)
         self._owned[gym_id] = (spec, tuple(e.target for e in entries))
         gymnasium.registry[gym_id] = spec

@@ -16,8 +16,8 @@ Targets given as ``"module:attr"`` strings are imported on first use, which keep
 ``import embodichain_core`` (and plugin loading) cheap.
 
 This module also defines the register objects the hooks receive
-(:class:`FunctorRegister`, :class:`RobotRegister`, :class:`SensorRegister`,
-:class:`AssetRegister`, :class:`TaskRegister`, :class:`CommandRegister`).
+(:class:`FunctorRegister`, :class:`RobotRegister`, :class:`SolverRegister`,
+:class:`SensorRegister`, :class:`AssetRegister`, :class:`TaskRegister`, :class:`CommandRegister`).
 """
 
 from __future__ import annotations
@@ -103,6 +103,18 @@ class RobotRegister(BaseRegister):
         return self._add(name, cfg_class)
 
 
+class SolverRegister(BaseRegister):
+    """``register(name, solver_class, description="")``: kinematics solvers for ``solver_cfg``.
+
+    Lookups ignore case and a trailing ``Cfg``. The solver class must offer
+    ``from_config(cfg, robot, part) -> solver`` (see :func:`embodichain_register_solvers`).
+    """
+
+    def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
+        """Register a solver class (or ``"module:Class"``) as ``name`` (a ``class_type``)."""
+        return self._add(name, solver_class, {"description": description})
+
+
 class SensorRegister(BaseRegister):
     """``register(sensor_type, cfg_class, sensor_class)``."""
 
@@ -167,6 +179,7 @@ class CommandRegister(BaseRegister):
 REGISTER_CLASSES: dict[str, type[BaseRegister]] = {
     "functors": FunctorRegister,
     "robots": RobotRegister,
+    "solvers": SolverRegister,
     "sensors": SensorRegister,
     "assets": AssetRegister,
     "tasks": TaskRegister,
@@ -211,6 +224,32 @@ def embodichain_register_robots(register: RobotRegister) -> None:
         >>> @hookimpl
         ... def embodichain_register_robots(register):
         ...     register("DexforceW1", "embodichain_robots.w1:DexforceW1Cfg")
+    """
+
+
+@hookspec
+def embodichain_register_solvers(register: SolverRegister) -> None:
+    """Register kinematics solver classes, named by ``solver_cfg.<part>.class_type``.
+
+    A robot section's ``"solver_cfg": {part: {"class_type": name, ...}}`` builds one
+    solver per control part through the class registered as ``name``; the core holds
+    no solver code. The class must provide
+    ``from_config(cfg: dict, robot: Robot, part: str) -> solver``: ``cfg`` is the part's
+    mapping (``class_type`` included), ``robot`` the built robot; a bad value raises
+    ``ConfigError`` with its key relative to the part (``"end_link_name"``), which the
+    core reports as ``robot.solver_cfg.<part>.end_link_name``. The solver it returns
+    has ``joint_ids``, ``root_link_name``, ``get_fk`` and ``get_ik`` (see
+    :mod:`embodichain_core.sim.entities.robot`).
+
+    Args:
+        register: ``register(name, solver_class, description="")``; ``solver_class`` is
+            a class or a lazy ``"module:Class"`` string. Lookups ignore case and a
+            trailing ``Cfg``; ``<plugin>:<name>`` picks one plugin's solver.
+
+    Example:
+        >>> @hookimpl
+        ... def embodichain_register_solvers(register):
+        ...     register("DLSSolver", "my_pkg.ik:DLSSolver")
     """
 
 
@@ -287,6 +326,7 @@ REGISTER_HOOKS: dict[str, str] = {
     "commands": "embodichain_register_commands",
     "assets": "embodichain_register_assets",
     "robots": "embodichain_register_robots",
+    "solvers": "embodichain_register_solvers",
     "sensors": "embodichain_register_sensors",
     "functors": "embodichain_register_functors",
     "tasks": "embodichain_register_tasks",

@@ -22,6 +22,7 @@ Environment variables:
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 import sys
@@ -261,7 +262,7 @@ def _run_register_hooks(pm: EmbodichainPluginManager, name: str) -> dict[str, li
             if not any(impl.plugin is plugin for impl in getattr(pm.hook, hook_name).get_hookimpls()):
                 continue
             registry = pm.registries[kind]
-            register = REGISTER_CLASSES[kind](registry, name, lambda e, r=registry: added.append((r, e)))
+            register = REGISTER_CLASSES[kind](registry, name, functools.partial(_record, added, registry))
             others = [p for p in pm.get_plugins() if p is not plugin]
             pm.subset_hook_caller(hook_name, others)(register=register)
     except BaseException:
@@ -272,6 +273,10 @@ def _run_register_hooks(pm: EmbodichainPluginManager, name: str) -> dict[str, li
     for registry, entry in added:
         registered.setdefault(registry.kind, []).append(entry.name)
     return registered
+
+
+def _record(added: list[tuple[Registry, Entry]], registry: Registry, entry: Entry) -> None:
+    added.append((registry, entry))
 
 
 def register_plugin(obj: Any, name: str | None = None) -> str:
@@ -291,7 +296,8 @@ def register_plugin(obj: Any, name: str | None = None) -> str:
         name = name or _default_name(obj)
         if pm.register(obj, name=name) is None:
             raise ValueError(f"plugin {name!r} is blocked")
-        info = PluginInfo(name, module=getattr(obj, "__module__", None) or getattr(obj, "__name__", ""))
+        module = getattr(obj, "__module__", None) or getattr(obj, "__name__", "")
+        info = PluginInfo(name, module=str(module))
         try:
             _check_hooks(pm, name)
             info.registered = _run_register_hooks(pm, name)
@@ -365,7 +371,7 @@ def known_providers() -> set[str]:
 def get_registry(kind: str) -> Registry:
     """The registry of ``kind`` (loads plugins first).
 
-    Kinds: ``functors``, ``robots``, ``sensors``, ``assets``, ``tasks``, ``commands``.
+    Kinds: ``functors``, ``robots``, ``solvers``, ``sensors``, ``assets``, ``tasks``, ``commands``.
     """
     return load_plugins().registry(kind)
 

@@ -1,4 +1,4 @@
-"""Named registries filled by plugins: functors, robots, sensors, assets, tasks, commands.
+"""Named registries filled by plugins: functors, robots, solvers, sensors, assets, tasks, commands.
 
 A :class:`Registry` maps names to :class:`Entry` objects. An entry's target is an
 object or a lazy ``"module:attr"`` string imported on first :meth:`Registry.get`.
@@ -273,7 +273,7 @@ class Registry:
 
 
 #: Registry kinds, in the order their hooks are called.
-KINDS = ("commands", "assets", "robots", "sensors", "functors", "tasks")
+KINDS = ("commands", "assets", "robots", "solvers", "sensors", "functors", "tasks")
 
 
 def new_registries() -> dict[str, Registry]:
@@ -283,6 +283,7 @@ def new_registries() -> dict[str, Registry]:
     return {
         "functors": Registry("functors"),
         "robots": Registry("robots", key=class_name_key),
+        "solvers": Registry("solvers", key=class_name_key),
         "sensors": Registry("sensors", key=class_name_key),
         "assets": Registry("assets", noun="asset root"),
         "tasks": TaskRegistry("tasks", noun="task"),

@@ -62,6 +62,9 @@ class SimulationManagerCfg:
     physics_dt: float = 0.01
     physics_substeps: int = 5
     sim_device: str = "cpu"
+    #: ``"mujoco_batch"`` (CPU threads, float64) or ``"warp"`` (MuJoCo Warp on ``sim_device``
+    #: cpu/cuda, float32; docs/backends.md).
+    backend: Literal["mujoco_batch", "warp"] = "mujoco_batch"
     physics_config: PhysicsCfg = PhysicsCfg()
     persistent: bool = True
 
@@ -149,10 +152,18 @@ class JointDrivePropertiesCfg:
 
 @configclass
 class ArticulationCfg(ObjectBaseCfg):
-    """A jointed object from URDF or MJCF (``fpath``) or inline MJCF (``mjcf``)."""
+    """A jointed object from URDF or MJCF (``fpath``) or inline MJCF (``mjcf``).
+
+    ``keep_actuators``: keep the actuators the model file declares (its position and
+    velocity servos then act as the joints' drives; other joints get ``drive_pros``
+    drives). By default they are replaced by the ``drive_pros`` drives, with one notice
+    naming them. Link inertias that break MuJoCo's triangle inequality are balanced
+    (one warning names the links).
+    """
 
     fpath: Optional[str] = None
     mjcf: Optional[str] = None
+    keep_actuators: bool = False
     drive_pros: JointDrivePropertiesCfg = JointDrivePropertiesCfg(drive_type="none")
     body_scale: tuple = (1.0, 1.0, 1.0)
     attrs: RigidBodyAttributesCfg = RigidBodyAttributesCfg()
@@ -179,8 +190,11 @@ class ArticulationCfg(ObjectBaseCfg):
 class RobotCfg(ArticulationCfg):
     """An articulation the env controls, with named control parts.
 
-    ``control_parts`` maps a part name to joint-name regexes. Robot plugins subclass
-    this and override :meth:`build_spec` to generate their model.
+    ``control_parts`` maps a part name to joint-name regexes. ``solver_cfg`` maps a
+    part to its kinematics solver settings, ``{part: {"class_type": name, ...}}``, with
+    ``name`` a solver class registered by a plugin (``DLSSolver`` from
+    embodichain-robots); see :mod:`embodichain_core.sim.entities.solvers`. Robot plugins
+    subclass this and override :meth:`build_spec` to generate their model.
     """
 
     drive_pros: JointDrivePropertiesCfg = JointDrivePropertiesCfg()

@@ -200,11 +200,7 @@ def _asset_registry() -> Any:
     except ImportError:
         return None
     try:
-        from embodichain_core.plugins.registry import get_registry
-    except ImportError:
-        get_registry = getattr(manager, "get_registry", None)
-    try:
-        return get_registry("assets") if get_registry is not None else None
+        return manager.get_registry("assets")
     except (LookupError, ValueError):
         return None
 

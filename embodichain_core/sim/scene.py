@@ -26,6 +26,7 @@ from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.entities.light import Light
 from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.entities.robot import Robot
+from embodichain_core.sim.scene_defaults import DefaultRows
 from embodichain_core.utils.suggest import did_you_mean
 
 
@@ -36,9 +37,9 @@ class Scene:
         self.sim_cfg = sim_cfg
         self.num_envs = int(num_envs)
         self.device = torch.device(device)
-        self.builder: Optional[SceneBuilder] = SceneBuilder(sim_cfg)
-        self.model: Optional[mujoco.MjModel] = None
-        self.sim: Optional[SimBackend] = None
+        self.builder = SceneBuilder(sim_cfg)  # kept after build: the records name what it added
+        self._model: Optional[mujoco.MjModel] = None  # set by build(), see the properties below
+        self._sim: Optional[SimBackend] = None
         self.entities: dict[str, Entity] = {}
         self.robots: dict[str, Robot] = {}
         self.articulations: dict[str, Articulation] = {}
@@ -48,6 +49,7 @@ class Scene:
         self.lights: dict[str, Light] = {}
         self.sensors: dict[str, Any] = {}
         self.current_mesh: dict[str, list] = {}
+        self.defaults = DefaultRows(self)  # the saved default state row of resets
 
     # -- adding (before build) -------------------------------------------------------------
     def add_robot(self, cfg: ArticulationCfg, path: str = "robot") -> None:
@@ -112,17 +114,41 @@ class Scene:
             current[env] = str(key)
 
     def _b(self) -> SceneBuilder:
-        if self.builder is None or self.model is not None:
+        if self._model is not None:
             raise RuntimeError("the scene is already built; add entities before build()")
         return self.builder
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The compiled model (after :meth:`build`)."""
+        if self._model is None:
+            raise RuntimeError("the scene is not built yet; call build() first")
+        return self._model
+
+    @property
+    def sim(self) -> SimBackend:
+        """The simulation backend stepping the ``num_envs`` copies (after :meth:`build`)."""
+        if self._sim is None:
+            raise RuntimeError("the scene is not built yet; call build() first")
+        return self._sim
 
     # -- build -------------------------------------------------------------------------------
     def build(self) -> None:
         """Compile the model, create the batch and the entities, reset every env."""
-        self.model = self._b().compile()
+        self._model = self._b().compile()
         cfg = self.sim_cfg
-        self.sim = BatchSim(self.model, self.num_envs, substeps=cfg.physics_substeps,
-                            nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent)
+        sim: SimBackend
+        if getattr(cfg, "backend", "mujoco_batch") == "warp":  # MuJoCo Warp (docs/backends.md)
+            from embodichain_core.sim.backend.warp_sim import WarpSim
+
+            sim = WarpSim(self.model, self.num_envs, substeps=cfg.physics_substeps, device=cfg.sim_device)
+        else:
+            sim = BatchSim(self.model, self.num_envs, substeps=cfg.physics_substeps,
+                           nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent)
+        self._sim = sim
+        if any(rec.extra.get("variants") for rec in self.builder.records.values()):
+            # per-env meshes switch collision filters: a backend that cannot (warp) fails here
+            sim.declare_per_env(("geom_contype", "geom_conaffinity"))
         for uid, rec in self.builder.records.items():
             self._make_entity(uid, rec)
         for sensor in self.sensors.values():
@@ -130,7 +156,7 @@ class Scene:
         self.reset()
 
     def _make_entity(self, uid: str, rec: Any) -> None:
-        kinds = {
+        kinds: dict[str, tuple[type[Articulation], dict[str, Any]]] = {
             "robot": (Robot, self.robots), "articulation": (Articulation, self.articulations),
         }
         if rec.kind in kinds:
@@ -188,27 +214,59 @@ class Scene:
 
     def reset_state(self, env_ids: Any, keep_uids: Any = ()) -> None:
         """Reset the whole simulation state rows of ``env_ids`` (clears anything a
-        diverged simulation left behind), keeping the state of ``keep_uids``."""
+        diverged simulation left behind), keeping the state of ``keep_uids``.
+
+        Once a reset has run, the rows are restored from the saved default row
+        (model defaults and every entity's initial state, see
+        :mod:`embodichain_core.sim.scene_defaults`); :meth:`reset` with the same ids
+        then skips the entities the row covers.
+        """
         from embodichain_core.sim.entities.base import env_index
 
         ids = env_index(env_ids, self.num_envs)
-        idx = self.state_indices(keep_uids) if keep_uids else None
-        saved = {}
-        if idx:
-            sim = self.sim
-            saved = {name: getattr(sim, name)[ids][:, idx[key]].clone() for name, key in
-                     (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"),
-                      ("mocap_quat", "mocap"))}
-        self.sim.reset(ids)
-        for (name, key) in (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"),
-                            ("mocap_quat", "mocap")):
+        sim = self.sim
+        idx = self.state_indices(keep_uids) if keep_uids else {}
+        kept = (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"), ("mocap_quat", "mocap"))
+        saved = {name: getattr(sim, name)[ids][:, idx[key]].clone() for name, key in kept} if idx else {}
+        row = self.defaults.row()
+        if row is None:
+            sim.reset(ids)
+        else:
+            sim.reset(ids, state=row)
+        self.defaults.restored, self.defaults.slow_reset = (ids, None) if row is not None else (None, ids)
+        for (name, key) in kept:
             if saved and idx[key]:
-                getattr(self.sim, name)[ids[:, None], torch.as_tensor(idx[key])[None, :]] = saved[name]
+                getattr(sim, name)[ids[:, None], torch.as_tensor(idx[key])[None, :]] = saved[name]
         if saved:
-            self.sim.mark_dirty(ids)
+            sim.mark_dirty(ids)
 
     def reset(self, env_ids: Any = None, excluded_uids: Any = ()) -> None:
-        """Restore every entity (except ``excluded_uids``) of ``env_ids`` to its initial state."""
+        """Restore every entity (except ``excluded_uids``) of ``env_ids`` to its initial state
+        (the entities the saved default row covers are skipped right after
+        :meth:`reset_state` restored it for the same ids)."""
+        defaults = self.defaults
+        restored = defaults.restored is not None and env_ids is defaults.restored
+        slow = not excluded_uids and defaults.slow_reset is not None and env_ids is defaults.slow_reset
+        defaults.restored = defaults.slow_reset = None
         for uid, ent in self.entities.items():
-            if uid not in excluded_uids:
+            if uid not in excluded_uids and not (restored and defaults.covers(ent)):
                 ent.reset(env_ids)
+        if slow:  # rows at model defaults + every entity's initial state: save one
+            defaults.capture(env_ids)
+
+    # -- per-env options ---------------------------------------------------------------------------
+    def set_gravity(self, gravity: Any, env_ids: Any = None) -> None:
+        """Gravity (m/s^2) per env: ``(3,)`` for every env of ``env_ids``, or ``(n, 3)``.
+
+        Raises:
+            ValueError: a bad shape, or a backend where gravity is one global option.
+        """
+        from embodichain_core.sim.entities.model_fields import set_gravity
+
+        set_gravity(self.sim, gravity, env_ids)
+
+    def get_gravity(self, env_ids: Any = None) -> torch.Tensor:
+        """(n, 3) gravity of ``env_ids`` (all envs when None)."""
+        from embodichain_core.sim.entities.model_fields import get_gravity
+
+        return get_gravity(self.sim, env_ids)

@@ -24,15 +24,62 @@ from __future__ import annotations
 import copy
 import dataclasses
 import inspect
-from dataclasses import MISSING
-from typing import Any, Callable, TypeVar
+import sys
+from typing import Any, Callable, ClassVar, Protocol, TypeVar
 
 from embodichain_core.config.convert import convert_value, to_plain
 from embodichain_core.config.errors import ConfigError, join_path, unknown_key
 
-__all__ = ["configclass", "MISSING", "is_configclass"]
+if sys.version_info >= (3, 11):
+    from typing import dataclass_transform
+else:  # Python 3.10: the typing_extensions backport (a dependency on 3.10)
+    from typing_extensions import dataclass_transform
+
+__all__ = ["configclass", "MISSING", "is_configclass", "ConfigClass"]
 
 T = TypeVar("T")
+C = TypeVar("C", bound="ConfigClass")
+
+#: Marks a required field (``uid: str = MISSING``); ``validate()`` lists the ones still
+#: unset. It is ``dataclasses.MISSING``, typed ``Any`` so that it fits every annotation.
+MISSING: Any = dataclasses.MISSING
+
+
+class ConfigClass(Protocol):
+    """What every ``@configclass`` class provides: a structural type for generic code.
+
+    Annotate a parameter ``type[ConfigClass]`` (or an instance ``ConfigClass``) where any
+    config class is accepted; the decorated classes match it without inheriting from it.
+    """
+
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data: nested configs become dicts, callables ``"module:name"``."""
+        ...
+
+    @classmethod
+    def from_dict(cls: type[C], data: Any, path: str = "") -> C:
+        """An instance built from a mapping; ``ConfigError`` names the bad entry's path."""
+        ...
+
+    @classmethod
+    def _resolve_subclass(cls, data: dict, path: str) -> type: ...
+
+    @classmethod
+    def _build_from_dict(cls: type[C], data: dict, path: str) -> C: ...
+
+    def replace(self: C, **changes: Any) -> C:
+        """A deep copy with ``changes`` applied."""
+        ...
+
+    def copy(self: C) -> C:
+        """A deep copy."""
+        ...
+
+    def validate(self, prefix: str = "") -> list[str]:
+        """The still-``MISSING`` fields; without ``prefix`` any of them raises ``ConfigError``."""
+        ...
 
 
 def _missing() -> Any:
@@ -112,8 +159,15 @@ def _copier(value: Any) -> Callable[[], Any]:
     return factory
 
 
+@dataclass_transform(field_specifiers=(dataclasses.field, dataclasses.Field))
 def configclass(cls: type[T] | None = None, **kwargs: Any) -> Any:
-    """Class decorator making ``cls`` a config dataclass (see module docstring)."""
+    """Class decorator making ``cls`` a config dataclass (see module docstring).
+
+    Type checkers read the fields through :pep:`681` (``dataclass_transform``). The
+    methods added here (``from_dict``, ``to_dict``, ``replace``, ``copy``,
+    ``validate``) are declared to mypy by the plugin
+    ``embodichain_core/utils/mypy_plugin.py`` (see docs/architecture.md).
+    """
 
     def wrap(klass: type[T]) -> type[T]:
         _annotate(klass)
@@ -122,7 +176,7 @@ def configclass(cls: type[T] | None = None, **kwargs: Any) -> Any:
         for name, func in _METHODS.items():
             if name not in klass.__dict__ and not _defined_in_user_base(klass, name):
                 setattr(klass, name, func)
-        klass.__configclass__ = True
+        setattr(klass, "__configclass__", True)  # a runtime marker (is_configclass), not a declared field
         return klass
 
     if cls is None:
@@ -152,22 +206,22 @@ def _to_dict(self: Any) -> dict[str, Any]:
     return {f.name: to_plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
 
-def _from_dict(cls: type[T], data: Any, path: str = "") -> T:
+def _from_dict(cls: type[C], data: Any, path: str = "") -> C:
     """Build an instance from a mapping; unknown keys and bad types raise ``ConfigError``."""
     if is_configclass(data) and isinstance(data, cls):
         return data
     if not isinstance(data, dict):
         raise ConfigError(path, f"expected a mapping for {cls.__name__}, got {type(data).__name__}")
-    cls = cls._resolve_subclass(data, path)
-    return cls._build_from_dict(data, path)
+    resolved: type[C] = cls._resolve_subclass(data, path)
+    return resolved._build_from_dict(data, path)
 
 
-def _resolve_subclass(cls: type[T], data: dict, path: str) -> type[T]:
+def _resolve_subclass(cls: type[C], data: dict, path: str) -> type[C]:
     """Hook: pick a subclass from a discriminator key. Default: ``cls`` itself."""
     return cls
 
 
-def _build_from_dict(cls: type[T], data: dict, path: str) -> T:
+def _build_from_dict(cls: type[C], data: dict, path: str) -> C:
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     hints = _type_hints(cls)
     kwargs: dict[str, Any] = {}
@@ -197,7 +251,7 @@ def _type_hints(cls: type) -> dict[str, Any]:
         return {k: (Any if isinstance(v, str) else v) for k, v in hints.items()}
 
 
-def _replace(self: T, **changes: Any) -> T:
+def _replace(self: C, **changes: Any) -> C:
     """A copy with ``changes`` applied (``dataclasses.replace``)."""
     return dataclasses.replace(copy.deepcopy(self), **changes)
 

@@ -202,7 +202,7 @@ def quat_normalize(q: Array) -> Array:
         array([1., 0., 0., 0.])
     """
     xp, q = _ns(q)
-    return q / xp.sqrt((q * q).sum(-1, keepdims=True))
+    return q / xp.sqrt(xp.sum(q * q, -1, keepdims=True))
 
 
 @_numpy_views
@@ -248,7 +248,7 @@ def matrix_to_quat(m: Array) -> Array:
     """
     xp, m = _ns(m)
     dtype, batch = m.dtype, tuple(m.shape[:-2])
-    m = (m.to(torch.float64) if xp is torch else m.astype(np.float64, copy=False)).reshape(batch + (9,))
+    m = (m.to(torch.float64) if isinstance(m, torch.Tensor) else m.astype(np.float64, copy=False)).reshape(batch + (9,))
     m00, m11, m22 = m[..., 0], m[..., 4], m[..., 8]
     largest = xp.where(m00 + m11 + m22 > 0, 0, xp.where((m00 > m11) & (m00 > m22), 1, xp.where(m11 > m22, 2, 3)))
     pick = largest[..., None] == _const(xp, "arange4", m)  # one-hot: w, x, y or z is the largest

@@ -53,6 +53,9 @@ class BatchSim(BatchConstants, PerEnvModels):
             (False: always the whole model's, e.g. as a reference in tests).
     """
 
+    restores_state_rows = True
+    """:meth:`reset` takes a saved state row (``state=``)."""
+
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
                  persistent: bool = True, fast_constants: bool = True):
         self.model = model
@@ -139,7 +142,8 @@ class BatchSim(BatchConstants, PerEnvModels):
         """
         self.flush_const()
         if env_ids is None:
-            self._forward_dirty()
+            if self._maybe_dirty:
+                self._forward_dirty()
             failed = self._step_rows(None, nstep)
             if self._pending_failed:
                 failed, self._pending_failed = sorted(set(failed) | set(self._pending_failed)), []
@@ -161,6 +165,8 @@ class BatchSim(BatchConstants, PerEnvModels):
         except mjbatch.SimulationError as err:
             failed = [int(i) for i in err.ids]
         state = self.batch.state if rows is None else self.batch.state[rows]
+        if np.isfinite(state.sum()):  # a sum is finite only if every value is (cheap prefilter)
+            return failed
         bad = ~np.isfinite(state).all(axis=1)
         if bad.any():
             bad_ids = np.flatnonzero(bad) if rows is None else rows[bad]
@@ -177,13 +183,18 @@ class BatchSim(BatchConstants, PerEnvModels):
             self._pending_failed = sorted(set(self._pending_failed) | {int(i) for i in err.ids})
         self._dirty[_np_ids(env_ids, self.num_envs)] = False
 
-    def reset(self, env_ids: Any = None) -> None:
-        """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls);
-        failures of theirs not reported yet are dropped."""
-        ids = _batch_ids(env_ids, self.num_envs)
+    def reset(self, env_ids: Any = None, state: Optional[np.ndarray] = None) -> None:
+        """Reset ``env_ids`` to the model defaults (qpos0, zero velocities, zero controls),
+        then with ``state`` write that saved ``(nstate,)`` row into them (one write, see
+        :mod:`embodichain_core.sim.scene_defaults`); failures of theirs not reported yet
+        are dropped."""
         # no forward here: resets are followed by state writes; derived fields are
-        # recomputed lazily when next read (or before the next step)
-        self.batch.reset(ids, stage=int(mujoco.mjtStage.mjSTAGE_NONE))
+        # recomputed lazily when next read (or before the next step). The MuJoCo reset
+        # runs in any case: it also clears the derived fields a forward does not
+        # recompute (qfrc_actuator, ...) and whatever a diverged simulation left there.
+        self.batch.reset(_batch_ids(env_ids, self.num_envs), stage=int(mujoco.mjtStage.mjSTAGE_NONE))
+        if state is not None:
+            self.batch.state[_np_ids(env_ids, self.num_envs)] = state
         self.mark_dirty(env_ids)
         if self._pending_failed:  # a reset state has nothing left to report
             reset = set(_np_ids(env_ids, self.num_envs).tolist())

@@ -14,11 +14,17 @@ import torch
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.entities.base import Entity, as_array, as_values, find_names
+from embodichain_core.sim.entities.model_fields import JointModelFields, per_env_values
 from embodichain_core.utils.math import pose_to_matrix
 
 
-class Articulation(Entity):
-    """A jointed object; joint-indexed tensors are ``(N, dof)``."""
+class Articulation(JointModelFields, Entity):
+    """A jointed object; joint-indexed tensors are ``(N, dof)``.
+
+    Per-env model fields (damping, armature, friction loss, drive gains, masses, geom
+    friction) have setters/getters with one shape contract, see
+    :mod:`embodichain_core.sim.entities.model_fields`.
+    """
 
     kind = "articulation"
 
@@ -33,7 +39,7 @@ class Articulation(Entity):
         self.body_ids = torch.as_tensor([self._name2id(mujoco.mjtObj.mjOBJ_BODY, p + b) for b in self.link_names])
         self.root_body_id = int(self.body_ids[0])
         self._init_mimic(record.extra.get("mimic", {}))
-        self._init_drives(record.extra.get("driven", []), p)
+        self._init_drives(record.extra.get("driven", []), p, record.extra.get("drive_actuators"))
         self._init_root(model)
         self.default_qpos = self._default_qpos(model, getattr(record, "path", "") or uid)
 
@@ -51,14 +57,18 @@ class Articulation(Entity):
         self._mimic_off = np.asarray(self.mimic_offsets, dtype=np.float64)
         self._mimic_chained = bool(set(self.mimic_ids) & set(self.mimic_parents))
 
-    def _init_drives(self, driven: Sequence[str], prefix: str) -> None:
+    def _init_drives(self, driven: Sequence[str], prefix: str, actuators: dict | None = None) -> None:
+        """Drive actuator ids per joint: the core's ``<joint>:pos``/``:vel``, or the model's
+        own servos kept by ``keep_actuators`` (``actuators``: joint -> (pos name, vel name))."""
         model = self.scene.model
         pos = [-1] * self.dof
         vel = [-1] * self.dof
         for name in driven:
             i = self.joint_names.index(name)
-            pos[i] = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{prefix}{name}:pos")
-            vel[i] = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{prefix}{name}:vel")
+            pos_name, vel_name = (actuators or {}).get(name, (f"{name}:pos", f"{name}:vel"))
+            for ids, act in ((pos, pos_name), (vel, vel_name)):
+                if act is not None:
+                    ids[i] = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, prefix + act)
         self.driven_ids = torch.as_tensor([i for i in range(self.dof) if pos[i] >= 0], dtype=torch.long)
         self.pos_act = torch.as_tensor(pos, dtype=torch.long)
         self.vel_act = torch.as_tensor(vel, dtype=torch.long)
@@ -234,6 +244,10 @@ class Articulation(Entity):
             body = int(self.body_ids[self.find_bodies(link_name)[0][0]])
             if isinstance(link_name, str):
                 self._link_body[link_name] = body
+        if env_ids is None and self._host_reads():  # every env: numpy views of the derived fields
+            sim = self.sim
+            pose = self._pose_out(sim.xpos.numpy()[:, body], sim.xquat.numpy()[:, body])
+            return pose_to_matrix(pose) if to_matrix else pose
         env = self._ids(env_ids)
         pose = self._out(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), dim=-1))
         return pose_to_matrix(pose) if to_matrix else pose
@@ -260,22 +274,19 @@ class Articulation(Entity):
     # -- drives and masses ----------------------------------------------------------------------------
     def set_joint_drive(self, stiffness: Any = None, damping: Any = None, max_effort: Any = None,
                         joint_ids: Any = None, env_ids: Any = None) -> None:
-        """Change per-env drive gains and effort limits of driven joints."""
-        ids, jids = self._ids(env_ids), self._jids(joint_ids)
-        jids = jids[self.pos_act[jids] >= 0]
-        for j in jids.tolist():
-            pa, va, jnt = int(self.pos_act[j]), int(self.vel_act[j]), self._joint_ids[j]
-            if stiffness is not None:
-                kp = as_values(stiffness, len(ids)).numpy()
-                self.sim.set_model_field("actuator_gainprm", ids, (pa, 0), kp)
-                self.sim.set_model_field("actuator_biasprm", ids, (pa, 1), -kp)
-            if damping is not None:
-                kv = as_values(damping, len(ids)).numpy()
-                self.sim.set_model_field("actuator_gainprm", ids, (va, 0), kv)
-                self.sim.set_model_field("actuator_biasprm", ids, (va, 2), -kv)
-            if max_effort is not None:
-                eff = as_values(max_effort, len(ids)).numpy()
-                self.sim.set_model_field("jnt_actfrcrange", ids, jnt, np.stack((-eff, eff), -1))
+        """Change per-env drive gains and effort limits of the driven joints among ``joint_ids``.
+
+        Args:
+            stiffness: drive ``kp`` (N*m/rad or N/m); None leaves it.
+            damping: drive ``kv`` (N*m*s/rad or N*s/m); None leaves it.
+            max_effort: symmetric actuator force limit (N*m or N); None leaves it.
+            joint_ids: joints (all when None); joints without a drive are skipped.
+            env_ids: envs (all when None).
+
+        Each value follows the shape contract of :mod:`~embodichain_core.sim.entities.model_fields`
+        (``n`` envs x ``k`` joints: a number, ``(k,)``, ``(n, k)``, ``(n, 1)`` or ``(n,)`` per env).
+        """
+        self._write_drive(stiffness, damping, max_effort, joint_ids, env_ids)
 
     def get_mass(self, link_names: Any = None) -> torch.Tensor:
         """(N, n_links) link masses."""
@@ -283,10 +294,11 @@ class Articulation(Entity):
         return self._out(torch.as_tensor(np.array(self.sim.model_field("body_mass")[:, ids.numpy()])))
 
     def set_mass(self, mass: Any, link_names: Any = None, env_ids: Any = None) -> None:
-        """Set (n, n_links) link masses; inertias scale along."""
+        """Set link masses (kg) per env and link (``(n, k)``, broadcast like
+        :func:`~embodichain_core.sim.entities.model_fields.per_env_values`); inertias scale along."""
         env = self._ids(env_ids)
         ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
-        self.sim.set_body_masses(env, ids.numpy(), as_array(mass, len(env), len(ids)))
+        self.sim.set_body_masses(env, ids.numpy(), per_env_values(mass, len(env), len(ids), f"{self.uid}: mass"))
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero joint velocities and applied efforts of ``env_ids``."""

@@ -61,6 +61,13 @@ class RigidObject(Entity):
     # -- pose ------------------------------------------------------------------------------
     def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
         """Pose in the env frame, ``(N, 7)`` or ``(N, 4, 4)``."""
+        if self._host_reads():
+            arrays = self.sim.arrays
+            if self.is_dynamic:
+                pose = torch.from_numpy(arrays["qpos"][:, self.qpos_adr : self.qpos_adr + 7].astype(np.float32))
+            else:
+                pose = self._pose_out(arrays["mocap_pos"][:, self.mocap_id], arrays["mocap_quat"][:, self.mocap_id])
+            return pose_to_matrix(pose) if to_matrix else pose
         if self.is_dynamic:
             pose = self.sim.qpos[:, self.qpos_adr : self.qpos_adr + 7]
         else:

@@ -2,7 +2,9 @@
 
 Kinematics of a control part go through ``robot.solvers[part]``, built by the
 robot config's optional ``build_solvers(robot) -> {part: solver}`` hook (robot
-plugins provide them, e.g. embodichain-robots). A solver offers:
+plugins provide them, e.g. embodichain-robots), or else from the config's
+``solver_cfg`` (``{part: {"class_type": name, ...}}``) with the solver classes
+plugins register (:mod:`embodichain_core.sim.entities.solvers`). A solver offers:
 
 * ``joint_ids``: the robot joint ids it solves for (the part's joints, in order);
 * ``root_link_name``: the link its poses are expressed in;
@@ -48,6 +50,11 @@ class Robot(Articulation):
         builder = getattr(cfg, "build_solvers", None)
         if callable(builder):
             self.solvers = builder(self) or {}
+        elif getattr(cfg, "solver_cfg", None):
+            from embodichain_core.sim.entities.solvers import build_cfg_solvers
+
+            path = getattr(record, "path", "") or uid
+            self.solvers = build_cfg_solvers(self, cfg.solver_cfg, f"{path}.solver_cfg")
 
     def get_joint_ids(self, name: Optional[str] = None, remove_mimic: bool = False) -> list[int]:
         """Joint ids of control part ``name`` (all joints when ``None``)."""
@@ -116,7 +123,8 @@ class Robot(Articulation):
         if name is None and len(self.solvers) == 1:
             return next(iter(self.solvers.values()))
         if name not in self.solvers:
-            have = list(self.solvers) or "none; the robot config builds no solvers"
+            have = list(self.solvers) or ("none; the robot config builds no solvers: add "
+                                          "'solver_cfg': {part: {'class_type': ...}} to it")
             raise KeyError(f"{self.uid}: no kinematics solver for control part {name!r} (solvers: {have})")
         return self.solvers[name]
 

@@ -60,7 +60,8 @@ def load_articulation_spec(path: str | os.PathLike[str], inline_meshes: bool = F
             cannot decode (makes ``spec.to_xml()`` independent of any file).
 
     Raises:
-        FileNotFoundError: the file, or a mesh it references, does not exist.
+        FileNotFoundError: the file, or a mesh it references, does not exist (a URDF's
+            message names the link).
         ValueError: unknown extension, or MuJoCo rejects the model.
     """
     path = os.path.abspath(os.fspath(path))
@@ -103,9 +104,14 @@ def prepare_urdf(text: str, base_dir: str) -> str:
         raise ValueError(f"not a URDF: root element is <{root.tag}>, expected <robot>")
     compiler = _ensure_compiler(root)
     mesh_base = os.path.join(base_dir, compiler.attrib.pop("meshdir", ""))
-    for mesh in root.iter("mesh"):
-        if mesh.get("filename"):
-            mesh.set("filename", resolve_mesh_path(mesh.get("filename", ""), mesh_base))
+    for link in root.iter("link"):
+        for mesh in link.iter("mesh"):
+            if not mesh.get("filename"):
+                continue
+            try:
+                mesh.set("filename", resolve_mesh_path(mesh.get("filename", ""), mesh_base))
+            except FileNotFoundError as err:
+                raise FileNotFoundError(f"link {link.get('name')!r}: {err}") from None
     return ET.tostring(root, encoding="unicode")
 
 
@@ -178,15 +184,26 @@ def _absolutize_assets(spec: mujoco.MjSpec) -> None:
 
 
 def _inline_meshes(spec: mujoco.MjSpec, everything: bool = False) -> None:
-    """Replace file meshes MuJoCo cannot decode (or all, with ``everything``) by user meshes."""
+    """Replace file meshes MuJoCo cannot decode (or all, with ``everything``) by user meshes.
+
+    Raises:
+        FileNotFoundError / ValueError: a missing or unreadable file (naming it and its links).
+    """
+    from embodichain_core.sim.scene_build.import_checks import mesh_users
+
     for mesh in spec.meshes:
         suffix = os.path.splitext(mesh.file)[1].lower()
         if mesh.file and (everything or suffix not in MUJOCO_NATIVE_SUFFIXES):
             if suffix == ".msh":
                 continue  # MuJoCo's own binary format; only MuJoCo reads it
+            links = ", ".join(repr(b) for b in mesh_users(spec).get(mesh.name, [])) or "no link"
             if not os.path.isfile(mesh.file):
-                raise FileNotFoundError(f"mesh {mesh.name!r}: file {mesh.file!r} does not exist")
-            set_user_mesh(mesh, load_mesh(mesh.file))
+                raise FileNotFoundError(f"mesh {mesh.name!r} of link(s) {links}: file {mesh.file!r} does not exist")
+            try:
+                set_user_mesh(mesh, load_mesh(mesh.file))
+            except Exception as err:
+                raise ValueError(f"cannot read mesh file {mesh.file!r} (mesh {mesh.name!r}, used by link(s) "
+                                 f"{links}): {err}") from err
 
 
 def list_joints(spec: mujoco.MjSpec) -> list[JointInfo]:

@@ -55,6 +55,7 @@ class SceneBuilder:
         self.spec.modelname = "embodichain_scene"
         self.records: dict[str, EntityRecord] = {}
         self._post_compile: list[Callable[[mujoco.MjModel], None]] = []
+        self.collision_bit = 0  # the last articulation's collision bit (builder_articulation)
         self._configure_options()
         self.add_ground()
 
@@ -160,6 +161,12 @@ class SceneBuilder:
         try:
             model = spec.compile()
         except Exception as err:  # mujoco raises ValueError with the XML element
+            from embodichain_core.sim.scene_build.import_checks import explain_compile_error
+
+            paths = {uid: rec.path or uid for uid, rec in self.records.items()}
+            explained = explain_compile_error(err, spec, paths)
+            if explained is not None:  # an unreadable mesh: name the file and the link
+                raise explained from err
             raise RuntimeError(f"MuJoCo could not compile the scene: {err}") from err
         for fn in self._post_compile:
             fn(model)

@@ -17,7 +17,9 @@ import mujoco
 import numpy as np
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.sim.scene_build.actuators import drive_actuator_names, keep_servos, replace_actuators
 from embodichain_core.sim.scene_build.builder import EntityRecord, SceneBuilder
+from embodichain_core.sim.scene_build.import_checks import balance_inertias
 from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg
 from embodichain_core.utils.math import init_pos_from_cfg, init_quat_from_cfg
 
@@ -35,14 +37,21 @@ def add_articulation(builder: SceneBuilder, cfg: ArticulationCfg, kind: str, pat
     joints = bfs_joints(root)
     mimic = _mimic_joints(child)
     driven = [j for j in joints if j not in mimic]
+    owner = f"{path}: {kind} {cfg.uid!r}"
+    balance_inertias(child, owner)
+    keep = bool(getattr(cfg, "keep_actuators", False))
+    servos = keep_servos(child, driven) if keep else {}
+    added: list[str] = []
     if cfg.drive_pros.drive_type != "none":
-        for act in list(child.actuators):
-            child.delete(act)
-        _add_drives(child, driven, cfg.drive_pros, f"{path}.drive_pros")
+        if not keep:
+            replace_actuators(child, owner)
+        added = [j for j in driven if j not in servos]
+        _add_drives(child, driven, cfg.drive_pros, f"{path}.drive_pros", skip_actuators=set(servos))
+    drives = drive_actuator_names(driven, servos, added)
     _apply_qpos_limits(child, joints, cfg.qpos_limits, f"{path}.qpos_limits")
     if not cfg.fix_base and not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in root.joints):
         root.add_freejoint(name="root_free")
-    builder.collision_bit = getattr(builder, "collision_bit", 0) + 1
+    builder.collision_bit += 1
     _configure_bodies(child, cfg, is_robot=kind == "robot", bit=builder.collision_bit)
     frame = builder.spec.worldbody.add_frame(
         pos=init_pos_from_cfg(cfg.init_pos, cfg.init_local_pose),
@@ -56,7 +65,8 @@ def add_articulation(builder: SceneBuilder, cfg: ArticulationCfg, kind: str, pat
     record.extra.update(
         joints=joints,
         mimic=mimic,
-        driven=driven if cfg.drive_pros.drive_type != "none" else [],
+        driven=[j for j in driven if j in drives],
+        drive_actuators=drives,
         bodies=bodies,
     )
     return record
@@ -127,7 +137,10 @@ def joint_value(values: Any, joint: str, path: str) -> float:
         raise ConfigError(path, f"expected a number or a {{regex: number}} mapping, got {values!r}") from err
 
 
-def _add_drives(spec: mujoco.MjSpec, joints: list[str], drive: JointDrivePropertiesCfg, path: str) -> None:
+def _add_drives(spec: mujoco.MjSpec, joints: list[str], drive: JointDrivePropertiesCfg, path: str,
+                skip_actuators: frozenset[str] | set[str] = frozenset()) -> None:
+    """Joint properties of ``drive`` on ``joints``, and their two drive actuators (except for
+    the joints in ``skip_actuators``: they keep the model's own servos)."""
     defaults = JointDrivePropertiesCfg()
     for name in joints:
         joint = spec.joint(name)
@@ -142,6 +155,8 @@ def _add_drives(spec: mujoco.MjSpec, joints: list[str], drive: JointDrivePropert
         if np.isfinite(vals["max_effort"]) and vals["max_effort"] < 1e9:
             joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
             joint.actfrcrange = [-vals["max_effort"], vals["max_effort"]]
+        if name in skip_actuators:
+            continue
         _drive_actuator(spec, name, "pos", gain=vals["stiffness"], bias=[0.0, -vals["stiffness"], 0.0])
         _drive_actuator(spec, name, "vel", gain=vals["damping"], bias=[0.0, 0.0, -vals["damping"]])
 

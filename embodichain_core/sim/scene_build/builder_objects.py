@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from typing import Any
 
@@ -31,12 +32,13 @@ def add_rigid_object(builder: SceneBuilder, cfg: RigidObjectCfg, role: str, path
     """
     _check_body_type(cfg, role, path)
     record = builder.claim_uid(cfg.uid, role, cfg, path)
-    body = _add_body(builder, cfg, name=cfg.uid)
-    parts = _add_shape(builder, body, cfg, name=cfg.uid, path=path)
-    record.root_body = cfg.uid
+    uid = record.uid  # cfg.uid, checked to be a non-empty string
+    body = _add_body(builder, cfg, name=uid)
+    parts = _add_shape(builder, body, cfg, name=uid, path=path)
+    record.root_body = uid
     record.extra.update(parts)
     if cfg.body_type == "dynamic":
-        builder.on_compile(lambda model: _apply_damping(model, cfg.uid, cfg))
+        builder.on_compile(functools.partial(_apply_damping, uid=uid, cfg=cfg))
     return record
 
 
@@ -46,13 +48,14 @@ def add_rigid_object_group(builder: SceneBuilder, cfg: RigidObjectGroupCfg, path
     record = builder.claim_uid(cfg.uid, "group", cfg, path)
     record.extra["members"], record.extra["parts"] = [], {}
     for name, member in members.items():
-        member = member.replace(uid=f"{cfg.uid}/{name}", body_type=cfg.body_type)
-        body = _add_body(builder, member, name=member.uid)
-        parts = _add_shape(builder, body, member, name=member.uid, path=f"{path}.rigid_objects.{name}")
-        record.extra["parts"][member.uid] = parts
+        uid = f"{cfg.uid}/{name}"
+        member = member.replace(uid=uid, body_type=cfg.body_type)
+        body = _add_body(builder, member, name=uid)
+        parts = _add_shape(builder, body, member, name=uid, path=f"{path}.rigid_objects.{name}")
+        record.extra["parts"][uid] = parts
         record.extra["members"].append((name, member))
         if member.body_type == "dynamic":
-            builder.on_compile(lambda model, m=member: _apply_damping(model, m.uid, m))
+            builder.on_compile(functools.partial(_apply_damping, uid=uid, cfg=member))
     return record
 
 

@@ -6,6 +6,7 @@ resolve unchanged.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Callable
 
@@ -47,7 +48,7 @@ def _fork_assets() -> list[MeshAsset]:
         extra = ", handle raised 15 mm" if spec.handle_rise else ""
         extra += ", wide cutting tine" if spec.wide_first_tine else ""
         out.append(MeshAsset(
-            FORK_FOLDER + file, lambda s=spec: tableware.fork(s),
+            FORK_FOLDER + file, functools.partial(tableware.fork, spec),
             f"fork, {spec.length * 100:.0f} cm, {spec.tines} tines, head {spec.head_width * 1000:.0f} mm{extra}"))
     return out
 

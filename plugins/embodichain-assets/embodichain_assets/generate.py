@@ -11,6 +11,7 @@ generator produces (meshes and the URDF byte for byte, textures pixel for pixel)
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 from pathlib import Path
@@ -35,13 +36,17 @@ def _mesh_bytes(asset: catalog.MeshAsset) -> Callable[[], bytes]:
     return produce
 
 
+def _texture_png(index: int) -> bytes:
+    return png_bytes(textures.texture(index))
+
+
 def pack_files() -> dict[str, Callable[[], bytes]]:
     """Every file of the pack: data name -> function returning its bytes."""
     files: dict[str, Callable[[], bytes]] = {a.name: _mesh_bytes(a) for a in catalog.MESHES}
     files[catalog.DRAWER] = lambda: drawer_urdf().encode("utf-8")
     for i in range(textures.COUNT):
         name = f"{catalog.COCO_FOLDER}/{textures.texture_name(i)}"
-        files[name] = lambda i=i: png_bytes(textures.texture(i))
+        files[name] = functools.partial(_texture_png, i)
     return files
 
 

@@ -22,7 +22,8 @@ COUNT = 32
 def _grid(size: int) -> tuple[np.ndarray, np.ndarray]:
     """Pixel-centre coordinates in [0, 1): ``(x, y)`` arrays of shape ``(size, size)``."""
     t = (np.arange(size) + 0.5) / size
-    return np.meshgrid(t, t)
+    x, y = np.meshgrid(t, t)
+    return x, y
 
 
 def _colour(rng: np.random.Generator, sat: tuple[float, float] = (0.3, 0.9),
@@ -51,7 +52,9 @@ def value_noise(rng: np.random.Generator, size: int, cells: int) -> np.ndarray:
 
 def fbm(rng: np.random.Generator, size: int, octaves: int = 5, base: int = 4) -> np.ndarray:
     """Fractal value noise normalised to [0, 1]."""
-    total = sum(value_noise(rng, size, base << o) * 0.5 ** o for o in range(octaves))
+    total: np.ndarray = np.zeros((size, size))
+    for o in range(octaves):
+        total = total + value_noise(rng, size, base << o) * 0.5 ** o
     return (total - total.min()) / max(float(np.ptp(total)), 1e-9)
 
 

@@ -3,8 +3,9 @@
 The recorders are dataset functors (``func: "LeRobotRecorder"`` or
 ``"AsyncLeRobotRecorder"`` in a gym config's ``dataset`` section); the
 ``embodichain dataset info|preview`` commands inspect what they wrote. Importing
-this package is cheap: lerobot is imported only when a recorder is built or a
-command runs.
+this package is cheap: lerobot is imported only once a recorder starts recording
+(on a background thread, so building an env does not wait for it) or a command
+that needs it runs.
 
 Example:
     >>> cfg.dataset = {"lerobot": DatasetFunctorCfg(  # doctest: +SKIP

@@ -2,8 +2,9 @@
 
 Commands:
     info PATH [--json] [--episodes]
-        episodes, frames, fps, tasks and features of a dataset folder; with
-        ``--episodes`` one line per episode (length, success, env, episode seed).
+        episodes, frames, fps, tasks, features (dtype and shape) of a dataset folder,
+        then one line per episode (length, success, env, episode seed): the first
+        20, every one with ``--episodes``.
         A folder left by a recording that saved no episode is reported as
         incomplete (exit 2), never read as a dataset.
     preview PATH --episode N [--out DIR] [--format png|mp4] [--frames K]
@@ -27,6 +28,8 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 PROG = "embodichain dataset"
+#: Episodes ``info`` lists without ``--episodes``.
+EPISODE_LINES = 20
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -37,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     info.add_argument("--json", action="store_true", help="print the summary as JSON")
     info.add_argument("--episodes", action="store_true",
-                      help="also list every episode: length, success, env id and episode seed")
+                      help="list every episode (default: the first 20): length, success, env id, episode seed")
     prev = sub.add_parser("preview", help="camera contact sheet (or mp4) and state/action plot of an episode")
     prev.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     prev.add_argument("--episode", type=int, required=True, metavar="N", help="episode index")
@@ -82,7 +85,8 @@ def _info(args: argparse.Namespace) -> int:
             summary["episode_records"] = read_sidecar(Path(summary["path"]), summary["episodes"])
         print(json.dumps(summary, indent=2))
     else:
-        print(format_summary(summary) + ("\n" + format_episodes(summary) if args.episodes else ""))
+        limit = None if args.episodes else EPISODE_LINES
+        print(format_summary(summary) + "\n" + format_episodes(summary, limit))
     return 0
 
 

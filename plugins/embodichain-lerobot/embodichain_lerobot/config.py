@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.utils.suggest import did_you_mean
 from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB
 
 #: Environment variable naming the default dataset root (``save_path`` not given).
@@ -30,6 +31,11 @@ DEFAULT_DATASET_ROOT = "./outputs/datasets"
 #: The task string of frames when ``instruction["lang"]`` is not given.
 UNKNOWN_TASK = "unknown_task"
 VIDEO_CODECS = ("libsvtav1", "h264", "hevc", "auto")
+#: How depth and mask maps are stored (``params.depth_format``): ``png16`` packs depth in
+#: millimetres and mask ids + 1 as 16-bit values into lossless PNG image features
+#: (:mod:`embodichain_lerobot.packing`); ``raw`` keeps the float32/int32 arrays as
+#: numeric features (large: every reader pays for them).
+DEPTH_FORMATS = ("png16", "raw")
 
 _UNSAFE = re.compile(r"[^a-z0-9_.\-]+")
 
@@ -45,8 +51,15 @@ class RecorderParams:
         extra: free metadata (``scene_type``, ``task_description`` name the folder)
             stored with every episode in ``meta/embodichain_episodes.jsonl``.
         use_videos: store camera colour as AV1/H.264 video instead of PNG images.
-        vcodec: lerobot video codec (``libsvtav1``, ``h264``, ``hevc``, ``auto``).
-        image_writer_threads, image_writer_processes: lerobot's async PNG writer.
+        vcodec: lerobot video codec (``libsvtav1``, ``h264``, ``hevc``, ``auto``: a hardware
+            encoder only when one actually opens here, else ``libsvtav1``).
+        streaming_encoding: encode videos while the episode's frames are added (lerobot's
+            streaming encoder: no PNG round trip, stats from the frames in memory); ``False``
+            writes PNG frames and encodes them at ``save_episode`` (lerobot's default path).
+        encoder_threads: threads per video encoder (``None``: the codec decides).
+        depth_format: ``png16`` (default) or ``raw``, see :data:`DEPTH_FORMATS`.
+        image_writer_threads, image_writer_processes: lerobot's async PNG writer (``None``
+            threads: 2 when the dataset has image features, PNG-stored depth/masks included).
         max_pending_episodes: async recorder queue bound (0: unbounded).
         min_free_mb: megabytes that must stay free on the dataset's filesystem: checked
             before the env is built and before each episode is saved (see
@@ -59,7 +72,10 @@ class RecorderParams:
     extra: dict = field(default_factory=dict)
     use_videos: bool = False
     vcodec: str = "libsvtav1"
-    image_writer_threads: int = 0
+    streaming_encoding: bool = True
+    encoder_threads: Optional[int] = None
+    depth_format: str = "png16"
+    image_writer_threads: Optional[int] = None
     image_writer_processes: int = 0
     max_pending_episodes: int = 64
     min_free_mb: int = DEFAULT_MIN_FREE_MB
@@ -97,7 +113,17 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     p.vcodec = str(params.get("vcodec", p.vcodec))
     if p.vcodec not in VIDEO_CODECS:
         raise ConfigError("vcodec", f"must be one of {VIDEO_CODECS}, got {p.vcodec!r}")
-    for name in ("image_writer_threads", "image_writer_processes", "max_pending_episodes", "min_free_mb"):
+    p.depth_format = str(params.get("depth_format", p.depth_format))
+    if p.depth_format not in DEPTH_FORMATS:
+        raise ConfigError("depth_format", f"must be one of {DEPTH_FORMATS}, got {p.depth_format!r}."
+                                          + did_you_mean(p.depth_format, DEPTH_FORMATS))
+    p.streaming_encoding = params.get("streaming_encoding", True)
+    if not isinstance(p.streaming_encoding, bool):
+        raise ConfigError("streaming_encoding", f"must be true or false, got {p.streaming_encoding!r}")
+    for name in ("encoder_threads", "image_writer_threads"):
+        if params.get(name) is not None:
+            setattr(p, name, _non_negative_int(params[name], name))
+    for name in ("image_writer_processes", "max_pending_episodes", "min_free_mb"):
         setattr(p, name, _non_negative_int(params.get(name, getattr(p, name)), name))
     return p
 

@@ -8,15 +8,18 @@ observation key                        feature                                  
 ``robot/qpos``, ``qvel``, ``qf``       ``observation.state``, ``.qvel``, ``.qf``       float32, named by joint
 ``robot/<x>`` (observation functors)   ``observation.robot.<x>``                       numeric
 ``sensor/<cam>/color[_right]``         ``observation.images.<cam>[_right]``            image/video (H, W, 3)
-``sensor/<cam>/depth[_right]``         ``observation.depth.<cam>[_right]``             numeric (dtype kept)
-``sensor/<cam>/mask[_right]``          ``observation.mask.<cam>[_right]``              numeric (dtype kept)
+``sensor/<cam>/depth[_right]``         ``observation.depth.<cam>[_right]``             PNG image, 16-bit mm
+``sensor/<cam>/mask[_right]``          ``observation.mask.<cam>[_right]``              PNG image, 16-bit id+1
 ``sensor/<cam>/<other>``               skipped with a warning (normal, position, ...)
 ``sensor/<contact>/<field>``           ``<contact>.<field>``                           numeric
 ``<key>`` (top-level tensor)           ``<key>``                                       numeric
 ``<a>/<b>`` (nested extra)             ``observation.<a>.<b>``                         numeric
 =====================================  ==============================================  ==========
 
-Scalar shapes ``()`` become ``(1,)``. The action is ``action["qpos"]`` when the
+Depth and masks are lossless PNG image features packing 16-bit values into RGB
+(:mod:`embodichain_lerobot.packing`: millimetres, and entity id + 1); with the
+recorder's ``depth_format: "raw"`` they stay numeric features of the sensor's
+dtype (float32 metres, int32 ids). Scalar shapes ``()`` become ``(1,)``. The action is ``action["qpos"]`` when the
 action is a mapping with that key, else its first tensor (or the tensor itself).
 """
 
@@ -30,6 +33,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_lerobot.packing import pack_depth, pack_mask
 
 ROBOT_KEYS = {"robot/qpos": "observation.state", "robot/qvel": "observation.qvel", "robot/qf": "observation.qf"}
 ANNOTATIONS = ("episode_step", "segment_id", "segment_step", "segment_start", "segment_end",
@@ -44,6 +48,8 @@ FIXED_FEATURES: dict[str, dict] = {
 }
 RESERVED = {"timestamp", "frame_index", "episode_index", "index", "task_index", "task", "action", *FIXED_FEATURES}
 _CAMERA_STREAMS = {"color": "images", "depth": "depth", "mask": "mask"}
+#: Source kinds stored as lerobot image (or video) features.
+IMAGE_KINDS = ("image", "depth", "mask")
 
 
 def flatten_obs(obs: Any, prefix: str = "") -> dict[str, Any]:
@@ -69,7 +75,7 @@ class Source:
 
     key: str
     name: str
-    kind: str  # "numeric" or "image"
+    kind: str  # "numeric", "image" (colour), "depth" or "mask" (packed 16-bit PNG images)
     dtype: str
     shape: tuple
     names: Optional[list] = None
@@ -79,12 +85,17 @@ class Source:
         arr = to_numpy(value)
         if self.kind == "image":
             return _rgb(arr)
+        if self.kind == "depth":
+            return pack_depth(arr)
+        if self.kind == "mask":
+            return pack_mask(arr)
         return np.array(arr, dtype=self.dtype, copy=True).reshape((num_envs,) + self.shape)
 
     def feature(self, use_videos: bool) -> dict:
-        """The lerobot feature dict."""
-        if self.kind == "image":
-            return {"dtype": "video" if use_videos else "image", "shape": self.shape,
+        """The lerobot feature dict (depth and masks are always lossless PNG images)."""
+        if self.kind in IMAGE_KINDS:
+            video = use_videos and self.kind == "image"
+            return {"dtype": "video" if video else "image", "shape": self.shape,
                     "names": ["height", "width", "channels"]}
         return {"dtype": self.dtype, "shape": self.shape, "names": self.names}
 
@@ -107,7 +118,7 @@ def _numeric(key: str, name: str, value: Any, names: Optional[list] = None) -> S
     return Source(key, name, "numeric", str(arr.dtype), shape, names)
 
 
-def _camera_source(key: str, uid: str, stream: str, value: Any) -> Optional[Source]:
+def _camera_source(key: str, uid: str, stream: str, value: Any, depth_format: str = "png16") -> Optional[Source]:
     base, _, side = stream.partition("_")
     group = _CAMERA_STREAMS.get(base)
     if group is None or side not in ("", "right"):
@@ -115,10 +126,10 @@ def _camera_source(key: str, uid: str, stream: str, value: Any) -> Optional[Sour
                       "and mask are)", RuntimeWarning, stacklevel=4)
         return None
     name = f"observation.{group}.{uid}" + ("_right" if side else "")
-    if group != "images":
+    if group != "images" and depth_format == "raw":
         return _numeric(key, name, value)
     shape = tuple(int(s) for s in to_numpy(value).shape[1:3]) + (3,)
-    return Source(key, name, "image", "uint8", shape, None)
+    return Source(key, name, {"images": "image"}.get(group, group), "uint8", shape, None)
 
 
 def _is_camera(env: Any, uid: str, fields: list[str]) -> bool:
@@ -129,7 +140,7 @@ def _is_camera(env: Any, uid: str, fields: list[str]) -> bool:
     return sensor is None and any(f.split("_")[0] == "color" for f in fields)
 
 
-def _sources(flat: dict[str, Any], env: Any, joint_names: list[str]) -> Iterator[Source]:
+def _sources(flat: dict[str, Any], env: Any, joint_names: list[str], depth_format: str = "png16") -> Iterator[Source]:
     sensors: dict[str, list[str]] = {}
     for key in flat:
         parts = key.split("/")
@@ -142,7 +153,7 @@ def _sources(flat: dict[str, Any], env: Any, joint_names: list[str]) -> Iterator
         elif parts[0] == "sensor" and len(parts) >= 3:
             uid, stream = parts[1], "/".join(parts[2:])
             if _is_camera(env, uid, sensors[uid]):
-                source = _camera_source(key, uid, stream, value)
+                source = _camera_source(key, uid, stream, value, depth_format)
                 if source is not None:
                     yield source
             else:
@@ -159,13 +170,14 @@ class FeatureSpec:
     Args:
         obs: a batched observation of the env (``(N, ...)`` tensors).
         env: the env (joint names, sensors).
+        depth_format: ``"png16"`` (depth and masks as packed 16-bit PNG images) or ``"raw"``.
     """
 
-    def __init__(self, obs: Any, env: Any):
+    def __init__(self, obs: Any, env: Any, depth_format: str = "png16"):
         self.num_envs = int(env.num_envs)
         robot = env.robot
         self.joint_names = [str(robot.joint_names[j]) for j in env.active_joint_ids]
-        self.sources = list(_sources(flatten_obs(obs), env, self.joint_names))
+        self.sources = list(_sources(flatten_obs(obs), env, self.joint_names, depth_format))
         self._check_names()
         self.action_dim: Optional[int] = None
 
@@ -192,6 +204,10 @@ class FeatureSpec:
         out["action"] = {"dtype": "float32", "shape": (self.action_dim,), "names": names}
         out.update({k: dict(v) for k, v in FIXED_FEATURES.items()})
         return out
+
+    def image_features(self, use_videos: bool) -> list[str]:
+        """The names of the features stored as PNG images (not videos)."""
+        return [s.name for s in self.sources if s.kind in IMAGE_KINDS and s.feature(use_videos)["dtype"] == "image"]
 
     def snapshot(self, obs: Any) -> dict[str, np.ndarray]:
         """Owned numpy copies ``(N, ...)`` of the recorded observation streams."""

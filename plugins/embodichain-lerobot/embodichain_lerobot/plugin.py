@@ -25,6 +25,8 @@ def embodichain_register_functors(register: Any) -> None:
 
 @hookimpl
 def embodichain_register_commands(register: Any) -> None:
-    """Register ``embodichain dataset``."""
+    """Register ``embodichain dataset`` and ``embodichain eval-policy``."""
     register("dataset", "embodichain_lerobot.cli:main",
              help="Inspect LeRobot datasets: 'info PATH', 'preview PATH --episode N'")
+    register("eval-policy", "embodichain_lerobot.eval_cli:main",
+             help="Evaluate a trained LeRobot policy (lerobot-train folder) in a task")

@@ -1,7 +1,8 @@
 """Previews of a recorded episode: its camera streams and its state/action curves.
 
-* cameras: a contact sheet PNG (rows: camera streams and depth maps; columns:
-  frames sampled evenly over the episode) or an mp4 of all streams side by side;
+* cameras: a contact sheet PNG (rows: camera streams, depth maps (normalised per
+  row, black: nothing in range) and masks (one colour per entity); columns: frames
+  sampled evenly over the episode) or an mp4 of all streams side by side;
 * ``state_action.png``: ``observation.state`` and ``action`` over time, with
   matplotlib when it is installed, else a plain line drawing with Pillow.
 """
@@ -14,7 +15,8 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from PIL import Image, ImageDraw
 
-from embodichain_lerobot.reading import load_dataset
+from embodichain_lerobot.episode_reader import EpisodeFiles
+from embodichain_lerobot.packing import DEPTH_MAX_MM, mask_ids, unpack_u16
 
 _MIN_TILE = 96
 
@@ -31,28 +33,49 @@ def _to_hwc_uint8(value: Any) -> np.ndarray:
     return np.repeat(arr, 3, axis=-1) if arr.shape[-1] == 1 else arr[..., :3]
 
 
-def _depth_streams(ds: Any) -> list[str]:
-    def is_map(shape: Sequence[int]) -> bool:
-        return len(shape) == 2 or (len(shape) == 3 and shape[-1] == 1)
-
-    return [n for n, f in ds.features.items() if n.startswith("observation.depth.") and is_map(f["shape"])]
+def _is_map(shape: Sequence[int]) -> bool:
+    return len(shape) == 2 or (len(shape) == 3 and shape[-1] == 1)
 
 
-def collect_streams(ds: Any, indices: Sequence[int]) -> dict[str, list[np.ndarray]]:
-    """``{stream: [(H, W, 3) uint8 per index]}`` for cameras, and depth maps (normalised)."""
-    cameras, depths = list(ds.meta.camera_keys), _depth_streams(ds)
-    out: dict[str, list[np.ndarray]] = {k: [] for k in cameras + depths}
-    raw_depth: dict[str, list[np.ndarray]] = {k: [] for k in depths}
-    for i in indices:
-        item = ds[int(i)]
-        for key in cameras:
-            out[key].append(_to_hwc_uint8(item[key]))
-        for key in depths:
-            raw_depth[key].append(np.asarray(item[key], dtype=np.float32).reshape(item[key].shape[:2]))
-    for key, maps in raw_depth.items():
-        stack = np.stack(maps) if maps else np.zeros((0, 1, 1), np.float32)
-        lo, hi = (float(stack.min()), float(stack.max())) if stack.size else (0.0, 1.0)
-        out[key] = [_to_hwc_uint8((m - lo) / (hi - lo if hi > lo else 1.0)) for m in maps]
+def preview_streams(features: dict[str, dict]) -> list[str]:
+    """The previewed features: colour, depth and mask images/videos, and raw depth maps."""
+    out = []
+    for name, ft in features.items():
+        if ft["dtype"] in ("image", "video") or (name.startswith("observation.depth.") and _is_map(ft["shape"])):
+            out.append(name)
+    return out
+
+
+def _normalised(maps: list[np.ndarray]) -> list[np.ndarray]:
+    stack = np.stack(maps).astype(np.float32) if maps else np.zeros((0, 1, 1), np.float32)
+    lo, hi = (float(stack.min()), float(stack.max())) if stack.size else (0.0, 1.0)
+    return [_to_hwc_uint8((m - lo) / (hi - lo if hi > lo else 1.0)) for m in stack]
+
+
+def _colour_ids(ids: np.ndarray) -> np.ndarray:
+    """Entity ids as distinct colours (black: no entity)."""
+    rng = np.random.default_rng(7)
+    palette = np.concatenate([np.zeros((1, 3), np.uint8), rng.integers(60, 256, (int(ids.max()) + 1, 3), np.uint8)])
+    return palette[ids + 1]
+
+
+def collect_streams(ep: EpisodeFiles, indices: Sequence[int]) -> dict[str, list[np.ndarray]]:
+    """``{stream: [(H, W, 3) uint8 per index]}``: colour as stored, depth normalised, masks coloured."""
+    out: dict[str, list[np.ndarray]] = {}
+    for name in preview_streams(ep.features):
+        if ep.features[name]["dtype"] not in ("image", "video"):  # raw depth (depth_format "raw")
+            cells = ep.columns([name])[name]
+            out[name] = _normalised([np.asarray(cells[i], np.float32).reshape(ep.features[name]["shape"][:2])
+                                     for i in indices])
+            continue
+        frames = ep.camera_frames(name, indices)
+        if name.startswith("observation.depth."):
+            far = [np.where(m == DEPTH_MAX_MM, 0, m) for m in (unpack_u16(f) for f in frames)]
+            out[name] = _normalised(far)
+        elif name.startswith("observation.mask."):
+            out[name] = [_colour_ids(mask_ids(f)) for f in frames]
+        else:
+            out[name] = frames
     return out
 
 
@@ -102,14 +125,20 @@ def write_mp4(streams: dict[str, list[np.ndarray]], fps: int, path: Path) -> Pat
 def _series(ds: Any, key: str) -> Optional[np.ndarray]:
     if key not in ds.features:
         return None
+    if isinstance(ds, EpisodeFiles):
+        return ds.series(key)
     import torch
 
     return torch.stack(list(ds.hf_dataset[key])).numpy().reshape(len(ds), -1)
 
 
 def plot_state_action(ds: Any, path: Path, title: str) -> Path:
-    """``observation.state`` and ``action`` over time (matplotlib, else Pillow)."""
-    t = np.arange(len(ds)) / float(ds.fps)
+    """``observation.state`` and ``action`` over time (matplotlib, else Pillow).
+
+    ``ds`` is an :class:`~embodichain_lerobot.episode_reader.EpisodeFiles` or a ``LeRobotDataset``.
+    """
+    n = ds.length if isinstance(ds, EpisodeFiles) else len(ds)
+    t = np.arange(n) / float(ds.fps)
     series = {k: v for k in ("observation.state", "action") if (v := _series(ds, k)) is not None}
     names = {k: ds.features[k].get("names") for k in series}
     try:
@@ -156,27 +185,26 @@ def preview_episode(path: str | Path, episode: int, out_dir: str | Path, fmt: st
                     num_frames: int = 8) -> list[Path]:
     """Write the camera preview (``fmt``: ``png`` or ``mp4``) and the state/action plot.
 
+    The episode's files are read directly (:class:`~embodichain_lerobot.episode_reader.EpisodeFiles`),
+    without importing lerobot.
+
     Raises:
         IndexError: no such episode.
     """
-    root = Path(path)
-    total = load_dataset(root).num_episodes
-    if not 0 <= episode < total:
-        raise IndexError(f"episode {episode} is out of range: the dataset has {total} episode(s)")
-    ds = load_dataset(root, episodes=[episode])
-    out = Path(out_dir)
+    ep = EpisodeFiles(path, episode)
+    root, out = ep.root, Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stem = f"{root.name}_ep{episode:03d}"
-    written = [plot_state_action(ds, out / f"{stem}_state_action.png", f"{root.name} episode {episode}")]
-    n = len(ds)
+    written = [plot_state_action(ep, out / f"{stem}_state_action.png", f"{root.name} episode {episode}")]
+    n = ep.length
     if fmt == "mp4":
-        streams = collect_streams(ds, range(n))
+        streams = collect_streams(ep, range(n))
         if streams:
-            written.insert(0, write_mp4(streams, int(ds.fps), out / f"{stem}_cameras.mp4"))
+            written.insert(0, write_mp4(streams, ep.fps, out / f"{stem}_cameras.mp4"))
         return written
     idx = sorted({int(round(x)) for x in np.linspace(0, n - 1, min(num_frames, n))})
-    streams = collect_streams(ds, idx)
+    streams = collect_streams(ep, idx)
     if streams:
-        labels = [f"t={i / float(ds.fps):.2f}s (frame {i})" for i in idx]
+        labels = [f"t={i / float(ep.fps):.2f}s (frame {i})" for i in idx]
         written.insert(0, contact_sheet(streams, labels, out / f"{stem}_cameras.png"))
     return written

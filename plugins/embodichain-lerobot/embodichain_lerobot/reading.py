@@ -136,6 +136,7 @@ def dataset_summary(path: str | os.PathLike) -> dict:
         "episode_lengths": _episode_lengths(root, total),
         "successes": sum(1 for r in sidecar if r.get("success")) if sidecar else None,
         "episode_seeds": seeds if any(s is not None for s in seeds) else None,
+        "episode_successes": [r.get("success") for r in sidecar] if sidecar else None,
         "unfinished": folder_status(root).unfinished,
     }
 
@@ -168,15 +169,23 @@ def format_summary(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def format_episodes(summary: dict) -> str:
-    """One line per episode: index, length, and the embodichain metadata (success, env, seed)."""
+def format_episodes(summary: dict, limit: Optional[int] = None) -> str:
+    """One line per episode: index, length, and the embodichain metadata (success, env, seed).
+
+    Args:
+        summary: a :func:`dataset_summary`.
+        limit: list at most this many episodes (``None``: all), then say how many are left out.
+    """
     records = read_sidecar(Path(summary["path"]), summary["episodes"])
     by_index = {r.get("lerobot_episode_index"): r for r in records}
     lines = [f"{'episode':>7}  {'length':>6}  {'success':<7}  {'env':>3}  episode_seed"]
-    for index, length in enumerate(summary["episode_lengths"]):
+    lengths = summary["episode_lengths"]
+    for index, length in enumerate(lengths[:limit] if limit is not None else lengths):
         record = by_index.get(index, {})
         success = {True: "yes", False: "no"}.get(record.get("success"), "-")
         seed = record.get("episode_seed")
         lines.append(f"{index:>7}  {length:>6}  {success:<7}  {record.get('env_id', '-'):>3}  "
                      f"{'-' if seed is None else seed}")
+    if limit is not None and len(lengths) > limit:
+        lines.append(f"    ... {len(lengths) - limit} more episode(s) (--episodes lists every one)")
     return "\n".join(lines)

@@ -43,6 +43,7 @@ from embodichain_lerobot.config import (
     reserve_dataset_dir,
     robot_type_of,
 )
+from embodichain_lerobot.encoding import preload_lerobot
 from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
 from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
 from embodichain_lerobot.folders import clean_incomplete
@@ -71,8 +72,10 @@ class LeRobotRecorder(DatasetFunctor):
 
     Params (read at construction; see :class:`~embodichain_lerobot.config.RecorderParams`):
     ``save_path``, ``robot_meta``, ``instruction``, ``extra``, ``use_videos``,
-    ``vcodec``, ``image_writer_threads``, ``image_writer_processes``,
-    ``max_pending_episodes`` (async variant only), ``min_free_mb``.
+    ``vcodec``, ``streaming_encoding``, ``encoder_threads``, ``depth_format``,
+    ``image_writer_threads``, ``image_writer_processes``, ``max_pending_episodes``
+    (async variant only), ``min_free_mb``. lerobot is imported on a thread once the
+    first observation is recorded (the env build does not wait for it).
 
     Raises:
         ValueError: the env control frequency is not a whole number of Hz.
@@ -84,8 +87,6 @@ class LeRobotRecorder(DatasetFunctor):
         self.params = parse_params(cfg.params or {})
         self.fps = dataset_fps(env.control_frequency)
         check_output_dir(self.params.save_path, self.params.min_free_mb, "params.save_path")
-        import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: import now, not at the first commit)
-
         if self.params.use_videos:
             os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its banner at every encoder start otherwise
         self.step_dt = float(env.step_dt)
@@ -137,7 +138,8 @@ class LeRobotRecorder(DatasetFunctor):
     # -- recording -------------------------------------------------------------------------------
     def _ensure_spec(self, obs: Any) -> FeatureSpec:
         if self._spec is None:
-            self._spec = FeatureSpec(obs, self._env)
+            self._spec = FeatureSpec(obs, self._env, self.params.depth_format)
+            preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
         return self._spec
 
     def record_reset(self, obs: Any, env_ids: Any) -> None:
@@ -161,8 +163,10 @@ class LeRobotRecorder(DatasetFunctor):
 
     def __call__(self, env: Any, env_ids: Any, save_path: Any = None, robot_meta: Any = None,
                  instruction: Any = None, extra: Any = None, use_videos: bool = False,
-                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0,
-                 max_pending_episodes: int = 64, min_free_mb: int = DEFAULT_MIN_FREE_MB) -> None:
+                 vcodec: str = "libsvtav1", image_writer_threads: Optional[int] = None,
+                 image_writer_processes: int = 0, max_pending_episodes: int = 64,
+                 min_free_mb: int = DEFAULT_MIN_FREE_MB, streaming_encoding: bool = True,
+                 encoder_threads: Optional[int] = None, depth_format: str = "png16") -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
 
         Each episode keeps its seed, ``env.episode_seeds[i]`` now (before the next episode draws its seed).
@@ -207,10 +211,14 @@ class LeRobotRecorder(DatasetFunctor):
             raise RuntimeError("no frame was recorded before the first commit")
         p = self.params
         root = reserve_dataset_dir(p.save_path, dataset_prefix(*naming_parts(p, self._robot_uid)))
+        threads = p.image_writer_threads
+        if threads is None:  # PNG features (depth, masks, colour without videos): write them on threads
+            threads = 2 if self._spec.image_features(p.use_videos) else 0
         try:
             self._writer = DatasetWriter(
                 root, self.fps, self._spec.features(p.use_videos), robot_type_of(p, self._robot_uid),
-                p.use_videos, p.vcodec, p.image_writer_threads, p.image_writer_processes)
+                p.use_videos, p.vcodec, threads, p.image_writer_processes,
+                streaming_encoding=p.streaming_encoding, encoder_threads=p.encoder_threads)
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
             raise

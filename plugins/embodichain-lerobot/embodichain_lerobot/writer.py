@@ -23,6 +23,15 @@ the first episode is published leaves an *incomplete* folder
 (:mod:`embodichain_lerobot.folders`). A full disk during a save raises
 :class:`~embodichain_lerobot.storage.DiskFullError`; the episodes published before
 stay intact. The price is one data file (and one video file per camera) per episode.
+
+Videos are encoded while the frames are added (lerobot's streaming encoder, the
+default): frames go to the encoder once, with no PNG round trip, and their stats
+are computed from the frames in memory (lerobot's frame sampling, see
+:func:`~embodichain_lerobot.encoding.sampled_video_stats`). The encoder's queue is unbounded (an
+episode is added in one burst, so a bounded queue would drop frames), and before
+an episode is published every video's frame count is checked against the episode
+length: an encoder that lost frames stops the recording with an error instead of
+publishing a video shorter than its data.
 """
 
 from __future__ import annotations
@@ -40,6 +49,13 @@ from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
+from embodichain_lerobot.encoding import (
+    batched_image_embedding,
+    resolve_vcodec,
+    sampled_video_stats,
+    video_frame_count,
+    wait_lerobot,
+)
 from embodichain_lerobot.folders import STAGING
 from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full
 
@@ -107,11 +123,16 @@ class DatasetWriter:
         fps: frames per second.
         features: lerobot features (without its default ones).
         robot_type: written into ``meta/info.json``.
-        use_videos, vcodec, image_writer_threads, image_writer_processes: lerobot options.
+        use_videos, vcodec, image_writer_threads, image_writer_processes: lerobot options
+            (``vcodec="auto"`` is resolved by :func:`~embodichain_lerobot.encoding.resolve_vcodec`).
+        streaming_encoding: encode videos while frames are added (see the module docstring).
+        encoder_threads: threads per video encoder (``None``: the codec decides).
     """
 
     def __init__(self, root: Path, fps: int, features: dict, robot_type: Optional[str], use_videos: bool,
-                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0):
+                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0,
+                 streaming_encoding: bool = True, encoder_threads: Optional[int] = None):
+        wait_lerobot()
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
         self.root = Path(root)
@@ -121,8 +142,9 @@ class DatasetWriter:
         try:
             self.dataset = LeRobotDataset.create(
                 repo_id=self.repo_id, fps=fps, features=features, root=self.staging, robot_type=robot_type,
-                use_videos=use_videos, vcodec=vcodec, image_writer_threads=image_writer_threads,
-                image_writer_processes=image_writer_processes)
+                use_videos=use_videos, vcodec=resolve_vcodec(vcodec) if use_videos else "libsvtav1",
+                image_writer_threads=image_writer_threads, image_writer_processes=image_writer_processes,
+                streaming_encoding=streaming_encoding, encoder_queue_maxsize=0, encoder_threads=encoder_threads)
             atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
         except BaseException:
             self._lock.release()
@@ -149,6 +171,20 @@ class DatasetWriter:
             RuntimeError: the writer is finalized, or broken by an earlier failed save.
         """
         self._check_usable()
+        with sampled_video_stats():  # the encoder threads start at the first frame
+            length = self._add_frames(frames)
+            if length == 0:
+                return -1
+            index = self.num_episodes
+            line = {**record, "lerobot_episode_index": index, "length": length, "schema_version": SCHEMA_VERSION}
+            with deferred_sigint():  # a Ctrl-C lands after this episode is saved and counted
+                self._save_and_publish(line)
+                self.num_episodes += 1
+                self.num_frames += length
+        return index
+
+    def _add_frames(self, frames: Iterable[dict]) -> int:
+        """``add_frame`` every frame; on an error nothing is kept (the writer stays usable)."""
         ds = self.dataset
         try:
             length = 0
@@ -156,19 +192,11 @@ class DatasetWriter:
                 ds.add_frame(frame)
                 length += 1
         except BaseException as err:
-            ds.clear_episode_buffer()  # nothing was published: the writer stays usable
+            ds.clear_episode_buffer()
             if is_disk_full(err):  # lerobot writes image frames to disk as they are added
                 raise self._disk_full_error(err) from err
             raise
-        if length == 0:
-            return -1
-        index = self.num_episodes
-        line = {**record, "lerobot_episode_index": index, "length": length, "schema_version": SCHEMA_VERSION}
-        with deferred_sigint():  # a Ctrl-C lands after this episode is saved and counted
-            self._save_and_publish(line)
-            self.num_episodes += 1
-            self.num_frames += length
-        return index
+        return length
 
     def _check_usable(self) -> None:
         if self._finalized:
@@ -181,8 +209,9 @@ class DatasetWriter:
         from lerobot.utils.utils import SuppressProgressBars
 
         try:
-            with SuppressProgressBars():
+            with SuppressProgressBars(), batched_image_embedding():
                 self.dataset.save_episode(parallel_encoding=False)
+            self._check_video_frames(line["length"])
             self._continue_in_new_files()
             self._publish(line)
         except BaseException as err:
@@ -190,6 +219,16 @@ class DatasetWriter:
             if is_disk_full(err):
                 raise self._disk_full_error(err) from err
             raise
+
+    def _check_video_frames(self, length: int) -> None:
+        """Every staged video of the episode has ``length`` frames (else nothing is published)."""
+        for path in sorted((self.staging / "videos").rglob("*.mp4")):
+            frames = video_frame_count(path)
+            if frames != length:
+                raise RuntimeError(
+                    f"video {path.relative_to(self.staging)} of episode {self.num_episodes} has {frames} frames "
+                    f"but the episode has {length}: the video encoder lost frames, so the episode is not saved; "
+                    "set the recorder's params.streaming_encoding to false to encode after each episode instead")
 
     def _disk_full_error(self, err: BaseException) -> DiskFullError:
         n = self.num_episodes

@@ -46,6 +46,18 @@ def test_core_and_plugin_loading_import_no_lerobot() -> None:
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+def test_building_an_env_with_a_recorder_imports_no_lerobot(tmp_path: Path) -> None:
+    code = ("import sys\n"
+            "from lerobot_helpers import ScriptedEnv, arm_cfg, recorder_cfg, reset, run_script\n"
+            f"env = ScriptedEnv(arm_cfg(1, dataset=recorder_cfg({str(tmp_path)!r})))\n"
+            "assert 'lerobot.datasets.lerobot_dataset' not in sys.modules, 'imported during the build'\n"
+            "reset(env)\n"
+            "run_script(env, [['s']])\n"
+            "assert env.dataset_manager.get_functor('rec').saved_episodes == 1\n"
+            "env.close()\n")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).parent)
+
+
 def test_info_lists_episodes_frames_features_fps_and_tasks(dataset: Path, capsys: pytest.CaptureFixture) -> None:
     assert embodichain(["dataset", "info", str(dataset)]) == 0
     out = capsys.readouterr().out
@@ -56,8 +68,14 @@ def test_info_lists_episodes_frames_features_fps_and_tasks(dataset: Path, capsys
     assert "'Push the cube'" in out
     assert "observation.state" in out
     assert "success   2/2" in out
+    assert "  action" in out
+    assert "float32  (7,)" in out
+    rows = out.split("episode_seed\n")[-1].splitlines()  # per episode, without --episodes
+    assert [r.split()[:3] for r in rows] == [["0", "2", "yes"], ["1", "3", "yes"]]
     if have_sensors():
         assert "observation.images.head_right" in out
+        assert "observation.depth.head" in out
+        assert "image    (30, 40, 3)" in out
     assert embodichain(["dataset", "info", str(dataset), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["episodes"] == 2
@@ -65,6 +83,18 @@ def test_info_lists_episodes_frames_features_fps_and_tasks(dataset: Path, capsys
     assert summary["fps"] == 25
     assert summary["features"]["action"]["shape"] == [7]
     assert summary["tasks"] == ["Push the cube"]
+    assert summary["episode_successes"] == [True, True]
+
+
+def test_info_lists_at_most_20_episodes_without_the_flag(dataset: Path) -> None:
+    from embodichain_lerobot.reading import dataset_summary, format_episodes
+
+    summary = dataset_summary(dataset)
+    summary["episode_lengths"] = summary["episode_lengths"] * 15
+    lines = format_episodes(summary, 20).splitlines()
+    assert len(lines) == 22
+    assert "10 more episode(s) (--episodes lists every one)" in lines[-1]
+    assert len(format_episodes(summary).splitlines()) == 31
 
 
 @pytest.mark.parametrize("fmt", ["png", "mp4"])

@@ -1,5 +1,6 @@
 """Camera streams (embodichain-sensors) in recorded datasets: stereo colour as
-``observation.images.<uid>`` / ``<uid>_right``, depth and masks as numeric features,
+``observation.images.<uid>`` / ``<uid>_right``, depth (millimetres) and masks (id + 1)
+as packed 16-bit PNG image features (``depth_format: raw``: numeric features), colour
 as PNG images (exact) and as video (lossy), for num_envs 1 and 3."""
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import pytest
 
 pytest.importorskip("embodichain_sensors")
 
+from embodichain_lerobot.packing import depth_metres, depth_millimetres, mask_ids  # noqa: E402
 from lerobot_helpers import (  # noqa: E402
     arm_cfg,
     as_np,
@@ -50,20 +52,35 @@ def test_stereo_images_depth_and_masks_round_trip(make_env: Any, tmp_path: Path,
     assert f["observation.images.head"] == {"dtype": "image", "shape": (24, 32, 3),
                                             "names": ["height", "width", "channels"]}
     assert f["observation.images.head_right"]["shape"] == (24, 32, 3)
-    assert f["observation.depth.head"]["dtype"] == "float32"
-    assert f["observation.depth.head"]["shape"] == (24, 32, 1)
-    assert f["observation.mask.head_right"]["dtype"] == "int32"
-    assert f["observation.mask.head_right"]["shape"] == (24, 32, 1)
-    assert ds.meta.camera_keys == ["observation.images.head", "observation.images.head_right"]
+    assert f["observation.depth.head"]["dtype"] == "image"
+    assert f["observation.depth.head"]["shape"] == (24, 32, 3)
+    assert f["observation.mask.head_right"]["dtype"] == "image"
+    assert f["observation.mask.head_right"]["shape"] == (24, 32, 3)
     assert ds.num_episodes == len(expected)
     for e, (_, rows) in enumerate(expected):
         for item, (obs, _) in zip(episode_items(ds, e), rows):
             cam = obs["sensor"]["head"]
             np.testing.assert_array_equal(_hwc(item["observation.images.head"]), cam["color"][..., :3])
             np.testing.assert_array_equal(_hwc(item["observation.images.head_right"]), cam["color_right"][..., :3])
-            np.testing.assert_array_equal(as_np(item["observation.depth.head"]), cam["depth"])
-            np.testing.assert_array_equal(as_np(item["observation.mask.head_right"]), cam["mask_right"])
-    assert as_np(episode_items(ds, 0)[0]["observation.images.head"]).std() > 0  # a rendering, not a blank frame
+            mm = np.clip(np.rint(cam["depth"][..., 0].astype(np.float64) * 1000), 0, 65535)
+            np.testing.assert_array_equal(depth_millimetres(item["observation.depth.head"]), mm)
+            np.testing.assert_array_equal(mask_ids(item["observation.mask.head_right"]), cam["mask_right"][..., 0])
+    first = episode_items(ds, 0)[0]
+    metres = expected[0][1][0][0]["sensor"]["head"]["depth"][..., 0]
+    np.testing.assert_allclose(depth_metres(first["observation.depth.head"]), metres, atol=5e-4)
+    assert as_np(first["observation.images.head"]).std() > 0  # a rendering, not a blank frame
+    assert len(np.unique(mask_ids(first["observation.mask.head"]))) > 1  # entities and background
+
+
+def test_raw_depth_format_keeps_float_depth_and_int_masks(make_env: Any, tmp_path: Path) -> None:
+    ds, expected = record(make_env, tmp_path, 1, depth_format="raw")
+    assert ds.features["observation.depth.head"]["dtype"] == "float32"
+    assert ds.features["observation.depth.head"]["shape"] == (24, 32, 1)
+    assert ds.features["observation.mask.head_right"]["dtype"] == "int32"
+    assert ds.meta.camera_keys == ["observation.images.head", "observation.images.head_right"]
+    item, (obs, _) = episode_items(ds, 0)[1], expected[0][1][1]
+    np.testing.assert_array_equal(as_np(item["observation.depth.head"]), obs["sensor"]["head"]["depth"])
+    np.testing.assert_array_equal(as_np(item["observation.mask.head_right"]), obs["sensor"]["head"]["mask_right"])
 
 
 def test_unsupported_camera_streams_are_skipped_with_a_warning(make_env: Any, tmp_path: Path) -> None:

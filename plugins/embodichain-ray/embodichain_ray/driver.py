@@ -69,11 +69,11 @@ def init_ray(spec: GenerateSpec) -> None:
 
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     if spec.ray_address:  # the cluster's own settings (token authentication included) apply
-        ray.init(address=spec.ray_address, log_to_driver=False, logging_level="ERROR")
+        ray.init(address=spec.ray_address, log_to_driver=False, logging_level=logging.ERROR)
         return
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a private instance: no token file in ~/.ray
     ray.init(num_cpus=spec.workers, include_dashboard=False, object_store_memory=80 * 2**20,
-             log_to_driver=False, logging_level="ERROR", configure_logging=True)
+             log_to_driver=False, logging_level=logging.ERROR, configure_logging=True)
 
 
 def start_workers(spec: GenerateSpec) -> list:

@@ -133,7 +133,8 @@ def _next_files(data_idx: dict, meta_idx: dict, videos_idx: dict) -> None:
         idx["chunk"], idx["file"] = update_chunk_file_indices(idx["chunk"], idx["file"], DEFAULT_CHUNK_SIZE)
 
 
-def _merge_views(episodes: Sequence[ShardEpisode], root: Path, metas: dict, per_file: int) -> None:
+def _merge_views(episodes: Sequence[ShardEpisode], root: Path, metas: dict[Path, tuple[Any, dict[int, int]]],
+                 per_file: int) -> None:
     """Copy ``episodes`` (in order) into a new dataset at ``root`` with lerobot's aggregation steps."""
     from lerobot.datasets import aggregate as agg
     from lerobot.datasets.utils import DEFAULT_CHUNK_SIZE
@@ -145,7 +146,8 @@ def _merge_views(episodes: Sequence[ShardEpisode], root: Path, metas: dict, per_
     for position, ep in enumerate(episodes):
         if position and position % per_file == 0:
             _next_files(data_idx, meta_idx, videos_idx)
-        view = EpisodeView(*metas[ep.root], ep.index)
+        meta, rows = metas[ep.root]
+        view = EpisodeView(meta, rows, ep.index)
         # lerobot adds the destination totals to the source's own indices: subtract the view's
         dst.info["total_episodes"], dst.info["total_frames"] = position - ep.index, frames - view.from_index
         videos_idx = agg.aggregate_videos(view, dst, videos_idx, VIDEO_MB, DEFAULT_CHUNK_SIZE)
@@ -184,7 +186,7 @@ def merge_episodes(episodes: Sequence[ShardEpisode], output: Path, per_file: int
     work = output.parent / f".{output.name}.merging"
     remove_tree(work)
     work.parent.mkdir(parents=True, exist_ok=True)
-    metas = {}
+    metas: dict[Path, tuple[Any, dict[int, int]]] = {}
     for root in sorted({ep.root for ep in episodes}):
         meta = LeRobotDatasetMetadata(f"local/{root.name}", root=root)
         metas[root] = (meta, {int(i): r for r, i in enumerate(meta.episodes["episode_index"])})

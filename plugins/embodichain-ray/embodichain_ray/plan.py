@@ -94,7 +94,8 @@ def _recorder(cfg: Any) -> tuple[str, Any]:
     from embodichain_core.managers.cfg import DatasetFunctorCfg
     from embodichain_core.managers.manager_base import iter_section, resolve_func
 
-    found, others = [], []
+    found: list[tuple[str, Any]] = []
+    others: list[tuple[str, Any]] = []
     for name, fcfg in iter_section(getattr(cfg, "dataset", None), DatasetFunctorCfg, "env.dataset"):
         func = resolve_func(fcfg.func, "dataset", f"env.dataset.{name}")
         exact = inspect.isclass(func) and func.__module__ == LeRobotRecorder.__module__ and \

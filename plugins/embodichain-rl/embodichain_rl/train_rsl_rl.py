@@ -82,8 +82,9 @@ def train(task: str, num_envs: int, steps: int, seed: int, out: Path, max_episod
     return out / f"model_{runner.current_learning_iteration}.pt"
 
 
-def load_policy(checkpoint: Path, vec: RslRlVecEnv, train_cfg: dict[str, Any]) -> Callable[[Any], torch.Tensor]:
-    """The deterministic inference policy of an rsl_rl checkpoint, for ``vec``'s observations."""
+def load_policy(checkpoint: Path, vec: RslRlVecEnv, train_cfg: dict[str, Any]) -> Callable[..., torch.Tensor]:
+    """The inference policy of an rsl_rl checkpoint, for ``vec``'s observations:
+    ``policy(obs)`` is the mean action, ``policy(obs, stochastic_output=True)`` a sample."""
     from rsl_rl.runners import OnPolicyRunner
 
     runner = OnPolicyRunner(vec, copy.deepcopy(train_cfg), log_dir=None, device="cpu")

@@ -155,7 +155,7 @@ class Camera(BaseSensor):
         if depth is not None:
             raw["depth" + sfx][i] = depth[::-1]
         if wants["mask"]:
-            raw["mask" + sfx][i] = renderer.render_segmentation(self._ids.geom_to_id)[::-1]
+            raw["mask" + sfx][i] = renderer.render_segmentation(self._bound_ids().geom_to_id)[::-1]
 
     def _outputs(self, raw: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
         """Requested outputs (with the derived ones) as tensors."""
@@ -164,13 +164,12 @@ class Camera(BaseSensor):
             sfx = view.suffix
             if cfg.enable_color:
                 out["color" + sfx] = raw["color" + sfx]
-            depth = raw.get("depth" + sfx)
             if cfg.enable_depth:
-                out["depth" + sfx] = _trailing(depth, self.image_dims["depth"])
+                out["depth" + sfx] = _trailing(raw["depth" + sfx], self.image_dims["depth"])
             if cfg.enable_mask:
                 out["mask" + sfx] = _trailing(raw["mask" + sfx], self.image_dims["mask"])
             if cfg.enable_position or cfg.enable_normal:
-                self._geometric(out, sfx, depth, view.intrinsics)
+                self._geometric(out, sfx, raw["depth" + sfx], view.intrinsics)
         return {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in out.items()}
 
     def _geometric(self, out: dict, sfx: str, depth: np.ndarray, intrinsics: np.ndarray) -> None:
@@ -231,15 +230,20 @@ class Camera(BaseSensor):
     @property
     def mask_id_table(self) -> dict[int, str]:
         """``{mask id: entity uid}`` (``-1`` in a mask means no entity)."""
-        return self._ids.as_dict()
+        return self._bound_ids().as_dict()
 
     def uid_of_mask_id(self, mask_id: int) -> Optional[str]:
         """The entity uid of a mask value (``None`` for ``-1``)."""
-        return self._ids.uid_of_id(mask_id)
+        return self._bound_ids().uid_of_id(mask_id)
 
     def mask_id_of(self, uid: str) -> int:
         """The mask value of entity ``uid``."""
-        return self._ids.id_of_uid(uid)
+        return self._bound_ids().id_of_uid(uid)
+
+    def _bound_ids(self) -> EntityIds:
+        if self._ids is None:
+            raise RuntimeError(f"sensor {self.uid!r}: mask ids exist once the scene is built")
+        return self._ids
 
     def reset(self, env_ids: Any = None) -> None:
         """Nothing per env to clear (poses persist across resets, as in EmbodiChain)."""

@@ -16,7 +16,7 @@ Example:
 from __future__ import annotations
 
 import math
-from typing import List, Literal, Optional
+from typing import Any, List, Literal, Optional
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.cfg import SensorCfg
@@ -28,9 +28,9 @@ MAX_IMAGE_SIDE = 16384
 _BYTES_PER_PIXEL = {"color": 4, "depth": 4, "mask": 4, "normal": 12, "position": 12}
 
 
-def _check_vector(value: object, n: int, name: str) -> None:
+def _check_vector(value: Any, n: int, name: str) -> None:
     try:
-        ok = len(value) == n and all(math.isfinite(float(v)) for v in value)  # type: ignore[arg-type]
+        ok = len(value) == n and all(math.isfinite(float(v)) for v in value)
     except (TypeError, ValueError):
         ok = False
     if not ok:

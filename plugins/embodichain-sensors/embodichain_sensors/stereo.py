@@ -66,12 +66,14 @@ class StereoCamera(Camera):
         disp = np.divide(num, depth, out=np.zeros_like(depth), where=depth > 0)
         return disp[..., None]
 
-    def get_intrinsics(self) -> tuple[torch.Tensor, torch.Tensor]:
+    def get_intrinsics(self) -> tuple[torch.Tensor, torch.Tensor]:  # type: ignore[override]  # EmbodiChain's pair
         """``(left (N, 3, 3), right (N, 3, 3))`` intrinsic matrices (EmbodiChain's order)."""
         left, right = (geo.intrinsic_matrix(v.intrinsics).astype(np.float32) for v in self.views)
         return torch.from_numpy(left), torch.from_numpy(right)
 
-    def set_intrinsics(self, intrinsics: Any, intrinsics_right: Optional[Any] = None, env_ids: Any = None) -> None:
+    def set_intrinsics(  # type: ignore[override]  # EmbodiChain's signature: the right intrinsics second
+        self, intrinsics: Any, intrinsics_right: Optional[Any] = None, env_ids: Any = None
+    ) -> None:
         """Set the left (and right; default: the same) intrinsics for ``env_ids``."""
         ids = env_index(env_ids, self.num_envs).numpy()
         _set_intrinsics(self.views[0], intrinsics, ids)

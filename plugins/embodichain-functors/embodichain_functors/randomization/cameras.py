@@ -100,7 +100,7 @@ def randomize_camera_extrinsics(env: Any, env_ids: Any, entity_cfg: SceneEntityC
     ids = env_ids_of(env, env_ids)
     sensor = env.scene.sensors[entity_cfg.uid]
     ext = getattr(sensor.cfg, "extrinsics", None)
-    if _look_at_mode(sensor):
+    if ext is not None and _look_at_mode(sensor):
         eye = np.asarray(ext.eye, dtype=np.float64) + _draw(env, eye_range, ids).numpy()
         target = np.asarray(ext.target, dtype=np.float64) + _draw(env, target_range, ids).numpy()
         up = np.asarray(ext.up if ext.up is not None else (0.0, 0.0, 1.0), dtype=np.float64)

@@ -130,6 +130,8 @@ def apply_scale(env: Any, obj: RigidObject, ids: torch.Tensor, factor: torch.Ten
         writes += [("geom_size", g, new_size), ("geom_rbound", g, rbound), ("geom_aabb", (g, slice(3, 6)), half)]
         if half_new is None:
             half_new, half_old = half, _sizes(gtype, size, old)[2]
+    if half_new is None or half_old is None:
+        raise ValueError(f"{obj.uid}: no geom to scale")
     inertia = read_model(env.sim, "body_inertia", ids, obj.body_id)
     inertia = inertia * _inertia_factor(half_new) / np.maximum(_inertia_factor(half_old), 1e-18)
     write_model(env.sim, ids, writes + [("body_inertia", obj.body_id, inertia)])

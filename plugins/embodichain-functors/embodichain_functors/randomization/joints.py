@@ -31,6 +31,9 @@ def _joint_param(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, value_range
     low, high = as_range(value_range, name, f"{field.split('_')[1]}_range")
     sample = uniform_np(env, ids, low, high, (len(index),))
     base = getattr(env.scene.model, field)[index][None, :] if relative else 0.0
+    if field == "dof_damping":  # the entity's public per-env setter
+        art.set_joint_damping(np.maximum(base + sample, 0.0), joint_ids=joints, env_ids=ids)
+        return
     write_model(env.sim, ids, [(field, index, np.maximum(base + sample, 0.0))])
 
 

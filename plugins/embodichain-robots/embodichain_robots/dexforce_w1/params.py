@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
-from typing import Optional
 
 SIDES = ("left", "right")
 SQ = math.sqrt(0.5)
@@ -53,12 +52,12 @@ EEF_FLANGE_OFFSET = {DexforceW1Version.V021: 0.0, DexforceW1Version.V022: 0.0, D
 
 @dataclass(frozen=True)
 class JointSpec:
-    """One body with (at most) one joint of the torso/head chain."""
+    """One body of the torso/head chain and the joint that moves it."""
 
     body: str
     parent: str
     pos: tuple
-    joint: Optional[str]
+    joint: str
     axis: tuple = (0.0, 0.0, 1.0)
     limits: tuple = (0.0, 0.0)
     mass: float = 0.0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import Enum
 from typing import Any, Optional
 
 import numpy as np
@@ -15,7 +16,7 @@ SIDES = P.SIDES
 Brand = P.DexforceW1HandBrand
 
 
-def _enum(enum: type, value: Any, path: str, upper: bool = False) -> Any:
+def _enum(enum: type[Enum], value: Any, path: str, upper: bool = False) -> Any:
     text = str(getattr(value, "value", value)).strip()
     text = text.upper() if upper else text.lower()
     try:

@@ -131,6 +131,14 @@ class DLSSolver:
             raise ValueError(f"solver joints {cfg.joint_names} differ from the chain's {chain.joint_names}")
         return cls(cfg, chain, joint_ids)
 
+    @classmethod
+    def from_config(cls, cfg: Any, robot: Any, part: str) -> "DLSSolver":
+        """The solver of control part ``part`` of a built robot, from a ``solver_cfg`` entry
+        (the solver-registry contract; see ``kinematics.factory.solver_from_config``)."""
+        from embodichain_robots.kinematics.factory import solver_from_config
+
+        return solver_from_config(cls, cfg, robot, part)
+
     # -- properties ----------------------------------------------------------------------
     @property
     def dof(self) -> int:

@@ -139,7 +139,7 @@ class DemoBuilder:
         """Straight TCP line from the current arm target to ``pose`` (its rotation kept),
         smooth-step timed, with one IK solve per step."""
         start = self.robot.compute_fk(self.arm_q.to(torch.float32), name=self.arm).to(torch.float64)
-        path = []
+        path: list[torch.Tensor] = []
         for s in smooth_step(steps):
             waypoint = pose.clone()
             waypoint[:, :3, 3] = start[:, :3, 3] + s * (pose[:, :3, 3] - start[:, :3, 3])

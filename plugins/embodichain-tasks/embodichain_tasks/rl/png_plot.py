@@ -15,11 +15,14 @@ from __future__ import annotations
 import math
 import struct
 import zlib
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Union
 
 import numpy as np
 
 __all__ = ["line_plot_png", "encode_png", "COLORS"]
+
+Series = Union[Sequence[float], np.ndarray]
+"""The values of one line: a sequence of numbers or a 1-d array."""
 
 #: Line colours (RGB) of successive series.
 COLORS = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40))
@@ -99,7 +102,7 @@ def _fmt(value: float) -> str:
     return f"{value:.4g}"
 
 
-def line_plot_png(xs: Sequence[Sequence[float]], ys: Sequence[Sequence[float]], title: str = "",
+def line_plot_png(xs: Sequence[Series], ys: Sequence[Series], title: str = "",
                   xlabel: str = "", ylabel: str = "", labels: Optional[Sequence[str]] = None,
                   size: tuple[int, int] = (900, 560)) -> bytes:
     """Render series ``(xs[i], ys[i])`` as a line plot; return PNG bytes."""

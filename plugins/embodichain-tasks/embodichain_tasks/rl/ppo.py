@@ -100,10 +100,14 @@ def make_env(cfg: PPOConfig) -> Any:
     import gymnasium as gym
 
     import embodichain_core  # noqa: F401  (loads the plugins: registers the task ids)
+    from embodichain_core.envs import EmbodiedEnv
 
     kwargs: dict[str, Any] = {"num_envs": cfg.num_envs, "seed": cfg.seed, "verbose": False}
     if cfg.max_episode_steps > 0:  # through the cfg: gym.make keeps a max_episode_steps kwarg for itself
-        creator = gym.envs.registration.load_env_creator(gym.spec(cfg.task).entry_point)
+        entry = gym.spec(cfg.task).entry_point
+        creator = gym.envs.registration.load_env_creator(entry) if isinstance(entry, str) else entry
+        if not (isinstance(creator, type) and issubclass(creator, EmbodiedEnv)):
+            raise TypeError(f"task {cfg.task!r} is no EmbodiedEnv: max_episode_steps is set through its cfg_cls")
         kwargs["cfg"] = creator.cfg_cls(max_episode_steps=cfg.max_episode_steps)
     return gym.make(cfg.task, **kwargs).unwrapped
 

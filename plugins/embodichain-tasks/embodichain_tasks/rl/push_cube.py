@@ -120,12 +120,12 @@ class PushCubeCfg(EmbodiedEnvCfg):
         direct=[LightCfg(uid="lamp", light_type="point", intensity=30.0, init_pos=(0.5, 0.0, 2.0))])
     background = [
         RigidObjectCfg(uid="table", shape=CubeCfg(size=[1.2, 1.0, TABLE_TOP],
-                                                  visual_material=VisualMaterialCfg(base_color=[0.55, 0.4, 0.28, 1])),
+                                                  visual_material=VisualMaterialCfg(base_color=(0.55, 0.4, 0.28, 1))),
                        body_type="static", init_pos=(0.35, 0.0, TABLE_TOP / 2)),
     ]
     rigid_object = [
         RigidObjectCfg(uid="cube", shape=CubeCfg(size=[CUBE_SIZE] * 3,
-                                                 visual_material=VisualMaterialCfg(base_color=[0.9, 0.2, 0.2, 1])),
+                                                 visual_material=VisualMaterialCfg(base_color=(0.9, 0.2, 0.2, 1))),
                        attrs=RigidBodyAttributesCfg(mass=0.2, static_friction=0.6, dynamic_friction=0.5),
                        init_pos=(0.45, 0.0, round(TABLE_TOP + CUBE_SIZE / 2, 6))),
     ]
@@ -147,12 +147,6 @@ class PushCubeEnv(EmbodiedEnv):
     success_threshold: float
     fall_depth: float
     goal_pose: torch.Tensor
-
-    def _bind_extensions(self) -> None:
-        super()._bind_extensions()
-        self.success_threshold = float(getattr(self, "success_threshold", 0.1))
-        self.fall_depth = float(getattr(self, "fall_depth", 0.1))
-        self.goal_pose = torch.eye(4).repeat(self.num_envs, 1, 1)
 
     def _cube_position(self) -> torch.Tensor:
         return self.scene["cube"].get_local_pose(to_matrix=True)[:, :3, 3].float()

@@ -1,0 +1,246 @@
+"""The ``warp`` backend: ``num_envs`` worlds of one model on MuJoCo Warp (GPU, or Warp's CPU device).
+
+:class:`WarpSim` implements :class:`~embodichain_core.sim.backend.interface.SimBackend`,
+so entities, managers, functors and tasks run on it unchanged. What differs from
+:class:`~embodichain_core.sim.backend.batch_sim.BatchSim` (see docs/backends.md):
+
+* **float32** state and views (``wp.to_torch`` of MuJoCo Warp's arrays, zero-copy, on the
+  sim device); on the CPU ``sim.arrays`` are numpy views of the same memory, on CUDA
+  proxies that write into the device tensors.
+* **No subset stepping** (``capabilities.subset_step`` is False): a subset step steps every
+  world, then puts the other envs' state back (a copy: slow, exact for those envs).
+* **Forward and constants cover every world** (MuJoCo Warp has no world subset); a step
+  ends with a position-velocity refresh (``mujoco_warp.step1``'s stages), so derived
+  views are current as after ``mujoco.batch``'s ``stage=VEL`` step, but acceleration
+  sensors read zero.
+* **Resets** through ``reset_data`` with a per-world mask; **per-env model fields** only
+  those MuJoCo Warp batches (:mod:`.warp_fields`, :mod:`.warp_model`).
+* **Graphs**: the step, the refresh and the reset are captured once and replayed
+  (:mod:`.warp_device`): CUDA graphs on a GPU (untested: no GPU was lent to this work),
+  Warp's recorded launches on the CPU (7x faster than launching from Python there).
+"""
+
+from __future__ import annotations
+
+import copy
+import warnings
+from typing import Any, Optional
+
+import mujoco
+import numpy as np
+import torch
+
+from embodichain_core.config.errors import ConfigError
+from embodichain_core.sim.backend.env_rows import np_ids
+from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
+from embodichain_core.sim.backend.warp_device import StepGraphs, init_warp, resolve_device, torch_device
+from embodichain_core.sim.backend.warp_model import WarpModelFields
+from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
+
+_AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+#: State (and acceleration-level outputs) a subset step puts back for the envs outside the subset.
+_KEPT = ("qpos", "qvel", "act", "qacc_warmstart", "time", "history", "plastic", "qacc", "qfrc_actuator",
+         "actuator_force", "cfrc_ext")
+
+
+class WarpSim(WarpModelFields):
+    """``num_envs`` MuJoCo Warp worlds of one compiled model.
+
+    Args:
+        model: the compiled scene (the host template; MuJoCo's own autoreset stays off).
+        num_envs: worlds.
+        substeps: MuJoCo steps per :meth:`step`.
+        device: ``"cpu"`` (Warp's CPU device), ``"cuda"`` or ``"cuda:N"``.
+        nconmax, njmax: contacts and constraint rows per world (default: from the model;
+            kept as attributes).
+
+    Raises:
+        ConfigError: a device or model feature MuJoCo Warp does not support.
+    """
+
+    #: Numpy views as ``sim.arrays`` on Warp's CPU device; ``False`` gives the CUDA path's
+    #: device proxies there too (tests exercise the GPU code paths of entities this way).
+    host_arrays_on_cpu: bool = True
+
+    def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, device: str = "cpu",
+                 nconmax: Optional[int] = None, njmax: Optional[int] = None):
+        self.wp = init_warp()
+        import mujoco_warp
+
+        self.mjw = mujoco_warp
+        self.model = model
+        self.num_envs = int(num_envs)
+        self.substeps = int(substeps)
+        self.wp_device = resolve_device(self.wp, device)
+        self.device = torch_device(self.wp_device)
+        self.dtype = torch.float32
+        on_cpu = self.wp_device == "cpu"
+        self.capabilities = SimCapabilities(subset_step=False, per_env_models=False,
+                                            host_arrays=on_cpu and self.host_arrays_on_cpu, float64=False,
+                                            deterministic=on_cpu)
+        self.graphs = StepGraphs(self.wp, self.wp_device)
+        self._init_fields()
+        self._make(nconmax, njmax)
+        self._dirty = np.zeros(self.num_envs, dtype=bool)
+        self._maybe_dirty = False
+        self._pending_failed: list[int] = []
+        self._errors: dict[int, str] = {}
+        self._warned_overflow = False
+        self.reset(None)
+
+    # -- construction ------------------------------------------------------------------------------
+    def _make(self, nconmax: Optional[int], njmax: Optional[int]) -> None:
+        mjm = self._host_model = _warp_ready(self.model)
+        data = mujoco.MjData(mjm)
+        mujoco.mj_forward(mjm, data)
+        self.nconmax = nconmax = int(nconmax or max(48, 2 * data.ncon + 2 * mjm.nbody))
+        self.njmax = njmax = int(njmax or max(64, 4 * nconmax + 2 * mjm.nv + 6 * mjm.neq))
+        with self.wp.ScopedDevice(self.wp_device):
+            try:
+                self.wp_model = self.mjw.put_model(mjm)
+            except NotImplementedError as err:
+                raise ConfigError("sim_cfg.backend", f"backend 'warp' cannot simulate this scene: {err} "
+                                  "(use backend 'mujoco_batch', or change sim_cfg.physics_config)") from err
+            self.wp_data = self.mjw.put_data(mjm, data, nworld=self.num_envs, nconmax=nconmax, njmax=njmax)
+            self._reset_mask = self.wp.zeros(self.num_envs, dtype=bool)
+        self._mask = self.wp.to_torch(self._reset_mask)
+        self._views: dict[str, torch.Tensor] = {}
+        for name in STATE_FIELDS + DERIVED_FIELDS:
+            array = getattr(self.wp_data, name, None)
+            if array is not None:
+                self._views[name] = flat_rows(self.wp.to_torch(array), self.num_envs)
+        self._kept = {n: self.wp.to_torch(getattr(self.wp_data, n)) for n in _KEPT
+                      if getattr(self.wp_data, n, None) is not None}
+        self._overflow = self.wp.to_torch(self.wp_data.overflow)
+        if self.capabilities.host_arrays:
+            self.arrays: Any = {n: getattr(self.wp_data, n).numpy() for n in STATE_FIELDS}
+        else:
+            self.arrays = DeviceArrays({n: self._views[n] for n in STATE_FIELDS})
+
+    def __getattr__(self, name: str) -> torch.Tensor:
+        views = self.__dict__.get("_views")
+        if views is not None and name in views:
+            if self._maybe_dirty and name not in STATE_FIELDS:
+                self._forward_dirty()
+            return views[name]
+        raise AttributeError(f"WarpSim has no field {name!r}")
+
+    def view(self, name: str) -> torch.Tensor:
+        """The persistent view of a state or derived field (same as ``sim.<name>``)."""
+        return self.__getattr__(name)
+
+    def mark_dirty(self, env_ids: Any = None) -> None:
+        """Note a direct state write; derived views are refreshed before the next read."""
+        self._dirty[np_ids(env_ids, self.num_envs)] = True
+        self._maybe_dirty = True
+
+    def _forward_dirty(self) -> None:
+        if self._dirty.any():
+            self.forward(None)
+        self._maybe_dirty = False
+
+    # -- stepping ----------------------------------------------------------------------------------
+    def _refresh(self) -> None:
+        """Position and velocity stages of every world (sensors included), from its state."""
+        self.mjw.step1(self.wp_model, self.wp_data)
+
+    def _advance(self, n: int) -> None:
+        for _ in range(n):
+            self.mjw.step(self.wp_model, self.wp_data)
+        self._refresh()
+
+    def step(self, nstep: int = 1, env_ids: Any = None) -> list[int]:
+        """Advance ``env_ids`` (``None``: every env) by ``nstep`` physics steps; return the envs
+        that diverged (non-finite state, or constraint rows over ``njmax``).
+
+        A subset steps every world and then restores the others' state (and refreshes
+        their derived views): slow, use it off the hot path.
+        """
+        self.flush_const()
+        n = int(nstep) * self.substeps
+        if env_ids is None:
+            failed = self._step_all(n)
+            if self._pending_failed:
+                failed, self._pending_failed = sorted(set(failed) | set(self._pending_failed)), []
+            return failed
+        rows = np.unique(np_ids(env_ids, self.num_envs))
+        if not len(rows):
+            return []
+        others = np.setdiff1d(np.arange(self.num_envs), rows)
+        idx = torch.as_tensor(others, device=self.device)
+        saved = {name: t[idx].clone() for name, t in self._kept.items()}
+        before, subset = set(self._pending_failed), set(rows.tolist())
+        failed = [i for i in self._step_all(n) if i in subset]
+        for name, values in saved.items():
+            self._kept[name][idx] = values
+        self.graphs.run("refresh", self._refresh)
+        failed = sorted(set(failed) | (set(self._pending_failed) - before))
+        self._pending_failed = sorted(before | set(failed))
+        return failed
+
+    def _step_all(self, n: int) -> list[int]:
+        self.graphs.run(("step", n), lambda: self._advance(n))
+        self._dirty[:] = False
+        self._maybe_dirty = False
+        return self._failed()
+
+    def _failed(self) -> list[int]:
+        """Worlds with a non-finite state or a constraint overflow (sticky until reset)."""
+        state = torch.cat([self._views["qpos"], self._views["qvel"], self._kept["act"]], dim=1)
+        bad = ~torch.isfinite(state).all(dim=1)
+        kinds = self.mjw.OverflowType
+        overflow = (self._overflow & int(kinds.NEFC)) != 0
+        ids = torch.nonzero(bad | overflow).flatten().tolist()
+        for i in ids:
+            self._errors[i] = ("non-finite state" if bad[i] else
+                               "constraint rows over njmax (raise WarpSim(njmax=...))")
+        contacts = int(kinds.BROADPHASE | kinds.NARROWPHASE | kinds.CCD)
+        if not self._warned_overflow and bool((self._overflow & contacts).any()):
+            self._warned_overflow = True
+            warnings.warn("MuJoCo Warp's contact buffers overflowed; some contacts were dropped "
+                          "(raise WarpSim(nconmax=...))", RuntimeWarning, stacklevel=3)
+        return ids
+
+    def forward(self, env_ids: Any = None) -> None:
+        """Recompute derived views (of every world: MuJoCo Warp has no subset)."""
+        self.flush_const()
+        self.graphs.run("refresh", self._refresh)
+        self._dirty[:] = False
+        self._maybe_dirty = False
+
+    def reset(self, env_ids: Any = None) -> None:
+        """Model defaults for ``env_ids`` (``reset_data`` with a world mask; no forward);
+        their failures not reported yet are dropped."""
+        rows = np_ids(env_ids, self.num_envs)
+        self._mask.zero_()
+        self._mask[torch.as_tensor(rows, device=self.device)] = True
+        self.graphs.run("reset", lambda: self.mjw.reset_data(self.wp_model, self.wp_data, self._reset_mask))
+        self.mark_dirty(rows)
+        reset = set(rows.tolist())
+        self._pending_failed = [i for i in self._pending_failed if i not in reset]
+        for i in reset & set(self._errors):
+            del self._errors[i]
+
+    def error(self, env_id: int) -> str:
+        """Why env ``env_id`` last failed ('' if it did not)."""
+        return self._errors.get(int(env_id), "")
+
+    def get_data(self, env_id: int, data: Optional[mujoco.MjData] = None) -> mujoco.MjData:
+        """Env ``env_id``'s ``MjData`` on the host (float64 copy; derived fields current)."""
+        self.flush_const()
+        if self._maybe_dirty:
+            self._forward_dirty()
+        data = mujoco.MjData(self._host_model) if data is None else data
+        self.mjw.get_data_into(data, self._host_model, self.wp_data, int(env_id))
+        if data.ncon:  # MuJoCo Warp fills contact.geom only; contact sensors read geom1/geom2
+            data.contact.geom1[:] = data.contact.geom[:, 0]
+            data.contact.geom2[:] = data.contact.geom[:, 1]
+        return data
+
+
+def _warp_ready(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A copy MuJoCo Warp accepts: its autoreset flag cleared (MuJoCo Warp never autoresets;
+    divergence is reported by :meth:`WarpSim.step`)."""
+    mjm = copy.copy(model)
+    mjm.opt.disableflags &= ~_AUTORESET
+    return mjm
