@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint setup system-deps bench docs clean
+.PHONY: run test lint typecheck setup system-deps bench docs clean
 
 $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml)
 	PYTHON=$(PYTHON) bash scripts/setup_env.sh
@@ -27,6 +27,10 @@ test: $(STAMP)
 # Lint gate (ruff; rules in pyproject.toml [tool.ruff]).
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
+
+# Type gate (mypy, basic mode; the core and every plugin package, settings in pyproject.toml [tool.mypy]).
+typecheck: $(STAMP)
+	$(VENV)/bin/mypy
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q tests $(wildcard plugins/*/tests)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import torch
 
@@ -31,9 +31,13 @@ class Functor:
     def device(self) -> torch.device:
         return self._env.device
 
-    @property
-    def __name__(self) -> str:  # type: ignore[override]
-        return type(self).__name__
+    if TYPE_CHECKING:  # an instance's name is a str (mypy would read the property as a method)
+        __name__: str
+    else:
+
+        @property
+        def __name__(self) -> str:
+            return type(self).__name__
 
     def reset(self, env_ids: Optional[torch.Tensor] = None) -> None:
         """Clear per-env state of ``env_ids`` (all when ``None``)."""
