@@ -80,9 +80,8 @@ def video_frame_count(path: Path) -> int:
 
     with av.open(str(path)) as container:
         stream = container.streams.video[0]
-        if stream.frames:
-            return int(stream.frames)
-        return sum(1 for _ in container.decode(stream))
+        count = int(stream.frames) if stream.frames else sum(1 for _ in container.decode(stream))
+    return count
 
 
 @functools.lru_cache(maxsize=None)

@@ -93,10 +93,13 @@ class EpisodeFiles:
         with av.open(str(path)) as container:
             stream = container.streams.video[0]
             stream.thread_type = "AUTO"
+            time_base = stream.time_base
+            if time_base is None:
+                raise ValueError(f"{path} has a video stream without a time base ({name})")
             if start > 0:
-                container.seek(int(start / stream.time_base), stream=stream, backward=True)
+                container.seek(int(start / time_base), stream=stream, backward=True)
             for frame in container.decode(stream):
-                index = int(round((float(frame.pts * stream.time_base) - start) * self.fps))
+                index = int(round((float(frame.pts * time_base) - start) * self.fps))
                 if index in wanted:
                     out[index] = frame.to_ndarray(format="rgb24")
                 if index >= max(wanted) or len(out) == len(wanted):

@@ -82,7 +82,7 @@ def collect_streams(ep: EpisodeFiles, indices: Sequence[int]) -> dict[str, list[
 def _tile(img: np.ndarray) -> Image.Image:
     pil = Image.fromarray(img)
     scale = max(1, -(-_MIN_TILE // max(1, img.shape[0])))
-    return pil.resize((pil.width * scale, pil.height * scale), Image.NEAREST) if scale > 1 else pil
+    return pil.resize((pil.width * scale, pil.height * scale), Image.Resampling.NEAREST) if scale > 1 else pil
 
 
 def contact_sheet(streams: dict[str, list[np.ndarray]], labels: Sequence[str], path: Path) -> Path:
@@ -114,6 +114,8 @@ def write_mp4(streams: dict[str, list[np.ndarray]], fps: int, path: Path) -> Pat
     with av.open(str(path), mode="w") as container:
         codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
         stream = container.add_stream(codec, rate=int(fps))
+        if not isinstance(stream, av.VideoStream):  # a video codec name always gives a video stream
+            raise TypeError(f"codec {codec!r} opened a {type(stream).__name__}, not a video stream")
         stream.width, stream.height, stream.pix_fmt = w + w % 2, h + h % 2, "yuv420p"
         for img in frames:
             img = np.pad(img, ((0, h % 2), (0, w % 2), (0, 0)))

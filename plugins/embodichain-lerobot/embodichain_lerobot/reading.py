@@ -182,7 +182,7 @@ def format_episodes(summary: dict, limit: Optional[int] = None) -> str:
     lengths = summary["episode_lengths"]
     for index, length in enumerate(lengths[:limit] if limit is not None else lengths):
         record = by_index.get(index, {})
-        success = {True: "yes", False: "no"}.get(record.get("success"), "-")
+        success = {True: "yes", False: "no", None: "-"}.get(record.get("success"), "-")
         seed = record.get("episode_seed")
         lines.append(f"{index:>7}  {length:>6}  {success:<7}  {record.get('env_id', '-'):>3}  "
                      f"{'-' if seed is None else seed}")

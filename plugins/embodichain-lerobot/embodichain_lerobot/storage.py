@@ -49,11 +49,13 @@ class DiskFullError(OSError):
 def is_disk_full(err: BaseException) -> bool:
     """Whether ``err`` or an exception it was raised from is a full disk (or quota)."""
     seen: set[int] = set()
-    while err is not None and id(err) not in seen:
-        seen.add(id(err))
-        if isinstance(err, OSError) and (err.errno in _FULL_ERRNOS or "No space left on device" in str(err)):
+    current: BaseException | None = err
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        if isinstance(current, OSError) and (current.errno in _FULL_ERRNOS
+                                             or "No space left on device" in str(current)):
             return True
-        err = err.__cause__ or err.__context__
+        current = current.__cause__ or current.__context__
     return False
 
 
