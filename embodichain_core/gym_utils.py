@@ -127,7 +127,7 @@ def launcher_overrides(args: argparse.Namespace) -> dict[str, Any]:
         ``device``, ``renderer``, ``backend``, ``max_episodes``, ``seed``, ``filter_visual_rand``,
         ``filter_dataset_saving`` (``--preview`` forces it to ``True``).
     """
-    given = getattr(args, GIVEN_ATTR, set())
+    given: set[str] = getattr(args, GIVEN_ATTR, set())
     values = {key: getattr(args, key) for key in OVERRIDE_KEYS if key in given}
     if "preview" in given:
         values["filter_dataset_saving"] = True

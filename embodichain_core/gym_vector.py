@@ -106,7 +106,8 @@ class UnbatchedEnv(gym.Wrapper):
         import torch
 
         if self._passthrough:
-            return self.env.step(action)
+            obs, reward, terminated, truncated, info = self.env.step(action)
+            return obs, float(reward), terminated, truncated, info
         batch = torch.as_tensor(np.asarray(action, dtype=np.float32)).reshape(1, -1)
         out: Any = self.env.step(batch)
         obs, reward, info = out[0], out[1], out[4]
@@ -133,7 +134,10 @@ class SingleEnvEntryPoint:
 
         entry = self.entry_point
         creator = entry if callable(entry) else load_env_creator(entry)
-        return UnbatchedEnv(creator(**kwargs))
+        env = creator(**kwargs)
+        if not isinstance(env, gym.Env):  # a vector env creator, or a class that is no gymnasium.Env
+            raise TypeError(f"entry point {entry!r} built a {type(env).__name__}, not a gymnasium.Env")
+        return UnbatchedEnv(env)
 
     def __repr__(self) -> str:
         return f"SingleEnvEntryPoint({self.entry_point!r})"

@@ -23,6 +23,7 @@ from gymnasium.vector import AutoresetMode
 from embodichain_core.envs import env_build
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
 from embodichain_core.envs.episode_rng import EpisodeRandom, episode_seeds_option
+from embodichain_core.envs.robot_io import RobotIO
 from embodichain_core.envs.rollout_buffer import RolloutBuffer
 from embodichain_core.envs.scene_setup import build_scene
 from embodichain_core.envs.spaces import batch_space, space_from_obs
@@ -44,7 +45,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
     cfg_cls: type = EmbodiedEnvCfg
     # set during construction (env_build)
     cfg: Any
-    single_action_space: gym.spaces.Space
+    single_action_space: gym.spaces.Box  # joint-position limits, or the action manager's ``pre`` terms
     scene: Any
     robot: Any
     sensors: dict[str, Any]
@@ -57,6 +58,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
     _active_qpos_adr: torch.Tensor
     _active_dof_adr: torch.Tensor
     _drive_targets: dict[str, tuple[torch.Tensor, torch.Tensor]]
+    _robot_io: RobotIO
 
     def __init__(self, cfg: Optional[EmbodiedEnvCfg] = None, num_envs: Optional[int] = None,
                  render_mode: Optional[str] = None, **kwargs: Any):

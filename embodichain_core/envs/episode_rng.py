@@ -111,7 +111,7 @@ class EpisodeRandom:
         self.episode_seeds = np.zeros(self.num_envs, dtype=np.uint64)
         self.episode_index = np.zeros(self.num_envs, dtype=np.int64)
         self._state = np.zeros(self.num_envs, dtype=np.uint64)  # SplitMix64 state per slot
-        self._steps = np.zeros(0, dtype=np.uint64)  # (1..m) * γ, grown on demand
+        self._steps: np.ndarray = np.zeros(0, dtype=np.uint64)  # (1..m) * γ, grown on demand
         self.seed(seed, startup=True)
 
     def seed(self, seed: int, *, startup: bool = False) -> None:

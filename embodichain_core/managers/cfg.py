@@ -113,7 +113,7 @@ class SceneEntityCfg:
         return ids
 
 
-FUNCTOR_CFG_TYPES: dict[str, type] = {
+FUNCTOR_CFG_TYPES: dict[str, type[FunctorCfg]] = {
     "events": EventCfg,
     "observations": ObservationCfg,
     "rewards": RewardCfg,

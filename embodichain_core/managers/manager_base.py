@@ -7,6 +7,7 @@ import copy
 import dataclasses
 import importlib
 import inspect
+import sys
 from dataclasses import dataclass
 from typing import Any, Generic, Iterator, Optional, TypeVar
 
@@ -59,7 +60,11 @@ def tag_functor_error(err: BaseException, path: str, func: Any) -> None:
     except AttributeError:  # exceptions with __slots__
         return
     name = getattr(func, "__name__", None) or type(func).__name__
-    err.add_note(f"raised in functor {path} ({name})")
+    note = f"raised in functor {path} ({name})"
+    if sys.version_info >= (3, 11):
+        err.add_note(note)
+    else:  # Python 3.10 has no add_note (nor prints notes): keep the note where 3.11 would
+        setattr(err, "__notes__", [*getattr(err, "__notes__", []), note])
 
 
 def functor_path_of(err: BaseException) -> Optional[str]:
@@ -67,7 +72,7 @@ def functor_path_of(err: BaseException) -> Optional[str]:
     return getattr(err, FUNCTOR_PATH_ATTR, None)
 
 
-def iter_section(section: Any, cfg_type: type, path: str) -> Iterator[tuple[str, Any]]:
+def iter_section(section: Any, cfg_type: type[FunctorCfg], path: str) -> Iterator[tuple[str, Any]]:
     """Yield ``(name, functor cfg)`` of a manager section (config object or dict)."""
     if section is None:
         return

@@ -10,7 +10,7 @@ the others run ``mj_setConst`` on the whole model.
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Optional
+from typing import TYPE_CHECKING, Any, Iterable, Optional
 
 import mujoco
 import numpy as np
@@ -31,8 +31,16 @@ class BatchConstants:
     batch: Any
     num_envs: int
     env_models: Optional[list[mujoco.MjModel]]
+    _const_dirty: np.ndarray  # (num_envs,) bool: a full mj_setConst is due
+    _closed_form_dirty: np.ndarray  # (num_envs,) bool: a closed-form update is due
+    _closed_form_fields: set[str]  # the fields written since the last flush
+    _const_pending: bool
+    _fast_constants: bool
     _free_bodies: Optional[np.ndarray]
     _free_const: Optional[FreeBodyConstants]
+
+    if TYPE_CHECKING:  # defined by PerEnvModels
+        def _set_const_models(self, ids: Iterable[int]) -> None: ...
 
     def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
         """Note that constant inputs of ``env_ids`` changed (written directly into

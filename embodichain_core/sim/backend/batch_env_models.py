@@ -4,7 +4,7 @@ different model structures (``Batch.set_models``), each with its own ``MjModel``
 from __future__ import annotations
 
 import copy
-from typing import Any, Iterable, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Optional, Sequence
 
 import mujoco
 
@@ -15,9 +15,24 @@ class PerEnvModels:
     """Mixin of :class:`BatchSim` (which provides ``model``, ``batch``, ``num_envs``,
     ``forward``, ``flush_const``, ``mark_dirty`` and ``_make_batch``)."""
 
+    model: mujoco.MjModel
+    batch: Any  # the mujoco.batch.Batch
+    num_envs: int
     env_models: Optional[list[mujoco.MjModel]]
 
+    if TYPE_CHECKING:  # defined by BatchSim (and BatchConstants)
+        def forward(self, env_ids: Any = None) -> None: ...
+
+        def flush_const(self) -> None: ...
+
+        def mark_dirty(self, env_ids: Any = None) -> None: ...
+
+        def _make_batch(self) -> None: ...
+
     def _set_const_models(self, ids: Iterable[int]) -> None:
+        """``mj_setConst`` on the per-env models of ``ids`` (their current state as the data)."""
+        if self.env_models is None:
+            raise RuntimeError("_set_const_models needs per-env models (use_env_models first)")
         data = mujoco.MjData(self.model)
         for env in ids:
             model = self.env_models[env]
@@ -52,7 +67,9 @@ class PerEnvModels:
         """Give ``env_ids`` a copy of ``model`` (e.g. a structural variant)."""
         if self.env_models is None:
             self.use_env_models([self.batch.get_model(i) for i in range(self.num_envs)])
+        env_models = self.env_models
+        assert env_models is not None  # set by use_env_models
         for env in _np_ids(env_ids, self.num_envs):
-            self.env_models[env] = copy.copy(model)
-        self.batch.set_models(self.env_models)
+            env_models[env] = copy.copy(model)
+        self.batch.set_models(env_models)
         self.mark_dirty(env_ids)

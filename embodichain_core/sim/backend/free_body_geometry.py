@@ -111,7 +111,10 @@ class _Bvh:
     def __init__(self, model: mujoco.MjModel, bodies: np.ndarray, geoms: np.ndarray, geom_owner: np.ndarray,
                  gpos: np.ndarray, gquat: np.ndarray, gaabb: np.ndarray):
         column = {int(g): i for i, g in enumerate(geoms)}
-        nodes, leaves, leaf_geoms, levels = [], [], [], {}
+        nodes: list[int] = []
+        leaves: list[int] = []
+        leaf_geoms: list[int] = []
+        levels: dict[int, list[tuple[int, list[int]]]] = {}  # depth -> (inner node, its two children)
         for b in bodies:
             for node in range(model.body_bvhadr[b], model.body_bvhadr[b] + model.body_bvhnum[b]):
                 nodes.append(node)

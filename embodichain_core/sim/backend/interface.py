@@ -73,7 +73,10 @@ class SimBackend(Protocol):
         substeps: MuJoCo steps per physics step (``physics_dt / timestep``).
         device, dtype: of every tensor view.
         capabilities: see :class:`SimCapabilities`.
-        arrays: numpy views of :data:`STATE_FIELDS` (``capabilities.host_arrays``).
+        arrays: numpy views of :data:`STATE_FIELDS` (``capabilities.host_arrays``; read-only
+            mapping, the arrays themselves are writable).
+        restores_state_rows: (optional, ``False`` when absent) whether :meth:`reset` takes a
+            saved state row (``state=``; see :mod:`embodichain_core.sim.scene_defaults`).
     """
 
     model: mujoco.MjModel
@@ -82,7 +85,11 @@ class SimBackend(Protocol):
     device: torch.device
     dtype: torch.dtype
     capabilities: SimCapabilities
-    arrays: Mapping[str, np.ndarray]
+
+    @property
+    def arrays(self) -> Mapping[str, np.ndarray]:
+        """Numpy views of :data:`STATE_FIELDS`, by name (a backend may rebind the mapping)."""
+        ...
 
     # -- stepping and state -------------------------------------------------------------------
     def step(self, nstep: int = 1, env_ids: Any = None) -> list[int]:
@@ -96,9 +103,11 @@ class SimBackend(Protocol):
         """Make the derived views of (at least) ``env_ids`` current."""
         ...
 
-    def reset(self, env_ids: Any = None) -> None:
+    def reset(self, env_ids: Any = None, state: Optional[np.ndarray] = None) -> None:
         """State of ``env_ids`` to the model defaults (no forward: they are marked dirty);
-        their failures not reported yet are dropped."""
+        their failures not reported yet are dropped. ``state``: a saved ``(nstate,)`` row
+        written into them afterwards, for backends with ``restores_state_rows`` (others
+        raise ``ValueError``)."""
         ...
 
     def mark_dirty(self, env_ids: Any = None) -> None:

@@ -22,12 +22,15 @@ Example:
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 
 from embodichain_core.sim.entities.base import env_index
+
+if TYPE_CHECKING:
+    from embodichain_core.sim.scene import Scene
 
 _GRAVITY = "opt.gravity"
 
@@ -51,7 +54,34 @@ def per_env_values(values: Any, n: int, k: int, what: str = "values") -> np.ndar
 
 
 class JointModelFields:
-    """Per-env joint and link model fields of an :class:`Articulation` (mixed in)."""
+    """Per-env joint and link model fields of an :class:`Articulation` (mixed in).
+
+    The host class provides the attributes and helpers declared below (``Entity`` and
+    ``Articulation`` set or define them).
+    """
+
+    uid: str
+    scene: Scene
+    dof_adr: torch.Tensor
+    pos_act: torch.Tensor
+    vel_act: torch.Tensor
+    body_ids: torch.Tensor
+    _joint_ids: list[int]
+
+    if TYPE_CHECKING:  # defined by the host class (properties and methods of Entity/Articulation)
+        @property
+        def sim(self) -> Any: ...  # the SimBackend; Any as in Entity: its views (sim.qpos) are dynamic
+
+        @property
+        def num_links(self) -> int: ...
+
+        def _ids(self, env_ids: Any) -> torch.Tensor: ...
+
+        def _jids_np(self, joint_ids: Any) -> np.ndarray: ...
+
+        def _out(self, t: torch.Tensor) -> torch.Tensor: ...
+
+        def find_bodies(self, names: Any, preserve_order: bool = False) -> tuple[list[int], list[str]]: ...
 
     def _set_dof_field(self, field: str, values: Any, joint_ids: Any, env_ids: Any) -> None:
         env, jids = self._ids(env_ids), self._jids_np(joint_ids)
