@@ -71,3 +71,15 @@ def test_gym_make_stays_batched_and_only_make_vec_copies_unbatch() -> None:
     assert copied.entry_point.entry_point == spec.entry_point
     assert copied.kwargs == spec.kwargs
     assert copied.vector_entry_point is spec.vector_entry_point
+
+
+def test_single_env_entry_point_rejects_what_is_no_gymnasium_env() -> None:
+    with pytest.raises(TypeError, match="built a dict, not a gymnasium.Env"):
+        SingleEnvEntryPoint(lambda **kwargs: dict(kwargs))(num_envs=1)
+    twice = UnbatchedEnv(UnbatchedEnv(gym.make(TASK, verbose=False)))  # passthrough: same layout
+    twice.reset(seed=0)
+    _, reward, terminated, truncated, _ = twice.step(np.zeros(3, np.float32))
+    assert isinstance(reward, float)
+    assert terminated is False
+    assert truncated is False
+    twice.close()

@@ -128,3 +128,16 @@ def test_dataset_preflight_fails_before_the_env_is_built(tmp_path: Path, task_id
     assert run_env.main(["--gym_config", str(config), "--quiet", "--filter_dataset_saving"]) == 0
     assert BUILT
     assert FINALIZED == []
+
+
+@pytest.mark.parametrize("version", [(3, 10), (3, 11)])
+def test_the_functor_note_is_added_on_python_3_10_too(monkeypatch: pytest.MonkeyPatch,
+                                                      version: tuple[int, int]) -> None:
+    from embodichain_core.managers import manager_base
+
+    monkeypatch.setattr(manager_base.sys, "version_info", version)  # 3.10 has no BaseException.add_note
+    err = ValueError("boom")
+    manager_base.tag_functor_error(err, "env.events.drive_damping", drive_damping)
+    manager_base.tag_functor_error(err, "env.events.outer", drive_damping)  # the innermost functor wins
+    assert err.__notes__ == ["raised in functor env.events.drive_damping (drive_damping)"]
+    assert manager_base.functor_path_of(err) == "env.events.drive_damping"

@@ -58,6 +58,18 @@ def test_views_are_the_warp_arrays() -> None:
         sim.use_env_models([sim.model, sim.model])
 
 
+def test_a_saved_state_row_is_refused_and_changes_nothing() -> None:
+    sim = make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
+    assert not sim.restores_state_rows  # the scene keeps its default-row fast path off here
+    sim.step(3)
+    before = sim.qpos.clone()
+    with pytest.raises(ValueError, match="does not restore saved state rows"):
+        sim.reset([0], state=np.zeros(10))
+    assert torch.equal(sim.qpos, before)
+    sim.reset([0], state=None)
+    assert np.allclose(sim.qpos[0].numpy(), sim.model.qpos0)
+
+
 def test_a_failed_graph_capture_falls_back_to_direct_launches(monkeypatch: Any) -> None:
     sim = make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
     assert sim.graphs.enabled  # Warp records launches on its CPU device too

@@ -61,6 +61,8 @@ class WarpSim(WarpModelFields):
     #: Numpy views as ``sim.arrays`` on Warp's CPU device; ``False`` gives the CUDA path's
     #: device proxies there too (tests exercise the GPU code paths of entities this way).
     host_arrays_on_cpu: bool = True
+    #: :meth:`reset` takes no saved state row (the scene's default-row fast path is off).
+    restores_state_rows = False
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, device: str = "cpu",
                  nconmax: Optional[int] = None, njmax: Optional[int] = None):
@@ -208,9 +210,18 @@ class WarpSim(WarpModelFields):
         self._dirty[:] = False
         self._maybe_dirty = False
 
-    def reset(self, env_ids: Any = None) -> None:
+    def reset(self, env_ids: Any = None, state: Optional[np.ndarray] = None) -> None:
         """Model defaults for ``env_ids`` (``reset_data`` with a world mask; no forward);
-        their failures not reported yet are dropped."""
+        their failures not reported yet are dropped.
+
+        Raises:
+            ValueError: a saved ``state`` row: MuJoCo Warp keeps no state rows, so this
+                backend has no ``restores_state_rows`` (the scene resets entities instead).
+        """
+        if state is not None:
+            raise ValueError("WarpSim.reset(state=...): backend 'warp' does not restore saved state rows "
+                             "(restores_state_rows is False); reset without state and write the entities' "
+                             "initial state instead")
         rows = np_ids(env_ids, self.num_envs)
         self._mask.zero_()
         self._mask[torch.as_tensor(rows, device=self.device)] = True
