@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint typecheck setup system-deps bench docs clean
+.PHONY: run test lint format typecheck setup system-deps bench docs clean
 
 $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml)
 	PYTHON=$(PYTHON) bash scripts/setup_env.sh
@@ -24,9 +24,14 @@ run: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)
 
-# Lint gate (ruff; rules in pyproject.toml [tool.ruff]).
+# Lint gate (ruff: the lint rules and the formatter's check; settings in pyproject.toml [tool.ruff]).
+# `make format` applies the formatter.
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+format: $(STAMP)
+	$(VENV)/bin/ruff format .
 
 # Type gate (mypy, basic mode; the core and every plugin package, settings in pyproject.toml [tool.mypy]).
 typecheck: $(STAMP)

@@ -37,8 +37,9 @@ def time_once(fn: Callable[[], Any], clock: str = "wall") -> float:
     return now() - start
 
 
-def interleaved_timings(fns: Mapping[str, Callable[[], Any]], repeats: int,
-                        warmup: int = 1, clock: str = "wall") -> dict[str, list[float]]:
+def interleaved_timings(
+    fns: Mapping[str, Callable[[], Any]], repeats: int, warmup: int = 1, clock: str = "wall"
+) -> dict[str, list[float]]:
     """Call every function ``warmup`` times, then ``repeats`` rounds of all of them in turn.
 
     Returns ``{name: [seconds per round]}`` on ``clock`` (see :data:`CLOCKS`). Interleaving
@@ -109,14 +110,20 @@ def format_table(rows: Iterable[Mapping[str, Any]], columns: Sequence[tuple[str,
     header = [h for _, h, _ in columns]
     body = [[format(row[key], spec) if row.get(key) is not None else "-" for key, _, spec in columns] for row in rows]
     widths = [max(len(h), *(len(r[i]) for r in body)) if body else len(h) for i, h in enumerate(header)]
-    lines = ["| " + " | ".join(h.rjust(w) for h, w in zip(header, widths)) + " |",
-             "|" + "|".join("-" * (w + 1) + ":" for w in widths) + "|"]
+    lines = [
+        "| " + " | ".join(h.rjust(w) for h, w in zip(header, widths)) + " |",
+        "|" + "|".join("-" * (w + 1) + ":" for w in widths) + "|",
+    ]
     lines += ["| " + " | ".join(c.rjust(w) for c, w in zip(r, widths)) + " |" for r in body]
     return "\n".join(lines)
 
 
-def print_table(rows: Iterable[Mapping[str, Any]], columns: Sequence[tuple[str, str, str]],
-                title: Optional[str] = None, file: Any = None) -> None:
+def print_table(
+    rows: Iterable[Mapping[str, Any]],
+    columns: Sequence[tuple[str, str, str]],
+    title: Optional[str] = None,
+    file: Any = None,
+) -> None:
     file = file or sys.stdout
     if title:
         print(title, file=file)

@@ -109,7 +109,9 @@ def reach_reward(env: Any, obs: dict, action: Any, info: dict) -> torch.Tensor:
     return torch.exp(-4.0 * obs["task"]["cube_to_ee"].norm(dim=-1))
 
 
-def lift_reward(env: Any, obs: dict, action: Any, info: dict, cube_cfg: SceneEntityCfg, table_top: float) -> torch.Tensor:
+def lift_reward(
+    env: Any, obs: dict, action: Any, info: dict, cube_cfg: SceneEntityCfg, table_top: float
+) -> torch.Tensor:
     """Reward: height of the first cube above the table."""
     z = env.scene[cube_cfg.uid].get_local_pose()[:, 2]
     return (z - table_top - CUBE / 2).clamp(min=0.0)
@@ -124,41 +126,62 @@ def make_cfg(num_envs: int, sim_steps_per_control: int = 4, episode_length: int 
     """The benchmark env's config."""
     cubes = [SceneEntityCfg(uid=u) for u in CUBE_UIDS]
     arm = SceneEntityCfg(uid="arm", joint_names=["joint[1-7]"])
-    rigid = [RigidObjectCfg(uid=u, shape=CubeCfg(size=[CUBE] * 3), init_pos=(0.45, -0.15 + 0.15 * i, TABLE_TOP + CUBE / 2))
-             for i, u in enumerate(CUBE_UIDS)]
-    table = RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.6, 0.9, 0.04]), body_type="kinematic",
-                           init_pos=(0.55, 0.0, TABLE_TOP - 0.02))
+    rigid = [
+        RigidObjectCfg(uid=u, shape=CubeCfg(size=[CUBE] * 3), init_pos=(0.45, -0.15 + 0.15 * i, TABLE_TOP + CUBE / 2))
+        for i, u in enumerate(CUBE_UIDS)
+    ]
+    table = RigidObjectCfg(
+        uid="table", shape=CubeCfg(size=[0.6, 0.9, 0.04]), body_type="kinematic", init_pos=(0.55, 0.0, TABLE_TOP - 0.02)
+    )
     events = {
-        "reset_cubes": EventCfg(func=randomize_cube_poses, mode="reset",
-                                params={"cube_cfgs": cubes, "xy_range": [[0.35, -0.3], [0.7, 0.3]],
-                                        "z": TABLE_TOP + CUBE / 2}),
+        "reset_cubes": EventCfg(
+            func=randomize_cube_poses,
+            mode="reset",
+            params={"cube_cfgs": cubes, "xy_range": [[0.35, -0.3], [0.7, 0.3]], "z": TABLE_TOP + CUBE / 2},
+        ),
         "reset_arm": EventCfg(func=randomize_arm_joints, mode="reset", params={"entity_cfg": arm, "noise": 0.1}),
-        "push_cubes": EventCfg(func=push_cubes, mode="interval", interval_step=10,
-                               params={"cube_cfgs": cubes, "max_speed": 0.2}),
+        "push_cubes": EventCfg(
+            func=push_cubes, mode="interval", interval_step=10, params={"cube_cfgs": cubes, "max_speed": 0.2}
+        ),
     }
     observations = {
-        "cube_poses": ObservationCfg(func=cube_poses, mode="add", name="object/cube_poses", params={"cube_cfgs": cubes}),
-        "ee_pose": ObservationCfg(func=ee_pose, mode="add", name="robot/ee_pose",
-                                  params={"entity_cfg": SceneEntityCfg(uid="arm"), "link": "hand"}),
-        "cube_to_ee": ObservationCfg(func=cube_to_ee, mode="add", name="task/cube_to_ee",
-                                     params={"entity_cfg": SceneEntityCfg(uid="arm"),
-                                             "cube_cfg": SceneEntityCfg(uid="cube0"), "link": "hand"}),
+        "cube_poses": ObservationCfg(
+            func=cube_poses, mode="add", name="object/cube_poses", params={"cube_cfgs": cubes}
+        ),
+        "ee_pose": ObservationCfg(
+            func=ee_pose,
+            mode="add",
+            name="robot/ee_pose",
+            params={"entity_cfg": SceneEntityCfg(uid="arm"), "link": "hand"},
+        ),
+        "cube_to_ee": ObservationCfg(
+            func=cube_to_ee,
+            mode="add",
+            name="task/cube_to_ee",
+            params={"entity_cfg": SceneEntityCfg(uid="arm"), "cube_cfg": SceneEntityCfg(uid="cube0"), "link": "hand"},
+        ),
     }
     rewards = {
         "reach": RewardCfg(func=reach_reward, weight=1.0),
-        "lift": RewardCfg(func=lift_reward, weight=5.0,
-                          params={"cube_cfg": SceneEntityCfg(uid="cube0"), "table_top": TABLE_TOP}),
+        "lift": RewardCfg(
+            func=lift_reward, weight=5.0, params={"cube_cfg": SceneEntityCfg(uid="cube0"), "table_top": TABLE_TOP}
+        ),
         "joint_vel": RewardCfg(func=joint_velocity_penalty, weight=-1e-3),
     }
     return EmbodiedEnvCfg(
-        num_envs=num_envs, seed=seed, sim_steps_per_control=sim_steps_per_control,
-        max_episode_steps=episode_length, verbose=False,
+        num_envs=num_envs,
+        seed=seed,
+        sim_steps_per_control=sim_steps_per_control,
+        max_episode_steps=episode_length,
+        verbose=False,
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
         control_parts=["arm"],
         rigid_object=rigid,
         background=[table],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="point", init_pos=(0.0, 0.0, 2.0))]),
-        events=events, observations=observations, rewards=rewards,
+        events=events,
+        observations=observations,
+        rewards=rewards,
     )
 
 
@@ -188,9 +211,18 @@ def make_actions(env: EmbodiedEnv, period: int = ACTION_PERIOD) -> list[torch.Te
 
 
 # -- measurement ------------------------------------------------------------------------------------
-def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] = None, repeats: int = 7,
-            warmup_steps: int = 20, target_seconds: float = 0.6, episode_length: int = 100, seed: int = 0,
-            breakdown: bool = True, clock: str = "wall") -> dict[str, Any]:
+def measure(
+    num_envs: int,
+    sim_steps_per_control: int = 4,
+    steps: Optional[int] = None,
+    repeats: int = 7,
+    warmup_steps: int = 20,
+    target_seconds: float = 0.6,
+    episode_length: int = 100,
+    seed: int = 0,
+    breakdown: bool = True,
+    clock: str = "wall",
+) -> dict[str, Any]:
     """One configuration: env and raw timings, interleaved; returns the JSON record.
 
     With ``breakdown``, a second, instrumented pass times the MuJoCo calls inside
@@ -237,8 +269,9 @@ def measure(num_envs: int, sim_steps_per_control: int = 4, steps: Optional[int] 
         per_call = max(t_env_w, t_raw_w) / max(1, warmup_steps)
         steps = int(min(20000, max(20, round(target_seconds / max(per_call, 1e-6)))))
 
-    times = interleaved_timings({"env": lambda: run_env(steps), "raw": lambda: run_raw(steps)},
-                                repeats=repeats, warmup=0, clock=clock)
+    times = interleaved_timings(
+        {"env": lambda: run_env(steps), "raw": lambda: run_raw(steps)}, repeats=repeats, warmup=0, clock=clock
+    )
     t_env, t_raw = median(times["env"]), median(times["raw"])
     env_sps = steps * num_envs / t_env
     raw_sps = steps * num_envs / t_raw
@@ -327,7 +360,9 @@ def _breakdown(sim: Any, run_env: Any, run_raw: Any, steps: int, repeats: int) -
         sim.__dict__["batch"] = batch
     per_call = {k: median(v) / steps * 1e3 for k, v in rows.items()}
     n = max(1, repeats) * steps
-    python_ms = [(e - s - f - r) / steps * 1e3 for e, s, f, r in zip(rows["env"], rows["step"], rows["forward"], rows["reset"])]
+    python_ms = [
+        (e - s - f - r) / steps * 1e3 for e, s, f, r in zip(rows["env"], rows["step"], rows["forward"], rows["reset"])
+    ]
     return {
         "repeats": max(1, repeats),
         "env_ms_per_call": per_call["env"],
@@ -369,28 +404,49 @@ COLUMNS = [
 
 
 def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--num-envs", type=int, nargs="+", default=None, help="env counts (default 1 16 64 256)")
-    p.add_argument("--steps", type=int, default=None,
-                   help="env.step calls per timed run (default: sized to ~--target-seconds per run)")
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        help="env.step calls per timed run (default: sized to ~--target-seconds per run)",
+    )
     p.add_argument("--repeats", type=int, default=None, help="timed runs of env and raw, interleaved (default 7)")
     p.add_argument("--sim-steps-per-control", type=int, default=4)
     p.add_argument("--episode-length", type=int, default=100, help="env steps per episode (staggered)")
-    p.add_argument("--target-seconds", type=float, default=0.6, help="length of one timed run when --steps is not given")
+    p.add_argument(
+        "--target-seconds", type=float, default=0.6, help="length of one timed run when --steps is not given"
+    )
     p.add_argument("--warmup-steps", type=int, default=None, help="untimed env.step calls first (default 20)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--clock", choices=("wall", "cpu"), default="wall",
-                   help="time the runs on the wall clock, or by CPU time of this process (all threads summed: "
-                        "steadier on a busy box; the same as wall time of an idle box at 1 env)")
+    p.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="time the runs on the wall clock, or by CPU time of this process (all threads summed: "
+        "steadier on a busy box; the same as wall time of an idle box at 1 env)",
+    )
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output (default {DEFAULT_OUT})")
-    p.add_argument("--quick", action="store_true",
-                   help="smoke run: num_envs 2, 5 steps, 1 repeat (structure check, not a measurement)")
-    p.add_argument("--no-breakdown", dest="breakdown", action="store_false",
-                   help="skip the instrumented pass that splits env time into MuJoCo calls and Python")
-    p.add_argument("--profile", action="store_true",
-                   help="profile env.step instead (pyinstrument if installed, else cProfile); "
-                        "default --num-envs 64, --steps 300; writes no JSON")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="smoke run: num_envs 2, 5 steps, 1 repeat (structure check, not a measurement)",
+    )
+    p.add_argument(
+        "--no-breakdown",
+        dest="breakdown",
+        action="store_false",
+        help="skip the instrumented pass that splits env time into MuJoCo calls and Python",
+    )
+    p.add_argument(
+        "--profile",
+        action="store_true",
+        help="profile env.step instead (pyinstrument if installed, else cProfile); "
+        "default --num-envs 64, --steps 300; writes no JSON",
+    )
     args = p.parse_args(argv)
     if args.profile:
         args.num_envs = args.num_envs or [64]
@@ -461,11 +517,24 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     records = []
     load_before = _loadavg()
     for n in args.num_envs:
-        rec = measure(n, args.sim_steps_per_control, args.steps, args.repeats, args.warmup_steps,
-                      args.target_seconds, args.episode_length, args.seed, args.breakdown, args.clock)
+        rec = measure(
+            n,
+            args.sim_steps_per_control,
+            args.steps,
+            args.repeats,
+            args.warmup_steps,
+            args.target_seconds,
+            args.episode_length,
+            args.seed,
+            args.breakdown,
+            args.clock,
+        )
         records.append(rec)
-        print(f"num_envs={n:<4d} env {rec['env_steps_per_s']:>9,.0f} steps/s  raw {rec['raw_steps_per_s']:>9,.0f} "
-              f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call", flush=True)
+        print(
+            f"num_envs={n:<4d} env {rec['env_steps_per_s']:>9,.0f} steps/s  raw {rec['raw_steps_per_s']:>9,.0f} "
+            f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call",
+            flush=True,
+        )
     payload = {
         "benchmark": "env_throughput",
         "description": "EmbodiedEnv env-steps/s vs raw mujoco.batch.Batch stepping of the same model",
@@ -488,8 +557,12 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
         "results": records,
     }
     print()
-    print_table(records, COLUMNS, title=f"EmbodiedEnv vs raw Batch, sim_steps_per_control={args.sim_steps_per_control} "
-                                        f"(median of {args.repeats} runs)")
+    print_table(
+        records,
+        COLUMNS,
+        title=f"EmbodiedEnv vs raw Batch, sim_steps_per_control={args.sim_steps_per_control} "
+        f"(median of {args.repeats} runs)",
+    )
     parts = [dict(r["breakdown"], num_envs=r["num_envs"]) for r in records if r.get("breakdown")]
     if parts:
         print()

@@ -33,12 +33,21 @@ from common import machine_info, print_table, write_json
 DEFAULT_OUT = os.path.join("benchmarks", "results", "generate_scaling.json")
 TARGET_RATIO = 1.6
 COLUMNS = [
-    ("workers", "W", "d"), ("episodes", "episodes", "d"), ("env_steps", "env steps", "d"),
-    ("wall_s", "wall [s]", ".1f"), ("workers_s", "episodes [s]", ".1f"), ("merge_s", "merge [s]", ".1f"),
-    ("steps_per_s", "env-steps/s", ".1f"), ("episodes_per_min", "episodes/min", ".2f"),
+    ("workers", "W", "d"),
+    ("episodes", "episodes", "d"),
+    ("env_steps", "env steps", "d"),
+    ("wall_s", "wall [s]", ".1f"),
+    ("workers_s", "episodes [s]", ".1f"),
+    ("merge_s", "merge [s]", ".1f"),
+    ("steps_per_s", "env-steps/s", ".1f"),
+    ("episodes_per_min", "episodes/min", ".2f"),
     ("wall_episodes_per_min", "episodes/min (wall)", ".2f"),
 ]
-MERGE_COLUMNS = [("episodes", "episodes", "d"), ("merge_s", "merge [s]", ".2f"), ("ms_per_episode", "ms/episode", ".0f")]
+MERGE_COLUMNS = [
+    ("episodes", "episodes", "d"),
+    ("merge_s", "merge [s]", ".2f"),
+    ("ms_per_episode", "ms/episode", ".0f"),
+]
 
 
 def main_job_config() -> str:
@@ -54,21 +63,46 @@ def run(workers: int, episodes: int, folder: Path) -> dict[str, Any]:
     from embodichain_ray.plan import check_plan
     from embodichain_ray.run import execute
 
-    args = build_parser().parse_args(["--gym_config", main_job_config(), "--episodes", str(episodes),
-                                      "--workers", str(workers), "--num_envs", "1", "--seed", "0",
-                                      "--output", str(folder / f"w{workers}"), "--keep-shards", "--quiet"])
+    args = build_parser().parse_args(
+        [
+            "--gym_config",
+            main_job_config(),
+            "--episodes",
+            str(episodes),
+            "--workers",
+            str(workers),
+            "--num_envs",
+            "1",
+            "--seed",
+            "0",
+            "--output",
+            str(folder / f"w{workers}"),
+            "--keep-shards",
+            "--quiet",
+        ]
+    )
     spec = spec_from_args(args)
     state = execute(spec, check_plan(spec), "generate_scaling")
     if state.code != 0:
         raise RuntimeError(f"generate --workers {workers} failed: {state.error}")
     busy = max(w.busy_s for w in state.workers)
     wall = state.run_s + state.merge_s
-    return {"workers": workers, "episodes": state.merged, "env_steps": state.env_steps, "wall_s": wall,
-            "workers_s": busy, "merge_s": state.merge_s, "steps_per_s": state.env_steps / busy,
-            "episodes_per_min": 60.0 * state.merged / busy, "wall_episodes_per_min": 60.0 * state.merged / wall,
-            "per_worker": [{"episodes": w.episodes, "failures": w.failures, "steps_per_s": w.steps_per_s,
-                            "restarts": w.restarts} for w in state.workers],
-            "shards": str(spec.shards)}
+    return {
+        "workers": workers,
+        "episodes": state.merged,
+        "env_steps": state.env_steps,
+        "wall_s": wall,
+        "workers_s": busy,
+        "merge_s": state.merge_s,
+        "steps_per_s": state.env_steps / busy,
+        "episodes_per_min": 60.0 * state.merged / busy,
+        "wall_episodes_per_min": 60.0 * state.merged / wall,
+        "per_worker": [
+            {"episodes": w.episodes, "failures": w.failures, "steps_per_s": w.steps_per_s, "restarts": w.restarts}
+            for w in state.workers
+        ],
+        "shards": str(spec.shards),
+    }
 
 
 def merge_scaling(shards: Path, episodes: int, sizes: list[int], folder: Path) -> list[dict[str, Any]]:
@@ -103,14 +137,23 @@ def main() -> int:
     ratio = rows[1]["steps_per_s"] / rows[0]["steps_per_s"]
     wall_ratio = rows[1]["wall_episodes_per_min"] / rows[0]["wall_episodes_per_min"]
     print_table(rows, COLUMNS, title=f"embodichain generate, main job, K=1, {args.episodes} episodes")
-    print(f"speed-up W=2 / W=1: {ratio:.2f}x while the workers ran, {wall_ratio:.2f}x over the wall time "
-          f"(target >= {TARGET_RATIO}x)")
+    print(
+        f"speed-up W=2 / W=1: {ratio:.2f}x while the workers ran, {wall_ratio:.2f}x over the wall time "
+        f"(target >= {TARGET_RATIO}x)"
+    )
     if merges:
         print_table(merges, MERGE_COLUMNS, title="merge alone (episodes of the W=2 run, repeated)")
     for row in rows:
         row.pop("shards")
-    payload = {"machine": machine_info(), "episodes": args.episodes, "runs": rows, "ratio": ratio,
-               "wall_ratio": wall_ratio, "target_ratio": TARGET_RATIO, "merge": merges}
+    payload = {
+        "machine": machine_info(),
+        "episodes": args.episodes,
+        "runs": rows,
+        "ratio": ratio,
+        "wall_ratio": wall_ratio,
+        "target_ratio": TARGET_RATIO,
+        "merge": merges,
+    }
     print(f"wrote {write_json(args.out, payload)}")
     return 0
 

@@ -109,11 +109,20 @@ def measure(num_envs: int, device: str, steps: int, repeats: int) -> dict[str, A
     env_rate, raw_rate = num_envs * steps / median(times["env"]), num_envs * steps / median(times["raw"])
     mujoco_steps = env.sim_steps_per_control * env.sim.substeps
     env.close()
-    return {"num_envs": num_envs, "device": device, "steps": steps, "repeats": repeats,
-            "mujoco_steps_per_env_step": mujoco_steps,
-            "env_steps_per_s": env_rate, "raw_steps_per_s": raw_rate, "ratio": env_rate / raw_rate,
-            "env_spread": spread(times["env"]), "raw_spread": spread(times["raw"]),
-            "env_times_s": times["env"], "raw_times_s": times["raw"]}
+    return {
+        "num_envs": num_envs,
+        "device": device,
+        "steps": steps,
+        "repeats": repeats,
+        "mujoco_steps_per_env_step": mujoco_steps,
+        "env_steps_per_s": env_rate,
+        "raw_steps_per_s": raw_rate,
+        "ratio": env_rate / raw_rate,
+        "env_spread": spread(times["env"]),
+        "raw_spread": spread(times["raw"]),
+        "env_times_s": times["env"],
+        "raw_times_s": times["raw"],
+    }
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:
@@ -138,15 +147,26 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parse(argv)
     rows = [measure(n, args.device, args.steps, args.repeats) for n in args.num_envs]
-    columns = [("num_envs", "num_envs", "d"), ("env_steps_per_s", "env steps/s", ".0f"),
-               ("raw_steps_per_s", "raw MuJoCo Warp steps/s", ".0f"), ("ratio", "ratio", ".2f")]
+    columns = [
+        ("num_envs", "num_envs", "d"),
+        ("env_steps_per_s", "env steps/s", ".0f"),
+        ("raw_steps_per_s", "raw MuJoCo Warp steps/s", ".0f"),
+        ("ratio", "ratio", ".2f"),
+    ]
     print_table(rows, columns, title=f"PushCube-v1 on the warp backend, device {args.device}")
     at_4096 = [r for r in rows if r["num_envs"] == 4096]
-    payload = {"benchmark": "gpu_throughput", "settings": vars(args), "machine": machine_info(),
-               "targets": {"env_steps_per_s_at_4096": TARGET_STEPS_PER_S_AT_4096, "ratio": TARGET_RATIO},
-               "meets_targets": (bool(at_4096[0]["env_steps_per_s"] >= TARGET_STEPS_PER_S_AT_4096
-                                      and at_4096[0]["ratio"] >= TARGET_RATIO) if at_4096 else None),
-               "results": rows}
+    payload = {
+        "benchmark": "gpu_throughput",
+        "settings": vars(args),
+        "machine": machine_info(),
+        "targets": {"env_steps_per_s_at_4096": TARGET_STEPS_PER_S_AT_4096, "ratio": TARGET_RATIO},
+        "meets_targets": (
+            bool(at_4096[0]["env_steps_per_s"] >= TARGET_STEPS_PER_S_AT_4096 and at_4096[0]["ratio"] >= TARGET_RATIO)
+            if at_4096
+            else None
+        ),
+        "results": rows,
+    }
     if args.out:
         write_json(args.out, payload)
         print(f"wrote {args.out}")

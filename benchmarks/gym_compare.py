@@ -69,8 +69,15 @@ class ArmMujocoEnv(MujocoEnv):
 
     metadata = {"render_modes": ["rgb_array"]}
 
-    def __init__(self, model_path: str, frame_skip: int, ctrl_ids: list[int], low: np.ndarray, high: np.ndarray,
-                 init_qpos: np.ndarray):
+    def __init__(
+        self,
+        model_path: str,
+        frame_skip: int,
+        ctrl_ids: list[int],
+        low: np.ndarray,
+        high: np.ndarray,
+        init_qpos: np.ndarray,
+    ):
         self._ctrl_ids = np.asarray(ctrl_ids, dtype=np.int64)
         super().__init__(model_path, frame_skip, observation_space=None, width=64, height=64)
         self.init_qpos = np.array(init_qpos, dtype=np.float64)  # the start of our env's episodes
@@ -156,6 +163,7 @@ def _looper(step: Callable[[Any], Any], actions: list) -> Callable[[int], None]:
         for i in range(k, k + n):
             step(actions[i % N_ACTIONS])
         state["k"] = k + n
+
     return run
 
 
@@ -178,11 +186,19 @@ def _raw_loop(env: EmbodiedEnv, actions: np.ndarray) -> Callable[[int], None]:
         state["t"] += 1
         ctrl[:, cols] = action
         batch.step(nstep=nstep, stage=stage)
+
     return _looper(step, list(actions.astype(np.float64)))
 
 
-def measure(num_envs: int, steps: Optional[int], repeats: int, target_seconds: float, with_async: bool,
-            seed: int = 0, clock: str = "wall") -> dict[str, Any]:
+def measure(
+    num_envs: int,
+    steps: Optional[int],
+    repeats: int,
+    target_seconds: float,
+    with_async: bool,
+    seed: int = 0,
+    clock: str = "wall",
+) -> dict[str, Any]:
     """One ``num_envs``: every contender timed in interleaved rounds; the JSON record."""
     with tempfile.TemporaryDirectory() as folder:
         runs, closers = contenders(num_envs, with_async, folder, seed)
@@ -192,8 +208,9 @@ def measure(num_envs: int, steps: Optional[int], repeats: int, target_seconds: f
             if steps is None:
                 per_call = max(_seconds(lambda r=run: r(10)) / 10 for run in runs.values())
                 steps = int(min(5000, max(10, round(target_seconds / max(per_call, 1e-6)))))
-            times = interleaved_timings({k: functools.partial(r, steps) for k, r in runs.items()}, repeats,
-                                        warmup=0, clock=clock)
+            times = interleaved_timings(
+                {k: functools.partial(r, steps) for k, r in runs.items()}, repeats, warmup=0, clock=clock
+            )
         finally:
             for close in closers:
                 close()
@@ -232,10 +249,18 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--steps", type=int, default=None, help="env steps per timed run (default: ~--target-seconds)")
     p.add_argument("--repeats", type=int, default=5, help="interleaved rounds; medians are reported")
     p.add_argument("--target-seconds", type=float, default=0.4, help="length of one timed run without --steps")
-    p.add_argument("--async-max", type=int, default=16,
-                   help="largest num_envs run in AsyncVectorEnv (one process per env; 0: never)")
-    p.add_argument("--clock", choices=("wall", "cpu"), default="wall",
-                   help="wall clock, or CPU time of this process (all threads; no async contender)")
+    p.add_argument(
+        "--async-max",
+        type=int,
+        default=16,
+        help="largest num_envs run in AsyncVectorEnv (one process per env; 0: never)",
+    )
+    p.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="wall clock, or CPU time of this process (all threads; no async contender)",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output ('' writes none; default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true", help="smoke run: 1 and 2 envs, 3 steps, 1 round (not a measurement)")
@@ -257,20 +282,32 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
         with_async = n <= args.async_max and args.clock == "wall"
         rec = measure(n, args.steps, args.repeats, args.target_seconds, with_async, args.seed, args.clock)
         records.append(rec)
-        print(f"num_envs={n:<3d} ours/raw {rec['ours_over_raw']:.2f}  ours/Sync {rec['ours_over_sync']:.2f}", flush=True)
+        print(
+            f"num_envs={n:<3d} ours/raw {rec['ours_over_raw']:.2f}  ours/Sync {rec['ours_over_sync']:.2f}", flush=True
+        )
     payload = {
         "benchmark": "gym_compare",
         "description": "EmbodiedEnv (demo scene, no managers) vs a gymnasium MujocoEnv in Sync/AsyncVectorEnv "
-                       "and raw mujoco.batch, same compiled model, 20 MuJoCo steps per env step",
-        "settings": {"repeats": args.repeats, "steps": args.steps, "episode_length": EPISODE, "clock": args.clock,
-                     "async_max": args.async_max, "quick": bool(args.quick), "seed": args.seed},
+        "and raw mujoco.batch, same compiled model, 20 MuJoCo steps per env step",
+        "settings": {
+            "repeats": args.repeats,
+            "steps": args.steps,
+            "episode_length": EPISODE,
+            "clock": args.clock,
+            "async_max": args.async_max,
+            "quick": bool(args.quick),
+            "seed": args.seed,
+        },
         "machine": dict(machine_info(), loadavg_before=list(load_before), loadavg_after=list(os.getloadavg())),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "results": records,
     }
     print()
-    print_table(records, COLUMNS, title=f"Demo scene, env-steps/s (median of {args.repeats} interleaved rounds, "
-                                        f"{args.clock} clock)")
+    print_table(
+        records,
+        COLUMNS,
+        title=f"Demo scene, env-steps/s (median of {args.repeats} interleaved rounds, {args.clock} clock)",
+    )
     if args.out:
         print(f"wrote {write_json(args.out, payload)}")
     return payload

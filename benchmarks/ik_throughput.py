@@ -38,10 +38,16 @@ from common import machine_info, median, print_table, spread, write_json  # noqa
 
 DEFAULT_OUT = os.path.join("benchmarks", "results", "ik_throughput.json")
 COLUMNS = [
-    ("robot", "robot/part", ""), ("solver", "solver", ""), ("mode", "targets", ""),
-    ("solves_per_s", "solves/s", ".0f"), ("ms_per_batch", "ms/batch", ".2f"), ("spread", "spread", ".2f"),
-    ("success", "success", ".3f"), ("within_tol", "<=1mm/0.01rad", ".3f"),
-    ("max_pos_err_mm", "max pos err [mm]", ".4f"), ("max_rot_err_mrad", "max rot err [mrad]", ".4f"),
+    ("robot", "robot/part", ""),
+    ("solver", "solver", ""),
+    ("mode", "targets", ""),
+    ("solves_per_s", "solves/s", ".0f"),
+    ("ms_per_batch", "ms/batch", ".2f"),
+    ("spread", "spread", ".2f"),
+    ("success", "success", ".3f"),
+    ("within_tol", "<=1mm/0.01rad", ".3f"),
+    ("max_pos_err_mm", "max pos err [mm]", ".4f"),
+    ("max_rot_err_mrad", "max rot err [mrad]", ".4f"),
 ]
 
 
@@ -49,8 +55,10 @@ def _robots() -> dict[str, tuple[Any, str]]:
     from embodichain_robots.dexforce_w1.cfg import DexforceW1Cfg
     from embodichain_robots.seven_dof_arm.cfg import SevenDofArmCfg
 
-    return {"DexforceW1/left_arm": (DexforceW1Cfg.from_dict({"uid": "robot"}), "left_arm"),
-            "SevenDofArm/arm": (SevenDofArmCfg.from_dict({"uid": "robot"}), "arm")}
+    return {
+        "DexforceW1/left_arm": (DexforceW1Cfg.from_dict({"uid": "robot"}), "left_arm"),
+        "SevenDofArm/arm": (SevenDofArmCfg.from_dict({"uid": "robot"}), "arm"),
+    }
 
 
 def _solvers(cfg: Any, part: str) -> dict[str, Any]:
@@ -58,14 +66,16 @@ def _solvers(cfg: Any, part: str) -> dict[str, Any]:
     from embodichain_robots.kinematics.solver import DLSSolver
 
     model = cfg.build_spec().compile()
-    return {"DLSSolver": DLSSolver.from_model(cfg.solver_cfg[part], model),
-            "MjDLSSolver": MjDLSSolver.from_model(cfg.solver_cfg[part], model)}
+    return {
+        "DLSSolver": DLSSolver.from_model(cfg.solver_cfg[part], model),
+        "MjDLSSolver": MjDLSSolver.from_model(cfg.solver_cfg[part], model),
+    }
 
 
 def _home(cfg: Any, solver: Any, n: int) -> torch.Tensor:
     if cfg.init_qpos is None:
         return torch.zeros(n, solver.dof, dtype=torch.float64)
-    return torch.as_tensor(cfg.init_qpos, dtype=torch.float64)[:solver.dof].expand(n, -1).clone()
+    return torch.as_tensor(cfg.init_qpos, dtype=torch.float64)[: solver.dof].expand(n, -1).clone()
 
 
 def make_batches(cfg: Any, solver: Any, mode: str, n: int, rounds: int, seed: int = 0) -> list[tuple]:
@@ -94,9 +104,12 @@ def _accuracy(solver: Any, batches: list[tuple], results: list[tuple]) -> dict[s
         pos_ok.append(pos[success])
         rot_ok.append(rot[success])
     pos, rot = torch.cat(pos_ok), torch.cat(rot_ok)
-    return {"success": float(torch.cat(ok_all).float().mean()), "within_tol": float(torch.cat(good_all).float().mean()),
-            "max_pos_err_mm": float(pos.max()) * 1e3 if len(pos) else None,
-            "max_rot_err_mrad": float(rot.max()) * 1e3 if len(rot) else None}
+    return {
+        "success": float(torch.cat(ok_all).float().mean()),
+        "within_tol": float(torch.cat(good_all).float().mean()),
+        "max_pos_err_mm": float(pos.max()) * 1e3 if len(pos) else None,
+        "max_rot_err_mrad": float(rot.max()) * 1e3 if len(rot) else None,
+    }
 
 
 def _run(solve: Callable[[torch.Tensor, torch.Tensor], tuple], batches: list[tuple]) -> tuple[list[float], list]:
@@ -154,8 +167,17 @@ def bench_robot_api(n: int, rounds: int) -> list[dict[str, Any]]:
 
 def _row(robot: str, solver: str, mode: str, n: int, times: list[float], acc: dict) -> dict[str, Any]:
     ms = median(times) * 1e3
-    return {"robot": robot, "solver": solver, "mode": mode, "num_envs": n, "rounds": len(times),
-            "ms_per_batch": ms, "solves_per_s": n / (ms / 1e3), "spread": spread(times), **acc}
+    return {
+        "robot": robot,
+        "solver": solver,
+        "mode": mode,
+        "num_envs": n,
+        "rounds": len(times),
+        "ms_per_batch": ms,
+        "solves_per_s": n / (ms / 1e3),
+        "spread": spread(times),
+        **acc,
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -172,8 +194,14 @@ def main(argv: list[str] | None = None) -> int:
     from embodichain_robots.kinematics.solver import IKSolverCfg
 
     print(f"1-min load average before/after: {load[0]:.2f} / {load[1]:.2f} (other processes share the CPU)")
-    payload = {"benchmark": "ik_throughput", "num_envs": args.num_envs, "machine": machine_info(), "load_average": load,
-               "solver_defaults": IKSolverCfg().to_dict(), "rows": rows}
+    payload = {
+        "benchmark": "ik_throughput",
+        "num_envs": args.num_envs,
+        "machine": machine_info(),
+        "load_average": load,
+        "solver_defaults": IKSolverCfg().to_dict(),
+        "rows": rows,
+    }
     print(write_json(args.out, payload))
     return 0
 

@@ -42,12 +42,20 @@ def main_job_config() -> str:
 
     spec = importlib.util.find_spec("embodichain_tasks")
     if spec is None or not spec.submodule_search_locations:
-        raise SystemExit("the main job case needs the embodichain-tasks plugin (pip install -e plugins/embodichain-tasks)")
+        raise SystemExit(
+            "the main job case needs the embodichain-tasks plugin (pip install -e plugins/embodichain-tasks)"
+        )
     return os.path.join(list(spec.submodule_search_locations)[0], "configs", "main_job.json")
 
 
-def _child(twin: str, save_path: str, episodes: int, params: Optional[dict] = None,
-           func: Optional[str] = None, depth_masks: bool = False) -> dict[str, Any]:
+def _child(
+    twin: str,
+    save_path: str,
+    episodes: int,
+    params: Optional[dict] = None,
+    func: Optional[str] = None,
+    depth_masks: bool = False,
+) -> dict[str, Any]:
     from embodichain_core.cli.run_env import build_parser, prepare
     from embodichain_core.cli.run_loops import RunStats, make_env, run_episodes
 
@@ -74,16 +82,32 @@ def _child(twin: str, save_path: str, episodes: int, params: Optional[dict] = No
     env.close()
     close_s = time.perf_counter() - started
     paths = [str(p) for p in env.unwrapped.dataset_manager.finalize() if p] if twin == "recorded" else []
-    return {"twin": twin, "build_s": build_s, "run_s": stats.run_s, "close_s": close_s,
-            "cpu_s": time.process_time() - cpu, "env_steps": stats.env_steps, "episodes": stats.episodes,
-            "saved": stats.saved, "dataset": paths[0] if paths else None}
+    return {
+        "twin": twin,
+        "build_s": build_s,
+        "run_s": stats.run_s,
+        "close_s": close_s,
+        "cpu_s": time.process_time() - cpu,
+        "env_steps": stats.env_steps,
+        "episodes": stats.episodes,
+        "saved": stats.saved,
+        "dataset": paths[0] if paths else None,
+    }
 
 
 def run_twin(twin: str, episodes: int, workdir: str, depth_masks: bool = False) -> dict[str, Any]:
     """Run one twin in a child process; its JSON result."""
     save_path = tempfile.mkdtemp(prefix=f"{twin}_", dir=workdir)
-    cmd = [sys.executable, os.path.abspath(__file__), "--child", twin, "--save-path", save_path,
-           "--episodes", str(episodes)] + (["--depth-masks"] if depth_masks else [])
+    cmd = [
+        sys.executable,
+        os.path.abspath(__file__),
+        "--child",
+        twin,
+        "--save-path",
+        save_path,
+        "--episodes",
+        str(episodes),
+    ] + (["--depth-masks"] if depth_masks else [])
     out = subprocess.run(cmd, check=True, capture_output=True, text=True)
     line = [ln for ln in out.stdout.splitlines() if ln.startswith("{")][-1]
     return json.loads(line)
@@ -103,9 +127,13 @@ def measure_main_job(episodes: int, repeats: int, workdir: str) -> dict[str, Any
         e2e = sorted(r["env_steps"] / (r["run_s"] + r["close_s"]) for r in rs)[len(rs) // 2]
         base = e2e if base is None else base
         record["contenders"][twin] = {
-            "env_steps_per_s": sps, "end_to_end_steps_per_s": e2e, "ratio": e2e / base,
-            "build_s": sorted(r["build_s"] for r in rs)[len(rs) // 2], "runs": rs,
-            "episodes_saved": rs[-1]["saved"]}
+            "env_steps_per_s": sps,
+            "end_to_end_steps_per_s": e2e,
+            "ratio": e2e / base,
+            "build_s": sorted(r["build_s"] for r in rs)[len(rs) // 2],
+            "runs": rs,
+            "episodes_saved": rs[-1]["saved"],
+        }
     return record
 
 
@@ -124,10 +152,24 @@ def measure_depth_masks(episodes: int, workdir: str) -> dict[str, Any]:
     ``embodichain dataset preview`` wall times (PNG sheet, mp4) of episode 0 with them."""
     plain = run_twin("recorded", episodes, workdir)["dataset"]
     full = run_twin("recorded", episodes, workdir, depth_masks=True)["dataset"]
-    cli = [os.path.join(os.path.dirname(sys.executable), "embodichain"), "dataset", "preview", full,
-           "--episode", "0", "--out", os.path.join(workdir, "preview")]
-    record = {"case": "main_job_depth_masks", "episodes": episodes, "bytes_without": _size(plain),
-              "bytes_with": _size(full), "preview_png_s": _timed(cli), "preview_mp4_s": _timed(cli + ["--format", "mp4"])}
+    cli = [
+        os.path.join(os.path.dirname(sys.executable), "embodichain"),
+        "dataset",
+        "preview",
+        full,
+        "--episode",
+        "0",
+        "--out",
+        os.path.join(workdir, "preview"),
+    ]
+    record = {
+        "case": "main_job_depth_masks",
+        "episodes": episodes,
+        "bytes_without": _size(plain),
+        "bytes_with": _size(full),
+        "preview_png_s": _timed(cli),
+        "preview_mp4_s": _timed(cli + ["--format", "mp4"]),
+    }
     record["size_ratio"] = record["bytes_with"] / record["bytes_without"]
     return record
 
@@ -147,5 +189,8 @@ if __name__ == "__main__":
     args = _parse()
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
     os.environ.setdefault("SVT_LOG", "1")
-    print(json.dumps(_child(args.child, args.save_path, args.episodes, json.loads(args.params), args.func,
-                                  args.depth_masks)))
+    print(
+        json.dumps(
+            _child(args.child, args.save_path, args.episodes, json.loads(args.params), args.func, args.depth_masks)
+        )
+    )

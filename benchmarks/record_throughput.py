@@ -73,8 +73,15 @@ class TimedDemoEnv(EmbodiedEnv):
         return success, torch.zeros_like(success), {}
 
 
-def make_cfg(num_envs: int, func: Optional[str], save_path: str, storage: str, size: tuple[int, int],
-             depth: bool, episode_length: int) -> EmbodiedEnvCfg:
+def make_cfg(
+    num_envs: int,
+    func: Optional[str],
+    save_path: str,
+    storage: str,
+    size: tuple[int, int],
+    depth: bool,
+    episode_length: int,
+) -> EmbodiedEnvCfg:
     """The benchmark env: arm, cube, light, stereo camera; a recorder unless ``func`` is None.
 
     ``max_episode_steps`` stays just above the episode length (the episodes end by success).
@@ -82,18 +89,42 @@ def make_cfg(num_envs: int, func: Optional[str], save_path: str, storage: str, s
     from embodichain_sensors.cfg import StereoCameraCfg
 
     w, h = size
-    cam = StereoCameraCfg(uid="head", width=w, height=h, intrinsics=(w, w, w / 2, h / 2), enable_depth=depth,
-                          extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=(1.4, 0.0, 1.1), target=(0.2, 0.0, 0.3)))
-    dataset = None if func is None else {"rec": DatasetFunctorCfg(func=func, params={
-        "save_path": save_path, "robot_meta": {"robot_type": "arm7"}, "instruction": {"lang": "reach"},
-        "extra": {"scene_type": "bench"}, "use_videos": storage == "video"})}
+    cam = StereoCameraCfg(
+        uid="head",
+        width=w,
+        height=h,
+        intrinsics=(w, w, w / 2, h / 2),
+        enable_depth=depth,
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=(1.4, 0.0, 1.1), target=(0.2, 0.0, 0.3)),
+    )
+    dataset = (
+        None
+        if func is None
+        else {
+            "rec": DatasetFunctorCfg(
+                func=func,
+                params={
+                    "save_path": save_path,
+                    "robot_meta": {"robot_type": "arm7"},
+                    "instruction": {"lang": "reach"},
+                    "extra": {"scene_type": "bench"},
+                    "use_videos": storage == "video",
+                },
+            )
+        }
+    )
     return EmbodiedEnvCfg(
-        num_envs=num_envs, seed=0, verbose=False, max_episode_steps=episode_length + 1,
+        num_envs=num_envs,
+        seed=0,
+        verbose=False,
+        max_episode_steps=episode_length + 1,
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
         control_parts=["arm"],
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05] * 3), init_pos=(0.5, 0.0, 0.025))],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="lamp", init_pos=(0.0, 0.0, 2.0))]),
-        sensor=[cam], dataset=dataset)
+        sensor=[cam],
+        dataset=dataset,
+    )
 
 
 def make_env(cfg: EmbodiedEnvCfg, episode_length: int) -> EmbodiedEnv:
@@ -132,29 +163,55 @@ class Contender:
         self.total_s.append(time.perf_counter() - start)
 
 
-def measure(num_envs: int, storage: str, steps: int, episode_length: int, repeats: int, size: tuple[int, int],
-            depth: bool, workdir: str) -> dict[str, Any]:
+def measure(
+    num_envs: int,
+    storage: str,
+    steps: int,
+    episode_length: int,
+    repeats: int,
+    size: tuple[int, int],
+    depth: bool,
+    workdir: str,
+) -> dict[str, Any]:
     """One (num_envs, storage) configuration: every contender, interleaved rounds."""
-    contenders = [Contender(name, make_env(make_cfg(num_envs, func, os.path.join(workdir, name), storage, size,
-                                                    depth, episode_length), episode_length))
-                  for name, func in CONTENDERS.items()]
+    contenders = [
+        Contender(
+            name,
+            make_env(
+                make_cfg(num_envs, func, os.path.join(workdir, name), storage, size, depth, episode_length),
+                episode_length,
+            ),
+        )
+        for name, func in CONTENDERS.items()
+    ]
     for c in contenders:  # warm-up: first commits create the datasets, codecs start
         c.round(min(steps, episode_length + 1))
         c.step_s.clear(), c.total_s.clear()
     for _ in range(max(1, repeats)):
         for c in contenders:
             c.round(steps)
-    record: dict[str, Any] = {"num_envs": num_envs, "storage": storage, "steps": steps,
-                              "episode_length": episode_length, "repeats": repeats, "contenders": {}}
+    record: dict[str, Any] = {
+        "num_envs": num_envs,
+        "storage": storage,
+        "steps": steps,
+        "episode_length": episode_length,
+        "repeats": repeats,
+        "contenders": {},
+    }
     base = None
     for c in contenders:
         t_step, t_total = median(c.step_s), median(c.total_s)
         sps = steps * num_envs / t_step
         base = sps if base is None else base
         record["contenders"][c.name] = {
-            "env_steps_per_s": sps, "end_to_end_steps_per_s": steps * num_envs / t_total,
-            "ratio": sps / base, "spread": spread(c.step_s), "step_times_s": c.step_s, "total_times_s": c.total_s,
-            "episodes_saved": c.rec.saved_episodes if c.rec is not None else None}
+            "env_steps_per_s": sps,
+            "end_to_end_steps_per_s": steps * num_envs / t_total,
+            "ratio": sps / base,
+            "spread": spread(c.step_s),
+            "step_times_s": c.step_s,
+            "total_times_s": c.total_s,
+            "episodes_saved": c.rec.saved_episodes if c.rec is not None else None,
+        }
         c.env.close()
     return record
 
@@ -169,10 +226,14 @@ def rows(results: list[dict]) -> list[dict]:
 
 def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--case", nargs="+", choices=("stereo", "main_job", "main_job_depth_masks"),
-                   default=["stereo", "main_job", "main_job_depth_masks"],
-                   help="stereo: the 128x128 stereo env; main_job: make run's config (each twin in a process); "
-                        "main_job_depth_masks: dataset size with depth and masks, preview times")
+    p.add_argument(
+        "--case",
+        nargs="+",
+        choices=("stereo", "main_job", "main_job_depth_masks"),
+        default=["stereo", "main_job", "main_job_depth_masks"],
+        help="stereo: the 128x128 stereo env; main_job: make run's config (each twin in a process); "
+        "main_job_depth_masks: dataset size with depth and masks, preview times",
+    )
     p.add_argument("--main-job-episodes", type=int, default=4, help="saved episodes per main job run")
     p.add_argument("--num-envs", type=int, nargs="+", default=[1, 4])
     p.add_argument("--storage", nargs="+", choices=("video", "image"), default=["video", "image"])
@@ -197,23 +258,48 @@ def main(argv: Optional[list[str]] = None) -> int:
     try:
         for storage in args.storage if "stereo" in args.case else ():
             for n in args.num_envs:
-                results.append(measure(n, storage, args.steps, args.episode_length, args.repeats,
-                                       tuple(args.size), args.depth, workdir))
-                print_table(rows(results[-1:]), [("storage", "storage", ""), ("num_envs", "envs", "d"),
-                                                 ("recorder", "recorder", ""), ("env_steps_per_s", "steps/s", ".1f"),
-                                                 ("end_to_end_steps_per_s", "end-to-end/s", ".1f"),
-                                                 ("ratio", "vs none", ".2f"), ("episodes_saved", "episodes", "")])
+                results.append(
+                    measure(
+                        n, storage, args.steps, args.episode_length, args.repeats, tuple(args.size), args.depth, workdir
+                    )
+                )
+                print_table(
+                    rows(results[-1:]),
+                    [
+                        ("storage", "storage", ""),
+                        ("num_envs", "envs", "d"),
+                        ("recorder", "recorder", ""),
+                        ("env_steps_per_s", "steps/s", ".1f"),
+                        ("end_to_end_steps_per_s", "end-to-end/s", ".1f"),
+                        ("ratio", "vs none", ".2f"),
+                        ("episodes_saved", "episodes", ""),
+                    ],
+                )
         if "main_job" in args.case:
             results.append(measure_main_job(args.main_job_episodes, args.repeats, workdir))
-            print_table([{"twin": k, **v} for k, v in results[-1]["contenders"].items()],
-                        [("twin", "main job", ""), ("build_s", "build s", ".2f"), ("env_steps_per_s", "steps/s", ".1f"),
-                         ("end_to_end_steps_per_s", "end-to-end/s", ".1f"), ("ratio", "vs unrecorded", ".2f"),
-                         ("episodes_saved", "episodes", "")])
+            print_table(
+                [{"twin": k, **v} for k, v in results[-1]["contenders"].items()],
+                [
+                    ("twin", "main job", ""),
+                    ("build_s", "build s", ".2f"),
+                    ("env_steps_per_s", "steps/s", ".1f"),
+                    ("end_to_end_steps_per_s", "end-to-end/s", ".1f"),
+                    ("ratio", "vs unrecorded", ".2f"),
+                    ("episodes_saved", "episodes", ""),
+                ],
+            )
         if "main_job_depth_masks" in args.case:
             results.append(measure_depth_masks(min(2, args.main_job_episodes), workdir))
-            print_table(results[-1:], [("bytes_without", "bytes without", "d"), ("bytes_with", "with depth+masks", "d"),
-                                       ("size_ratio", "ratio", ".2f"), ("preview_png_s", "preview png s", ".2f"),
-                                       ("preview_mp4_s", "preview mp4 s", ".2f")])
+            print_table(
+                results[-1:],
+                [
+                    ("bytes_without", "bytes without", "d"),
+                    ("bytes_with", "with depth+masks", "d"),
+                    ("size_ratio", "ratio", ".2f"),
+                    ("preview_png_s", "preview png s", ".2f"),
+                    ("preview_mp4_s", "preview mp4 s", ".2f"),
+                ],
+            )
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     settings = {k: v for k, v in vars(args).items() if k != "out"}

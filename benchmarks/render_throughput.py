@@ -27,8 +27,15 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import embodichain_core.sim  # noqa: E402,F401  (chooses MUJOCO_GL before mujoco is imported)
 import mujoco  # noqa: E402
 
-from common import (interleaved_timings, machine_info, median, print_table, seven_dof_arm_mjcf,  # noqa: E402
-                    spread, write_json)
+from common import (
+    interleaved_timings,
+    machine_info,
+    median,
+    print_table,
+    seven_dof_arm_mjcf,  # noqa: E402
+    spread,
+    write_json,
+)
 
 RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "render_throughput.json")
 SIZES = ((128, 128), (640, 480))
@@ -46,13 +53,24 @@ def build(width: int, height: int, num_envs: int, mode: str) -> tuple[Any, Any]:
     scene = Scene(SimulationManagerCfg(), num_envs=num_envs)
     scene.add_robot(RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf()))
     scene.add_light(LightCfg(uid="lamp", init_pos=(0.5, 0.5, 2.0)))
-    scene.add_rigid_object(RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.6, 0.8, 0.4]), init_pos=(0.6, 0.0, 0.2),
-                                          body_type="kinematic"), background=True)
-    scene.add_rigid_object(RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]),
-                                          init_pos=(0.5, 0.1, 0.43)))
+    scene.add_rigid_object(
+        RigidObjectCfg(
+            uid="table", shape=CubeCfg(size=[0.6, 0.8, 0.4]), init_pos=(0.6, 0.0, 0.2), body_type="kinematic"
+        ),
+        background=True,
+    )
+    scene.add_rigid_object(
+        RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.5, 0.1, 0.43))
+    )
     f = 0.9 * width
-    cfg = CameraCfg(uid="cam", width=width, height=height, intrinsics=(f, f, width / 2 - 0.5, height / 2 - 0.5),
-                    extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.6, -0.9, 1.3), target=(0.4, 0.0, 0.4)), **MODES[mode])
+    cfg = CameraCfg(
+        uid="cam",
+        width=width,
+        height=height,
+        intrinsics=(f, f, width / 2 - 0.5, height / 2 - 0.5),
+        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.6, -0.9, 1.3), target=(0.4, 0.0, 0.4)),
+        **MODES[mode],
+    )
     camera = Camera(cfg, scene)
     scene.add_sensor(camera)
     scene.build()
@@ -71,8 +89,9 @@ def bare_renderer(scene: Any, width: int, height: int, fast: bool) -> mujoco.Ren
         vis.offsamples = samples
 
 
-def bare_frames(scene: Any, renderer: mujoco.Renderer, camera: str, mode: str, fast: bool,
-                frames: int) -> Callable[[], None]:
+def bare_frames(
+    scene: Any, renderer: mujoco.Renderer, camera: str, mode: str, fast: bool, frames: int
+) -> Callable[[], None]:
     """``frames`` renders per env of the bare renderer (3 per frame for rgb+depth+mask)."""
     datas = [mujoco.MjData(scene.model) for _ in range(scene.num_envs)]
     flags = mujoco.mjtRndFlag
@@ -91,6 +110,7 @@ def bare_frames(scene: Any, renderer: mujoco.Renderer, camera: str, mode: str, f
                     renderer.enable_segmentation_rendering()
                     renderer.render()
                     renderer.disable_segmentation_rendering()
+
     return run
 
 
@@ -98,8 +118,10 @@ def measure(width: int, height: int, mode: str, args: argparse.Namespace) -> dic
     """One row: sensor and bare fps (and MuJoCo-default fps for RGB), interleaved."""
     scene, camera = build(width, height, args.num_envs, mode)
     fast = bare_renderer(scene, width, height, fast=True)
-    contenders = {"sensor": lambda: [camera.update() for _ in range(args.frames)],
-                  "bare": bare_frames(scene, fast, "cam", mode, True, args.frames)}
+    contenders = {
+        "sensor": lambda: [camera.update() for _ in range(args.frames)],
+        "bare": bare_frames(scene, fast, "cam", mode, True, args.frames),
+    }
     default = None
     if mode == "rgb" and not args.skip_default:
         default = bare_renderer(scene, width, height, fast=False)
@@ -107,10 +129,17 @@ def measure(width: int, height: int, mode: str, args: argparse.Namespace) -> dic
     times = interleaved_timings(contenders, repeats=args.rounds, warmup=1)
     n = args.num_envs
     fps = {"sensor": n * args.frames / median(times["sensor"]), "bare": n * args.frames / median(times["bare"])}
-    row = {"resolution": f"{width}x{height}", "mode": mode, "num_envs": n, "sensor_fps": fps["sensor"],
-           "bare_fps": fps["bare"], "ratio": fps["sensor"] / fps["bare"],
-           "spread_sensor": spread(times["sensor"]), "spread_bare": spread(times["bare"]),
-           "default_settings_fps": (n * max(1, args.frames // 10) / median(times["default"])) if default else None}
+    row = {
+        "resolution": f"{width}x{height}",
+        "mode": mode,
+        "num_envs": n,
+        "sensor_fps": fps["sensor"],
+        "bare_fps": fps["bare"],
+        "ratio": fps["sensor"] / fps["bare"],
+        "spread_sensor": spread(times["sensor"]),
+        "spread_bare": spread(times["bare"]),
+        "default_settings_fps": (n * max(1, args.frames // 10) / median(times["default"])) if default else None,
+    }
     for r in (fast, default):
         if r is not None:
             r.close()
@@ -127,12 +156,25 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--out", default=RESULTS)
     args = parser.parse_args(argv)
     rows = [measure(w, h, mode, args) for (w, h) in SIZES for mode in MODES]
-    columns = [("resolution", "resolution", "s"), ("mode", "outputs", "s"), ("sensor_fps", "sensor fps", ".0f"),
-               ("bare_fps", "bare mujoco.Renderer fps", ".0f"), ("ratio", "ratio", ".2f"),
-               ("default_settings_fps", "MuJoCo defaults fps", ".1f")]
-    print_table(rows, columns, title=f"Camera rendering, {args.num_envs} env(s), MUJOCO_GL={os.environ.get('MUJOCO_GL')}")
-    payload = {"benchmark": "render_throughput", "target_ratio": 0.8, "backend": os.environ.get("MUJOCO_GL"),
-               "settings": vars(args), "machine": machine_info(), "rows": rows}
+    columns = [
+        ("resolution", "resolution", "s"),
+        ("mode", "outputs", "s"),
+        ("sensor_fps", "sensor fps", ".0f"),
+        ("bare_fps", "bare mujoco.Renderer fps", ".0f"),
+        ("ratio", "ratio", ".2f"),
+        ("default_settings_fps", "MuJoCo defaults fps", ".1f"),
+    ]
+    print_table(
+        rows, columns, title=f"Camera rendering, {args.num_envs} env(s), MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+    )
+    payload = {
+        "benchmark": "render_throughput",
+        "target_ratio": 0.8,
+        "backend": os.environ.get("MUJOCO_GL"),
+        "settings": vars(args),
+        "machine": machine_info(),
+        "rows": rows,
+    }
     write_json(args.out, payload)
     print(f"wrote {args.out}")
     return payload

@@ -55,23 +55,41 @@ def randomization_events() -> dict[str, EventCfg]:
 
     xy = [[-0.1, -0.1, 0.0], [0.1, 0.1, 0.0]]
     return {
-        "cube0_pose": ev(rand.randomize_rigid_object_pose, entity_cfg=E(uid="cube0"), position_range=xy,
-                         rotation_range=[[0, 0, -180], [0, 0, 180]]),
+        "cube0_pose": ev(
+            rand.randomize_rigid_object_pose,
+            entity_cfg=E(uid="cube0"),
+            position_range=xy,
+            rotation_range=[[0, 0, -180], [0, 0, 180]],
+        ),
         "cube1_pose": ev(rand.randomize_rigid_object_pose, entity_cfg=E(uid="cube1"), position_range=xy),
-        "arm_qpos": ev(rand.randomize_robot_qpos, entity_cfg=E(uid="arm", joint_names=["joint[1-7]"]),
-                       qpos_range=[-0.1, 0.1]),
+        "arm_qpos": ev(
+            rand.randomize_robot_qpos, entity_cfg=E(uid="arm", joint_names=["joint[1-7]"]), qpos_range=[-0.1, 0.1]
+        ),
         "cube0_mass": ev(rand.randomize_rigid_object_mass, entity_cfg=E(uid="cube0"), mass_range=[0.05, 0.5]),
-        "cube1_com": ev(rand.randomize_rigid_object_center_of_mass, entity_cfg=E(uid="cube1"),
-                        com_pos_offset_range=[[-0.01, -0.01, 0.0], [0.01, 0.01, 0.0]]),
-        "cube0_friction": ev(rand.randomize_rigid_object_friction, entity_cfg=E(uid="cube0"),
-                             friction_range=[0.4, 1.2]),
+        "cube1_com": ev(
+            rand.randomize_rigid_object_center_of_mass,
+            entity_cfg=E(uid="cube1"),
+            com_pos_offset_range=[[-0.01, -0.01, 0.0], [0.01, 0.01, 0.0]],
+        ),
+        "cube0_friction": ev(
+            rand.randomize_rigid_object_friction, entity_cfg=E(uid="cube0"), friction_range=[0.4, 1.2]
+        ),
         "arm_damping": ev(rand.randomize_joint_damping, entity_cfg=E(uid="arm"), damping_range=[0.0, 0.5]),
-        "light": ev(rand.randomize_light, entity_cfg=E(uid="lamp"), position_range=[[-0.5, -0.5, 0], [0.5, 0.5, 0]],
-                    color_range=[[0.6, 0.6, 0.6], [1.0, 1.0, 1.0]], intensity_range=[-10.0, 10.0]),
-        "table_colour": ev(rand.randomize_visual_material, entity_cfg=E(uid="table"),
-                           base_color_range=[[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]]),
-        "target": ev(rand.randomize_target_pose, position_range=[[0.3, -0.2, 0.35], [0.6, 0.2, 0.35]],
-                     store_key="goal_pose"),
+        "light": ev(
+            rand.randomize_light,
+            entity_cfg=E(uid="lamp"),
+            position_range=[[-0.5, -0.5, 0], [0.5, 0.5, 0]],
+            color_range=[[0.6, 0.6, 0.6], [1.0, 1.0, 1.0]],
+            intensity_range=[-10.0, 10.0],
+        ),
+        "table_colour": ev(
+            rand.randomize_visual_material,
+            entity_cfg=E(uid="table"),
+            base_color_range=[[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]],
+        ),
+        "target": ev(
+            rand.randomize_target_pose, position_range=[[0.3, -0.2, 0.35], [0.6, 0.2, 0.35]], store_key="goal_pose"
+        ),
     }
 
 
@@ -79,14 +97,23 @@ CPU_NUM = 0  # batch threads (0: one per core, up to num_envs); --cpu-num sets i
 
 
 def make_env(num_envs: int, randomized: bool) -> EmbodiedEnv:
-    cubes = [RigidObjectCfg(uid=f"cube{k}", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.5, 0.15 * k - 0.1, 0.345))
-             for k in range(2)]
+    cubes = [
+        RigidObjectCfg(uid=f"cube{k}", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.5, 0.15 * k - 0.1, 0.345))
+        for k in range(2)
+    ]
     cfg = EmbodiedEnvCfg(
-        num_envs=num_envs, seed=0, verbose=False, max_episode_steps=100,
+        num_envs=num_envs,
+        seed=0,
+        verbose=False,
+        max_episode_steps=100,
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
-        control_parts=["arm"], rigid_object=cubes,
-        background=[RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.6, 0.9, 0.32]), init_pos=(0.6, 0.0, 0.16),
-                                   body_type="kinematic")],
+        control_parts=["arm"],
+        rigid_object=cubes,
+        background=[
+            RigidObjectCfg(
+                uid="table", shape=CubeCfg(size=[0.6, 0.9, 0.32]), init_pos=(0.6, 0.0, 0.16), body_type="kinematic"
+            )
+        ],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="lamp", init_pos=(1.0, 0.0, 2.0))]),
         events=randomization_events() if randomized else {},
     )
@@ -112,6 +139,7 @@ class ConstCounter:
                 original()
             finally:
                 self.seconds += time.perf_counter() - start
+
         sim.flush_const = timed
         if sim._free_const is not None:
             self._wrap(sim._free_const, "update", "closed")
@@ -122,6 +150,7 @@ class ConstCounter:
         def counted(*args: Any, **kwargs: Any) -> Any:
             self.calls[key] += 1
             return original(*args, **kwargs)
+
         setattr(obj, name, counted)
 
     def clear(self) -> None:
@@ -145,17 +174,23 @@ def _time(fn: Any) -> float:
     return time.perf_counter() - start
 
 
-def _record(num_envs: int, plain: list[float], randomized: list[float], counter: ConstCounter,
-            resets: int) -> dict[str, Any]:
+def _record(
+    num_envs: int, plain: list[float], randomized: list[float], counter: ConstCounter, resets: int
+) -> dict[str, Any]:
     t_plain, t_rand = median(plain), median(randomized)
     return {
-        "num_envs": num_envs, "repeats": len(plain),
-        "plain_reset_ms": 1e3 * t_plain, "randomized_reset_ms": 1e3 * t_rand, "extra_ms": 1e3 * (t_rand - t_plain),
-        "target_extra_ms": TARGET_EXTRA_MS, "meets_target": (t_rand - t_plain) * 1e3 <= TARGET_EXTRA_MS,
+        "num_envs": num_envs,
+        "repeats": len(plain),
+        "plain_reset_ms": 1e3 * t_plain,
+        "randomized_reset_ms": 1e3 * t_rand,
+        "extra_ms": 1e3 * (t_rand - t_plain),
+        "target_extra_ms": TARGET_EXTRA_MS,
+        "meets_target": (t_rand - t_plain) * 1e3 <= TARGET_EXTRA_MS,
         "full_set_const_per_reset": counter.calls["full"] / resets,
         "closed_form_per_reset": counter.calls["closed"] / resets,
         "constants_ms_per_reset": 1e3 * counter.seconds / resets,  # mean over the rounds
-        "spread_plain": spread(plain), "spread_randomized": spread(randomized),
+        "spread_plain": spread(plain),
+        "spread_randomized": spread(randomized),
         "load_average_1min": os.getloadavg()[0],
     }
 
@@ -168,13 +203,19 @@ def measure(num_envs: int, repeats: int) -> tuple[dict[str, Any], list[dict[str,
     that env's data in the caches for its next reset (measured: 0.08 ms off the plain
     reset at 64 envs), which the randomized env, reset after the plain one, never gets.
     """
-    envs = {"plain": make_env(num_envs, False), "randomized": make_env(num_envs, True),
-            "yardstick": make_env(num_envs, False)}
+    envs = {
+        "plain": make_env(num_envs, False),
+        "randomized": make_env(num_envs, True),
+        "yardstick": make_env(num_envs, False),
+    }
     counter = ConstCounter(envs["randomized"])
     try:
         batch = envs["yardstick"].sim.batch
-        contenders = {"plain": envs["plain"].reset, "randomized": envs["randomized"].reset,
-                      "raw_forward": lambda: batch.forward(None)}
+        contenders = {
+            "plain": envs["plain"].reset,
+            "randomized": envs["randomized"].reset,
+            "raw_forward": lambda: batch.forward(None),
+        }
         counter.clear()
         timings = interleaved_timings(contenders, repeats, warmup=3)
         record = _record(num_envs, timings["plain"], timings["randomized"], counter, repeats + 3)
@@ -203,21 +244,38 @@ def main(argv: list[str] | None = None) -> int:
     for n in args.num_envs:
         record, events[str(n)] = measure(n, args.repeats)
         records.append(record)
-    print_table(records, [("num_envs", "envs", "d"), ("plain_reset_ms", "plain reset ms", ".3f"),
-                          ("randomized_reset_ms", "10 events ms", ".3f"), ("extra_ms", "extra ms", ".3f"),
-                          ("full_set_const_per_reset", "full setConst", ".0f"),
-                          ("closed_form_per_reset", "closed form", ".0f"),
-                          ("constants_ms_per_reset", "constants ms", ".3f"),
-                          ("raw_forward_ms", "raw forward ms", ".3f"),
-                          ("extra_in_raw_forwards", "extra / raw forward", ".2f")],
-                title=f"Reset with 10 randomization events vs a plain reset (target: <= {TARGET_EXTRA_MS} ms extra)")
+    print_table(
+        records,
+        [
+            ("num_envs", "envs", "d"),
+            ("plain_reset_ms", "plain reset ms", ".3f"),
+            ("randomized_reset_ms", "10 events ms", ".3f"),
+            ("extra_ms", "extra ms", ".3f"),
+            ("full_set_const_per_reset", "full setConst", ".0f"),
+            ("closed_form_per_reset", "closed form", ".0f"),
+            ("constants_ms_per_reset", "constants ms", ".3f"),
+            ("raw_forward_ms", "raw forward ms", ".3f"),
+            ("extra_in_raw_forwards", "extra / raw forward", ".2f"),
+        ],
+        title=f"Reset with 10 randomization events vs a plain reset (target: <= {TARGET_EXTRA_MS} ms extra)",
+    )
     for n, rows in events.items():
-        print_table(rows, [("event", "event", "s"), ("functor", "functor", "s"), ("ms", "ms", ".3f")],
-                    title=f"\nEach event alone, {n} envs")
+        print_table(
+            rows,
+            [("event", "event", "s"), ("functor", "functor", "s"), ("ms", "ms", ".3f")],
+            title=f"\nEach event alone, {n} envs",
+        )
     if args.out:
-        path = write_json(args.out, {"benchmark": "reset_randomization", "machine": machine_info(),
-                                     "cpu_num": args.cpu_num,
-                                     "records": records, "per_event": events})
+        path = write_json(
+            args.out,
+            {
+                "benchmark": "reset_randomization",
+                "machine": machine_info(),
+                "cpu_num": args.cpu_num,
+                "records": records,
+                "per_event": events,
+            },
+        )
         print(f"\nwrote {path}")
     return 0
 

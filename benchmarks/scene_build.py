@@ -39,9 +39,13 @@ DEFAULT_OUT = os.path.join("benchmarks", "results", "scene_build.json")
 TARGET_WARM_S = 2.0
 VARIANTS = ("seed", "seed+fork_variants", "seed+mug_coacd", "seed+w1")
 COLUMNS = [
-    ("variant", "variant", ""), ("num_envs", "envs", "d"), ("import_s", "import [s]", ".3f"),
-    ("cold_s", "cold build [s]", ".3f"), ("warm_s", "warm build [s]", ".3f"),
-    ("coacd_calls_cold", "coacd runs cold", "d"), ("coacd_calls_warm", "coacd runs warm", "d"),
+    ("variant", "variant", ""),
+    ("num_envs", "envs", "d"),
+    ("import_s", "import [s]", ".3f"),
+    ("cold_s", "cold build [s]", ".3f"),
+    ("warm_s", "warm build [s]", ".3f"),
+    ("coacd_calls_cold", "coacd runs cold", "d"),
+    ("coacd_calls_warm", "coacd runs warm", "d"),
 ]
 
 
@@ -52,8 +56,9 @@ def _robot_cfg() -> Any:
     from embodichain_core.plugins import get_robot_cfg_class
 
     cls = get_robot_cfg_class("DexforceW1")
-    return cls.from_dict({"uid": "dexforce_w1", "version": "v021", "arm_kind": "anthropomorphic",
-                          "init_pos": [0.0, 0.0, 0.0]})
+    return cls.from_dict(
+        {"uid": "dexforce_w1", "version": "v021", "arm_kind": "anthropomorphic", "init_pos": [0.0, 0.0, 0.0]}
+    )
 
 
 def _builder(variant: str) -> tuple[Any, int]:
@@ -78,8 +83,9 @@ def _mug_builder() -> Any:
     from embodichain_core.sim.cfg import RigidObjectCfg
     from embodichain_core.sim.shapes import MeshCfg
 
-    mug = RigidObjectCfg(uid="mug", shape=MeshCfg(fpath="CoffeeCup/cup.ply", max_convex_hull_num=8),
-                         init_pos=(0.9, 0.2, 0.9))
+    mug = RigidObjectCfg(
+        uid="mug", shape=MeshCfg(fpath="CoffeeCup/cup.ply", max_convex_hull_num=8), init_pos=(0.9, 0.2, 0.9)
+    )
     return lambda: _seed_with_extra(mug)
 
 
@@ -124,8 +130,15 @@ def worker(variant: str, warm: int) -> dict[str, Any]:
         start = time.perf_counter()
         build()
         warm_times.append(time.perf_counter() - start)
-    return {"variant": variant, "num_envs": num_envs, "import_s": import_s, "cold_s": cold_s,
-            "warm_runs_s": warm_times, "coacd_calls_cold": cold_calls, "coacd_calls_warm": calls["n"] - cold_calls}
+    return {
+        "variant": variant,
+        "num_envs": num_envs,
+        "import_s": import_s,
+        "cold_s": cold_s,
+        "warm_runs_s": warm_times,
+        "coacd_calls_cold": cold_calls,
+        "coacd_calls_warm": calls["n"] - cold_calls,
+    }
 
 
 # -- driver ---------------------------------------------------------------------------------------
@@ -149,12 +162,15 @@ def measure(variant: str, repeats: int, warm: int) -> dict[str, Any]:
     if not ok:
         return {"variant": variant, "skipped": runs[0]["error"]}
     return {
-        "variant": variant, "num_envs": ok[0]["num_envs"],
+        "variant": variant,
+        "num_envs": ok[0]["num_envs"],
         "import_s": median([r["import_s"] for r in ok]),
         "cold_s": median([r["cold_s"] for r in ok]),
         "warm_s": median([t for r in ok for t in r["warm_runs_s"]]),
-        "coacd_calls_cold": ok[0]["coacd_calls_cold"], "coacd_calls_warm": max(r["coacd_calls_warm"] for r in ok),
-        "cold_runs_s": [r["cold_s"] for r in ok], "warm_runs_s": [t for r in ok for t in r["warm_runs_s"]],
+        "coacd_calls_cold": ok[0]["coacd_calls_cold"],
+        "coacd_calls_warm": max(r["coacd_calls_warm"] for r in ok),
+        "cold_runs_s": [r["cold_s"] for r in ok],
+        "warm_runs_s": [t for r in ok for t in r["warm_runs_s"]],
         "warm_target_met": median([t for r in ok for t in r["warm_runs_s"]]) < TARGET_WARM_S,
     }
 
@@ -178,14 +194,25 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     for variant in args.variants:
         rec = measure(variant, args.repeats, args.warm)
         records.append(rec)
-        print(f"{variant:<20s} " + (f"skipped: {rec['skipped']}" if "skipped" in rec else
-                                    f"cold {rec['cold_s']:.3f} s  warm {rec['warm_s']:.3f} s"), flush=True)
+        print(
+            f"{variant:<20s} "
+            + (
+                f"skipped: {rec['skipped']}"
+                if "skipped" in rec
+                else f"cold {rec['cold_s']:.3f} s  warm {rec['warm_s']:.3f} s"
+            ),
+            flush=True,
+        )
     payload = {
         "benchmark": "scene_build",
         "description": "Scene.build() time of the seed tutorial's scene (no robot, no camera), cold and warm",
-        "settings": {"repeats": args.repeats, "warm_builds_per_process": args.warm, "target_warm_s": TARGET_WARM_S,
-                     "cold": "first build in a fresh process, EMBODICHAIN_CACHE_DIR = new empty folder",
-                     "warm": "later builds in the same process (coacd cache on disk)"},
+        "settings": {
+            "repeats": args.repeats,
+            "warm_builds_per_process": args.warm,
+            "target_warm_s": TARGET_WARM_S,
+            "cold": "first build in a fresh process, EMBODICHAIN_CACHE_DIR = new empty folder",
+            "warm": "later builds in the same process (coacd cache on disk)",
+        },
         "machine": machine_info(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "results": records,

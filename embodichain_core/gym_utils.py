@@ -25,8 +25,14 @@ import argparse
 import itertools
 from typing import Any, Iterator, Optional
 
-__all__ = ["add_env_launcher_args_to_parser", "launcher_overrides", "episode_loop", "RENDERERS", "BACKENDS",
-           "LAUNCHER_DEFAULTS"]
+__all__ = [
+    "add_env_launcher_args_to_parser",
+    "launcher_overrides",
+    "episode_loop",
+    "RENDERERS",
+    "BACKENDS",
+    "LAUNCHER_DEFAULTS",
+]
 
 #: Renderer names accepted by ``--renderer`` (EmbodiChain's; all render with MuJoCo here).
 RENDERERS = ("auto", "hybrid", "fast-rt", "rt")
@@ -37,14 +43,31 @@ BACKENDS = ("mujoco_batch", "warp")
 #: The value of each launcher argument when it is not given (EmbodiChain's defaults). A
 #: default never overrides a gym config: only given values do (:func:`launcher_overrides`).
 LAUNCHER_DEFAULTS: dict[str, Any] = {
-    "num_envs": 1, "device": "cpu", "headless": False, "renderer": "auto", "gym_config": "",
-    "max_episodes": None, "preview": False, "filter_visual_rand": False, "filter_dataset_saving": False,
-    "seed": None, "backend": None,
+    "num_envs": 1,
+    "device": "cpu",
+    "headless": False,
+    "renderer": "auto",
+    "gym_config": "",
+    "max_episodes": None,
+    "preview": False,
+    "filter_visual_rand": False,
+    "filter_dataset_saving": False,
+    "seed": None,
+    "backend": None,
 }
 
 #: Launcher arguments that map onto a gym-config override of the same name.
-OVERRIDE_KEYS = ("num_envs", "headless", "device", "renderer", "max_episodes", "seed", "filter_visual_rand",
-                 "filter_dataset_saving", "backend")
+OVERRIDE_KEYS = (
+    "num_envs",
+    "headless",
+    "device",
+    "renderer",
+    "max_episodes",
+    "seed",
+    "filter_visual_rand",
+    "filter_dataset_saving",
+    "backend",
+)
 
 #: Attribute of the parsed namespace holding the names of the arguments given on the command line.
 GIVEN_ATTR = "_launcher_given"
@@ -53,8 +76,13 @@ GIVEN_ATTR = "_launcher_given"
 class _Value(argparse.Action):
     """Store a value and remember that the argument was given."""
 
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
-                 option_string: Optional[str] = None) -> None:
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: Optional[str] = None,
+    ) -> None:
         setattr(namespace, self.dest, values)
         _mark_given(namespace, self.dest)
 
@@ -65,8 +93,13 @@ class _Flag(argparse.Action):
     def __init__(self, option_strings: list[str], dest: str, **kwargs: Any):
         super().__init__(option_strings, dest, nargs=0, default=False, **kwargs)
 
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
-                 option_string: Optional[str] = None) -> None:
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: Optional[str] = None,
+    ) -> None:
         setattr(namespace, self.dest, True)
         _mark_given(namespace, self.dest)
 
@@ -93,25 +126,60 @@ def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_
     """
     d = LAUNCHER_DEFAULTS
     add = parser.add_argument
-    add("--gym_config", action=_Value, default=d["gym_config"], required=require_gym_config, metavar="FILE",
-        help="JSON/YAML gym config file (EmbodiChain layout)")
-    add("--num_envs", action=_Value, type=int, default=d["num_envs"], metavar="N",
-        help=f"number of parallel environments (default: the config's, else {d['num_envs']})")
+    add(
+        "--gym_config",
+        action=_Value,
+        default=d["gym_config"],
+        required=require_gym_config,
+        metavar="FILE",
+        help="JSON/YAML gym config file (EmbodiChain layout)",
+    )
+    add(
+        "--num_envs",
+        action=_Value,
+        type=int,
+        default=d["num_envs"],
+        metavar="N",
+        help=f"number of parallel environments (default: the config's, else {d['num_envs']})",
+    )
     add("--headless", action=_Flag, help="run without a viewer window (default: the config's)")
-    add("--device", action=_Value, default=d["device"], metavar="DEVICE",
-        help=f"simulation device, sim_cfg.sim_device (default: the config's, else {d['device']})")
-    add("--renderer", action=_Value, default=d["renderer"], choices=RENDERERS,
-        help=f"render_cfg.renderer (default: the config's, else {d['renderer']})")
-    add("--backend", action=_Value, default=d["backend"], choices=BACKENDS,
+    add(
+        "--device",
+        action=_Value,
+        default=d["device"],
+        metavar="DEVICE",
+        help=f"simulation device, sim_cfg.sim_device (default: the config's, else {d['device']})",
+    )
+    add(
+        "--renderer",
+        action=_Value,
+        default=d["renderer"],
+        choices=RENDERERS,
+        help=f"render_cfg.renderer (default: the config's, else {d['renderer']})",
+    )
+    add(
+        "--backend",
+        action=_Value,
+        default=d["backend"],
+        choices=BACKENDS,
         help="simulation backend, sim_cfg.backend: mujoco_batch (CPU threads) or warp (MuJoCo Warp on "
-             "--device cpu/cuda) (default: the config's, else mujoco_batch)")
-    add("--max_episodes", action=_Value, type=int, default=d["max_episodes"], metavar="N",
-        help="stop after this many episodes, summed over envs (default: the config's; scripts: "
-             "run until interrupted)")
+        "--device cpu/cuda) (default: the config's, else mujoco_batch)",
+    )
+    add(
+        "--max_episodes",
+        action=_Value,
+        type=int,
+        default=d["max_episodes"],
+        metavar="N",
+        help="stop after this many episodes, summed over envs (default: the config's; scripts: run until interrupted)",
+    )
     add("--seed", action=_Value, type=int, default=d["seed"], metavar="SEED", help="RNG seed (default: the config's)")
-    add("--preview", action=_Flag,
+    add(
+        "--preview",
+        action=_Flag,
         help="preview instead of running, recording no dataset (run-env: build, reset, step once, "
-             "describe the spaces, exit)")
+        "describe the spaces, exit)",
+    )
     add("--filter_visual_rand", action=_Flag, help="drop visual randomization events")
     add("--filter_dataset_saving", action=_Flag, help="record no dataset")
 

@@ -155,8 +155,9 @@ class BatchedEnvSpec(EnvSpec):
 
     def __deepcopy__(self, memo: dict) -> EnvSpec:
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(EnvSpec) if f.init}
-        values = {k: v if k in ("entry_point", "vector_entry_point") else copy.deepcopy(v, memo)
-                  for k, v in values.items()}
+        values = {
+            k: v if k in ("entry_point", "vector_entry_point") else copy.deepcopy(v, memo) for k, v in values.items()
+        }
         values["entry_point"] = SingleEnvEntryPoint(self.entry_point)
         return EnvSpec(**values)
 

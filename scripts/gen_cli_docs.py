@@ -59,8 +59,7 @@ def _subparsers(parser: argparse.ArgumentParser) -> Iterator[tuple[str, argparse
 
 def _arguments(parser: argparse.ArgumentParser) -> list[argparse.Action]:
     """The documented arguments: all but ``--help`` and the subcommands."""
-    return [a for a in parser._actions
-            if not isinstance(a, (argparse._HelpAction, argparse._SubParsersAction))]
+    return [a for a in parser._actions if not isinstance(a, (argparse._HelpAction, argparse._SubParsersAction))]
 
 
 def _metavar(action: argparse.Action) -> str:
@@ -152,8 +151,16 @@ def _top_level() -> list[str]:
     """The section of ``embodichain`` itself: the table of built-in commands."""
     from embodichain_core.plugins.builtin import BUILTIN_COMMANDS
 
-    lines = ["## `embodichain`", "", "```text", "embodichain [-h] [--version] <command> ...", "```", "",
-             "| Command | What |", "|---|---|"]
+    lines = [
+        "## `embodichain`",
+        "",
+        "```text",
+        "embodichain [-h] [--version] <command> ...",
+        "```",
+        "",
+        "| Command | What |",
+        "|---|---|",
+    ]
     for name, (_, help_text) in BUILTIN_COMMANDS.items():
         lines.append(f"| [`{name}`](#{_slug('embodichain ' + name)}) | {_escape(help_text)} |")
     return lines + ["", "`--version` prints the installed version of `embodichain-core`.", ""]
@@ -161,8 +168,11 @@ def _top_level() -> list[str]:
 
 #: Commands of the bundled plugins documented here too: name -> (target, help, plugin).
 PLUGIN_COMMANDS: dict[str, tuple[str, str, str]] = {
-    "eval-policy": ("embodichain_lerobot.eval_cli:main",
-                    "Evaluate a trained LeRobot policy (lerobot-train folder) in a task", "embodichain-lerobot"),
+    "eval-policy": (
+        "embodichain_lerobot.eval_cli:main",
+        "Evaluate a trained LeRobot policy (lerobot-train folder) in a task",
+        "embodichain-lerobot",
+    ),
 }
 
 
@@ -170,9 +180,14 @@ def _command(name: str, target: str, help_text: str) -> list[str]:
     """The section of one command: from its parser, else a pointer to ``--help``."""
     parser = command_parser(target)
     if parser is None:
-        return [f"## `embodichain {name}`", "", _escape(help_text) + ".", "",
-                f"Its module (`{target}`) has no parser to document in this installation; "
-                f"run `embodichain {name} --help`.", ""]
+        return [
+            f"## `embodichain {name}`",
+            "",
+            _escape(help_text) + ".",
+            "",
+            f"Its module (`{target}`) has no parser to document in this installation; run `embodichain {name} --help`.",
+            "",
+        ]
     return render_parser(f"embodichain {name}", parser)
 
 
@@ -180,9 +195,14 @@ def _plugin_commands() -> list[str]:
     """The table of the documented plugin commands and their sections."""
     if not PLUGIN_COMMANDS:
         return []
-    lines = ["## Commands of the bundled plugins", "",
-             "These come with the plugins in `plugins/` (each installs with its plugin).", "",
-             "| Command | Plugin | What |", "|---|---|---|"]
+    lines = [
+        "## Commands of the bundled plugins",
+        "",
+        "These come with the plugins in `plugins/` (each installs with its plugin).",
+        "",
+        "| Command | Plugin | What |",
+        "|---|---|---|",
+    ]
     for name, (_, help_text, plugin) in PLUGIN_COMMANDS.items():
         lines.append(f"| [`{name}`](#{_slug('embodichain ' + name)}) | `{plugin}` | {_escape(help_text)} |")
     lines.append("")

@@ -41,7 +41,9 @@ FUNCTOR_DESCRIPTIONS = {
 RANDOMIZE_PREFIX = "randomize_"
 
 TASK_NAME_RULE = "use letters and digits, words joined by '-' or '_', starting with a letter (e.g. push_cube)"
-FUNCTOR_NAME_RULE = "use a lowercase Python identifier: letters, digits and '_', starting with a letter (e.g. cube_height)"
+FUNCTOR_NAME_RULE = (
+    "use a lowercase Python identifier: letters, digits and '_', starting with a letter (e.g. cube_height)"
+)
 
 
 class TemplateNameError(ValueError):
@@ -104,8 +106,7 @@ def validate_task_context(ctx: dict[str, Any]) -> list[str]:
         errors.append(f"invalid class name {cls!r}: use a CamelCase Python identifier")
     task_id = str(ctx.get("task_id", ""))
     if not TASK_ID_RE.match(task_id):
-        errors.append(f"invalid task id {task_id!r}: a gymnasium id ending in a version, "
-                      f"like 'PushCube-v0' (Name-vN)")
+        errors.append(f"invalid task id {task_id!r}: a gymnasium id ending in a version, like 'PushCube-v0' (Name-vN)")
     steps = ctx.get("max_episode_steps", 1)
     if not str(steps).isdigit() or int(steps) < 1:
         errors.append(f"invalid max_episode_steps {steps!r}: use a positive integer")
@@ -123,8 +124,10 @@ def validate_functor_context(ctx: dict[str, Any]) -> list[str]:
     if kind not in FUNCTOR_KINDS:
         errors.append(f"invalid functor kind {kind!r}: choose one of {', '.join(FUNCTOR_KINDS)}")
     elif kind == "randomization" and not name.startswith(RANDOMIZE_PREFIX):
-        errors.append(f"invalid functor name {name!r}: randomization functors are named "
-                      f"{RANDOMIZE_PREFIX}* (e.g. {RANDOMIZE_PREFIX}{name})")
+        errors.append(
+            f"invalid functor name {name!r}: randomization functors are named "
+            f"{RANDOMIZE_PREFIX}* (e.g. {RANDOMIZE_PREFIX}{name})"
+        )
     return errors
 
 

@@ -42,8 +42,9 @@ def _normalized(name: str) -> str:
 
 def _packages(source: Path) -> list[Path]:
     """The top-level packages of the plugin at ``source`` (build outputs left out)."""
-    return sorted(p for p in source.iterdir()
-                  if p.is_dir() and (p / "__init__.py").is_file() and not p.name.endswith(".egg-info"))
+    return sorted(
+        p for p in source.iterdir() if p.is_dir() and (p / "__init__.py").is_file() and not p.name.endswith(".egg-info")
+    )
 
 
 def expose_plugin(source: Path, site: Path) -> str:
@@ -66,11 +67,16 @@ def expose_plugin(source: Path, site: Path) -> str:
         shutil.copytree(package, site / package.name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     info = site / f"{_normalized(name)}-{version}.dist-info"
     info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n"
-                                   f"Summary: {project.get('description', '')}\n", encoding="utf-8")
+    (info / "METADATA").write_text(
+        f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\nSummary: {project.get('description', '')}\n",
+        encoding="utf-8",
+    )
     groups = project.get("entry-points", {})
-    lines = [line for group, eps in groups.items()
-             for line in (f"[{group}]", *(f"{ep} = {target}" for ep, target in eps.items()), "")]
+    lines = [
+        line
+        for group, eps in groups.items()
+        for line in (f"[{group}]", *(f"{ep} = {target}" for ep, target in eps.items()), "")
+    ]
     (info / "entry_points.txt").write_text("\n".join(lines), encoding="utf-8")
     (info / "top_level.txt").write_text("".join(f"{p.name}\n" for p in packages), encoding="utf-8")
     (info / "INSTALLER").write_text("tests/conftest.py\n", encoding="utf-8")

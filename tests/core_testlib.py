@@ -1,7 +1,6 @@
 """Shared helpers and fixtures of the core tests (a uniquely named module: the test
 directories of the plugins share sys.path and each has its own ``conftest``)."""
 
-
 from __future__ import annotations
 
 import os
@@ -35,8 +34,9 @@ def base_cfg(**overrides: Any) -> EmbodiedEnvCfg:
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
         control_parts=["arm"],
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=CUBE_INIT)],
-        background=[RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_INIT,
-                                   body_type="kinematic")],
+        background=[
+            RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_INIT, body_type="kinematic")
+        ],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="point", init_pos=(0.0, 0.0, 2.0))]),
     )
     for key, value in overrides.items():

@@ -29,8 +29,20 @@ HOME = [0.0, 0.5, 1.0, 0.0, 0.8, 0.0]  # the wrist well away from the pan axis (
 def write_box_stl(path: Path, half: tuple[float, float, float]) -> None:
     """A binary STL box with half extents ``half`` centred at the origin."""
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float) * half
-    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
-             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    faces = [
+        (0, 1, 3),
+        (0, 3, 2),
+        (4, 6, 7),
+        (4, 7, 5),
+        (0, 4, 5),
+        (0, 5, 1),
+        (2, 3, 7),
+        (2, 7, 6),
+        (0, 2, 6),
+        (0, 6, 4),
+        (1, 5, 7),
+        (1, 7, 3),
+    ]
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as out:
         out.write(b"\0" * 80 + struct.pack("<I", len(faces)))
@@ -42,8 +54,10 @@ def write_box_stl(path: Path, half: tuple[float, float, float]) -> None:
 
 
 def _inertial(mass: float, diag: tuple[float, float, float]) -> str:
-    return (f'<inertial><mass value="{mass}"/><inertia ixx="{diag[0]}" iyy="{diag[1]}" izz="{diag[2]}" '
-            f'ixy="0" ixz="0" iyz="0"/></inertial>')
+    return (
+        f'<inertial><mass value="{mass}"/><inertia ixx="{diag[0]}" iyy="{diag[1]}" izz="{diag[2]}" '
+        f'ixy="0" ixz="0" iyz="0"/></inertial>'
+    )
 
 
 def _link(name: str, mesh: str | None, diag: tuple[float, float, float], mass: float = 1.0) -> str:
@@ -69,22 +83,30 @@ def write_urdf_arm(root: Path, unbalanced: bool = False, mesh_override: dict | N
         mesh = (mesh_override or {}).get(link, mesh)
         diag = (0.001, 0.001, 0.01) if unbalanced and link == "forearm" else (0.004, 0.004, 0.003)
         parts.append(_link(link, mesh, diag))
-    parts += [_link("tool0", None, (1e-5, 1e-5, 1e-5), 0.01),
-              _link("finger_left", None, (1e-5, 1e-5, 1e-5), 0.05),
-              _link("finger_right", None, (1e-5, 1e-5, 1e-5), 0.05)]
+    parts += [
+        _link("tool0", None, (1e-5, 1e-5, 1e-5), 0.01),
+        _link("finger_left", None, (1e-5, 1e-5, 1e-5), 0.05),
+        _link("finger_right", None, (1e-5, 1e-5, 1e-5), 0.05),
+    ]
     for name, parent, child, xyz, axis in ARM_JOINTS:
         kind = "continuous" if name == "shoulder_pan" else "revolute"
         limit = "" if kind == "continuous" else '<limit lower="-3.0" upper="3.0" effort="150" velocity="3"/>'
-        parts.append(f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
-                     f'<origin xyz="{" ".join(map(str, xyz))}"/><axis xyz="{" ".join(map(str, axis))}"/>'
-                     f'{limit}<dynamics damping="0.5"/></joint>')
-    parts.append('<joint name="tool_fixed" type="fixed"><parent link="flange"/><child link="tool0"/>'
-                 '<origin xyz="0 0.05 0"/></joint>')
+        parts.append(
+            f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{" ".join(map(str, xyz))}"/><axis xyz="{" ".join(map(str, axis))}"/>'
+            f'{limit}<dynamics damping="0.5"/></joint>'
+        )
+    parts.append(
+        '<joint name="tool_fixed" type="fixed"><parent link="flange"/><child link="tool0"/>'
+        '<origin xyz="0 0.05 0"/></joint>'
+    )
     for side, sign, mimic in (("left", 1, ""), ("right", -1, '<mimic joint="finger_left" multiplier="1"/>')):
-        parts.append(f'<joint name="finger_{side}" type="prismatic"><parent link="tool0"/>'
-                     f'<child link="finger_{side}"/><origin xyz="{0.02 * sign} 0.03 0"/>'
-                     f'<axis xyz="{sign} 0 0"/><limit lower="0" upper="0.03" effort="20" velocity="0.1"/>'
-                     f'{mimic}</joint>')
+        parts.append(
+            f'<joint name="finger_{side}" type="prismatic"><parent link="tool0"/>'
+            f'<child link="finger_{side}"/><origin xyz="{0.02 * sign} 0.03 0"/>'
+            f'<axis xyz="{sign} 0 0"/><limit lower="0" upper="0.03" effort="20" velocity="0.1"/>'
+            f"{mimic}</joint>"
+        )
     path = pkg / "urdf" / "arm.urdf"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(f'<robot name="test_arm">{"".join(parts)}</robot>')
@@ -93,11 +115,17 @@ def write_urdf_arm(root: Path, unbalanced: bool = False, mesh_override: dict | N
 
 def urdf_robot_section(path: Path, uid: str = "arm", **extra: object) -> dict:
     """A gym-config robot section for :func:`write_urdf_arm`'s arm, with an ``arm`` part."""
-    section = {"uid": uid, "fpath": str(path), "init_qpos": HOME + [0.01, 0.01],
-               "control_parts": {"arm": ARM_JOINT_NAMES, "gripper": ["finger_left"]},
-               "drive_pros": {"stiffness": {"finger_.*": 500.0, ".*": 2000.0},
-                              "damping": {"finger_.*": 20.0, ".*": 100.0},
-                              "armature": {"finger_.*": 0.01, ".*": 0.05}}}  # rotor inertia: stable drives
+    section = {
+        "uid": uid,
+        "fpath": str(path),
+        "init_qpos": HOME + [0.01, 0.01],
+        "control_parts": {"arm": ARM_JOINT_NAMES, "gripper": ["finger_left"]},
+        "drive_pros": {
+            "stiffness": {"finger_.*": 500.0, ".*": 2000.0},
+            "damping": {"finger_.*": 20.0, ".*": 100.0},
+            "armature": {"finger_.*": 0.01, ".*": 0.05},
+        },
+    }  # rotor inertia: stable drives
     section.update(extra)
     return section
 

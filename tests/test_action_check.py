@@ -20,22 +20,25 @@ def ctrl(env) -> torch.Tensor:
     return env.sim.ctrl[:, env.robot.pos_act[:ARM_ACTIVE]].clone()
 
 
-@pytest.mark.parametrize("action, error, match", [
-    (None, TypeError, "NoneType"),
-    ("0.1", TypeError, "str"),
-    (torch.zeros(2, 7, dtype=torch.bool), TypeError, "torch.bool"),
-    (np.zeros((2, 7), dtype=np.complex64), TypeError, "complex64"),
-    ([[0.0] * 7, [0.0] * 6], TypeError, "numeric array"),
-    ({"not": "numbers"}, ValueError, "expected some of"),
-    (torch.zeros(3, 7), ValueError, SHAPE),
-    (torch.zeros(2, 5), ValueError, SHAPE),
-    (torch.zeros(7, 2), ValueError, SHAPE),
-    (torch.zeros(2, 7, 1), ValueError, SHAPE),
-    (0.5, ValueError, SHAPE),
-    (torch.zeros(2, 7, device="meta"), ValueError, "device meta"),
-    (torch.full((2, 7), float("nan")), ValueError, r"NaN or infinite values in env\(s\) \[0, 1\]"),
-    (np.array([[0.0] * 7, [0.0] * 6 + [np.inf]]), ValueError, r"env\(s\) \[1\]"),
-])
+@pytest.mark.parametrize(
+    "action, error, match",
+    [
+        (None, TypeError, "NoneType"),
+        ("0.1", TypeError, "str"),
+        (torch.zeros(2, 7, dtype=torch.bool), TypeError, "torch.bool"),
+        (np.zeros((2, 7), dtype=np.complex64), TypeError, "complex64"),
+        ([[0.0] * 7, [0.0] * 6], TypeError, "numeric array"),
+        ({"not": "numbers"}, ValueError, "expected some of"),
+        (torch.zeros(3, 7), ValueError, SHAPE),
+        (torch.zeros(2, 5), ValueError, SHAPE),
+        (torch.zeros(7, 2), ValueError, SHAPE),
+        (torch.zeros(2, 7, 1), ValueError, SHAPE),
+        (0.5, ValueError, SHAPE),
+        (torch.zeros(2, 7, device="meta"), ValueError, "device meta"),
+        (torch.full((2, 7), float("nan")), ValueError, r"NaN or infinite values in env\(s\) \[0, 1\]"),
+        (np.array([[0.0] * 7, [0.0] * 6 + [np.inf]]), ValueError, r"env\(s\) \[1\]"),
+    ],
+)
 def test_bad_actions_get_one_clear_error(make_env, action, error, match) -> None:
     env = make_env()
     env.reset()

@@ -117,10 +117,12 @@ def test_single_pre_term(make_env) -> None:
 
 
 def test_two_pre_terms_split_flat_action_and_merge_by_input_key(make_env) -> None:
-    env = make_env(actions={
-        "pos": ActionTermCfg(func=ScaledQpos, params={"scale": 1.0}),
-        "vel": ActionTermCfg(func=JointVelocity),
-    })
+    env = make_env(
+        actions={
+            "pos": ActionTermCfg(func=ScaledQpos, params={"scale": 1.0}),
+            "vel": ActionTermCfg(func=JointVelocity),
+        }
+    )
     space = env.single_action_space
     assert space.shape == (2 * ARM_ACTIVE,)
     assert np.allclose(space.low, [-1.0] * ARM_ACTIVE + [-2.0] * ARM_ACTIVE)
@@ -191,10 +193,12 @@ def test_qf_command_writes_applied_forces(make_env, make_cfg) -> None:
 
 
 def test_post_terms_run_after_the_step(make_env) -> None:
-    env = make_env(actions={
-        "arm": ActionTermCfg(func=ScaledQpos, params={"scale": 2.0}),
-        "post": ActionTermCfg(func=RecordingPost, mode="post"),
-    })
+    env = make_env(
+        actions={
+            "arm": ActionTermCfg(func=ScaledQpos, params={"scale": 2.0}),
+            "post": ActionTermCfg(func=RecordingPost, mode="post"),
+        }
+    )
     assert env.single_action_space.shape == (ARM_ACTIVE,)  # post terms add no action dims
     assert env.action_manager.get_action_dim_by_mode("post") == ARM_ACTIVE
     post = env.action_manager.get_term("post")

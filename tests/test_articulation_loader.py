@@ -19,10 +19,7 @@ from embodichain_core.sim.scene_build.articulation_loader import (
     urdf_mesh_files,
 )
 
-INERTIAL = (
-    '<inertial><mass value="{m}"/>'
-    '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>'
-)
+INERTIAL = '<inertial><mass value="{m}"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>'
 
 
 def drawer_urdf(outer_geometry: str = '<box size="0.4 0.36 0.01"/>', extra: str = "") -> str:
@@ -123,7 +120,7 @@ def test_ply_meshes_are_injected_as_user_vertices(tmp_path):
     assert spec.meshes
     assert all(m.file == "" and len(m.uservert) > 0 for m in spec.meshes)
     model = spec.compile()
-    mesh = model.mesh_vert[model.mesh_vertadr[0]:model.mesh_vertadr[0] + model.mesh_vertnum[0]]
+    mesh = model.mesh_vert[model.mesh_vertadr[0] : model.mesh_vertadr[0] + model.mesh_vertnum[0]]
     assert np.ptp(mesh, axis=0).max() == pytest.approx(0.4, rel=1e-5)  # URDF scale still applies
 
 

@@ -15,13 +15,34 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPT = os.path.join(ROOT, "benchmarks", "env_throughput.py")
 
 RECORD_KEYS = {
-    "num_envs", "sim_steps_per_control", "physics_substeps", "mujoco_steps_per_env_step", "nthread", "steps",
-    "repeats", "env_steps_per_s", "raw_steps_per_s", "raw_sim_steps_per_s", "ratio", "manager_overhead_ms",
-    "env_ms_per_call", "raw_ms_per_call", "env_times_s", "raw_times_s", "breakdown",
+    "num_envs",
+    "sim_steps_per_control",
+    "physics_substeps",
+    "mujoco_steps_per_env_step",
+    "nthread",
+    "steps",
+    "repeats",
+    "env_steps_per_s",
+    "raw_steps_per_s",
+    "raw_sim_steps_per_s",
+    "ratio",
+    "manager_overhead_ms",
+    "env_ms_per_call",
+    "raw_ms_per_call",
+    "env_times_s",
+    "raw_times_s",
+    "breakdown",
 }
 BREAKDOWN_KEYS = {
-    "env_ms_per_call", "env_batch_step_ms", "env_batch_forward_ms", "env_batch_reset_ms", "env_python_ms",
-    "raw_ms_per_call", "physics_excess_ms", "forward_calls_per_step", "reset_calls_per_step",
+    "env_ms_per_call",
+    "env_batch_step_ms",
+    "env_batch_forward_ms",
+    "env_batch_reset_ms",
+    "env_python_ms",
+    "raw_ms_per_call",
+    "physics_excess_ms",
+    "forward_calls_per_step",
+    "reset_calls_per_step",
 }
 
 
@@ -30,7 +51,10 @@ def test_quick_run_writes_json(tmp_path):
     out = tmp_path / "env_throughput.json"
     proc = subprocess.run(
         [sys.executable, SCRIPT, "--quick", "--num-envs", "2", "--steps", "3", "--out", str(out)],
-        cwd=ROOT, capture_output=True, text=True, timeout=280,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=280,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "| num_envs |" in proc.stdout  # the table is printed
@@ -59,8 +83,9 @@ def test_quick_run_writes_json(tmp_path):
 
 
 def test_bad_arguments_are_rejected():
-    proc = subprocess.run([sys.executable, SCRIPT, "--num-envs", "0", "--out", ""], cwd=ROOT,
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, SCRIPT, "--num-envs", "0", "--out", ""], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 2
     assert "must be positive" in proc.stderr
 
@@ -69,13 +94,23 @@ def test_bad_arguments_are_rejected():
 def test_reset_randomization_quick_run_writes_json(tmp_path):
     out = tmp_path / "reset.json"
     script = os.path.join(ROOT, "benchmarks", "reset_randomization.py")
-    proc = subprocess.run([sys.executable, script, "--quick", "--out", str(out)], cwd=ROOT, capture_output=True,
-                          text=True, timeout=280)
+    proc = subprocess.run(
+        [sys.executable, script, "--quick", "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=280
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     data = json.loads(out.read_text())
     rec = data["records"][0]
-    keys = {"plain_reset_ms", "randomized_reset_ms", "extra_ms", "meets_target", "full_set_const_per_reset",
-            "closed_form_per_reset", "constants_ms_per_reset", "raw_forward_ms", "extra_in_raw_forwards"}
+    keys = {
+        "plain_reset_ms",
+        "randomized_reset_ms",
+        "extra_ms",
+        "meets_target",
+        "full_set_const_per_reset",
+        "closed_form_per_reset",
+        "constants_ms_per_reset",
+        "raw_forward_ms",
+        "extra_in_raw_forwards",
+    }
     assert keys <= set(rec), keys - set(rec)
     assert rec["num_envs"] == 2
     assert rec["events"] == 10

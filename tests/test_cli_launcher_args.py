@@ -36,8 +36,12 @@ def test_run_env_and_scripts_share_every_launcher_argument() -> None:
         ours, theirs = script[dest], cli[dest]
         assert ours.option_strings == theirs.option_strings, dest
         assert ours.default == theirs.default == LAUNCHER_DEFAULTS[dest], dest
-        assert (ours.type, ours.choices, ours.nargs, ours.help) == (theirs.type, theirs.choices, theirs.nargs,
-                                                                    theirs.help), dest
+        assert (ours.type, ours.choices, ours.nargs, ours.help) == (
+            theirs.type,
+            theirs.choices,
+            theirs.nargs,
+            theirs.help,
+        ), dest
     assert script["renderer"].choices == cli["renderer"].choices == RENDERERS
 
 
@@ -49,15 +53,41 @@ def test_no_flag_overrides_the_config() -> None:
 
 def test_given_flags_become_overrides() -> None:
     args = run_env.build_parser().parse_args(
-        ["Task-v0", "--num_envs", "1", "--device", "cpu", "--renderer", "auto", "--headless", "--seed", "0",
-         "--max_episodes", "2", "--max_steps", "9", "--quiet", "--filter_visual_rand"])
+        [
+            "Task-v0",
+            "--num_envs",
+            "1",
+            "--device",
+            "cpu",
+            "--renderer",
+            "auto",
+            "--headless",
+            "--seed",
+            "0",
+            "--max_episodes",
+            "2",
+            "--max_steps",
+            "9",
+            "--quiet",
+            "--filter_visual_rand",
+        ]
+    )
     # values equal to the defaults are still overrides: they were given
     assert run_env.overrides_from_args(args) == {
-        "num_envs": 1, "device": "cpu", "renderer": "auto", "headless": True, "seed": 0, "max_episodes": 2,
-        "filter_visual_rand": True, "max_episode_steps": 9, "verbose": False}
+        "num_envs": 1,
+        "device": "cpu",
+        "renderer": "auto",
+        "headless": True,
+        "seed": 0,
+        "max_episodes": 2,
+        "filter_visual_rand": True,
+        "max_episode_steps": 9,
+        "verbose": False,
+    }
     assert args.task == "Task-v0"
     assert run_env.overrides_from_args(run_env.build_parser().parse_args(["--preview"])) == {
-        "filter_dataset_saving": True}
+        "filter_dataset_saving": True
+    }
 
 
 @pytest.mark.parametrize("parser", [script_parser, run_env.build_parser])

@@ -24,8 +24,13 @@ REPO = Path(__file__).resolve().parents[1]
 class CatalogPlugin:
     @hookimpl
     def embodichain_register_functors(self, register: Any) -> None:
-        register("randomize_light", "json:dumps", kind="event", category="randomization.visual",
-                 description="Randomize lights")
+        register(
+            "randomize_light",
+            "json:dumps",
+            kind="event",
+            category="randomization.visual",
+            description="Randomize lights",
+        )
         register("joint_pos", "json:loads", kind="observation")
 
     @hookimpl

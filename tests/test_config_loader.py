@@ -42,16 +42,28 @@ def gym_config(**top: Any) -> dict:
         "max_episodes": 3,
         "num_envs": 2,
         "max_episode_steps": 20,
-        "env": {"seed": 1, "verbose": False,
-                "events": {"tick": {"func": f"{__name__}:count_event", "mode": "interval",
-                                    "interval_step": 2, "is_global": True, "params": {"tag": "t"}}},
-                "dataset": {"robot_meta": {"robot_type": "Arm3"}}},
+        "env": {
+            "seed": 1,
+            "verbose": False,
+            "events": {
+                "tick": {
+                    "func": f"{__name__}:count_event",
+                    "mode": "interval",
+                    "interval_step": 2,
+                    "is_global": True,
+                    "params": {"tag": "t"},
+                }
+            },
+            "dataset": {"robot_meta": {"robot_type": "Arm3"}},
+        },
         "robot": {"uid": "arm", "mjcf": ARM_MJCF},
         "light": {"direct": [{"uid": "lamp", "light_type": "point", "init_pos": [0, 0, 2]}]},
-        "background": [{"uid": "table", "shape": {"shape_type": "Cube", "size": [0.4, 0.4, 0.2]},
-                        "init_pos": [0.6, 0, 0.1]}],
-        "rigid_object": [{"uid": "cube", "shape": {"shape_type": "Cube", "size": [0.05, 0.05, 0.05]},
-                          "init_pos": [0.5, 0.0, 0.3]}],
+        "background": [
+            {"uid": "table", "shape": {"shape_type": "Cube", "size": [0.4, 0.4, 0.2]}, "init_pos": [0.6, 0, 0.1]}
+        ],
+        "rigid_object": [
+            {"uid": "cube", "shape": {"shape_type": "Cube", "size": [0.05, 0.05, 0.05]}, "init_pos": [0.5, 0.0, 0.3]}
+        ],
     }
     data.update(top)
     return data
@@ -105,10 +117,19 @@ def test_cfg_from_file_builds_an_env() -> None:
 #: A value for every non-scene field of EmbodiedEnvCfg, and where it goes in the file.
 ENV_FIELDS: dict[str, Any] = {
     "custom_event_modes": ["attach"],
-    "num_envs": 3, "seed": 7, "sim_steps_per_control": 2, "target_control_frequency": 50.0,
-    "ignore_terminations": True, "max_episode_steps": 9, "verbose": False, "control_parts": ["arm"],
-    "active_joint_ids": [0, 1], "filter_visual_rand": True, "filter_dataset_saving": True,
-    "init_rollout_buffer": True, "extensions": {"goal": [1, 2]},
+    "num_envs": 3,
+    "seed": 7,
+    "sim_steps_per_control": 2,
+    "target_control_frequency": 50.0,
+    "ignore_terminations": True,
+    "max_episode_steps": 9,
+    "verbose": False,
+    "control_parts": ["arm"],
+    "active_joint_ids": [0, 1],
+    "filter_visual_rand": True,
+    "filter_dataset_saving": True,
+    "init_rollout_buffer": True,
+    "extensions": {"goal": [1, 2]},
     "sim_cfg": {"width": 320, "cpu_num": 2},
     "events": {"e": {"func": "f", "mode": "interval", "interval_step": 3, "is_global": True}},
     "observations": {"o": {"func": "g", "mode": "add", "name": "task/goal", "extra": {"shape": [3]}}},
@@ -116,20 +137,45 @@ ENV_FIELDS: dict[str, Any] = {
     "actions": {"a": {"func": "k", "mode": "post", "params": {"scale": 0.1}}},
     "dataset": {"d": {"func": "rec", "save_failed_episodes": True}, "robot_meta": {"name": "arm"}},
 }
-SIM_KEYS = {"headless": False, "device": "cpu", "gpu_id": 1, "arena_space": 3.0, "physics_dt": 0.002,
-            "physics_substeps": 2, "physics_config": {"gravity": [0, 0, -1.0], "solver": "CG"},
-            "render_cfg": {"quality": "high", "renderer": "fast"}, "renderer": "rt"}
+SIM_KEYS = {
+    "headless": False,
+    "device": "cpu",
+    "gpu_id": 1,
+    "arena_space": 3.0,
+    "physics_dt": 0.002,
+    "physics_substeps": 2,
+    "physics_config": {"gravity": [0, 0, -1.0], "solver": "CG"},
+    "render_cfg": {"quality": "high", "renderer": "fast"},
+    "renderer": "rt",
+}
 
 
 def test_every_cfg_field_is_settable_from_a_file() -> None:
     fields = {f.name for f in dataclasses.fields(EmbodiedEnvCfg)}
     assert fields == set(ENV_FIELDS) | set(SCENE_SECTIONS), "a new cfg field needs a line in ENV_FIELDS"
     cfg, _ = gym_config_to_cfg(_without(gym_config(env=copy.deepcopy(ENV_FIELDS), **SIM_KEYS)))
-    for name in ("num_envs", "seed", "sim_steps_per_control", "target_control_frequency", "ignore_terminations",
-                 "max_episode_steps", "verbose", "control_parts", "active_joint_ids", "filter_visual_rand",
-                 "filter_dataset_saving", "init_rollout_buffer", "extensions"):
+    for name in (
+        "num_envs",
+        "seed",
+        "sim_steps_per_control",
+        "target_control_frequency",
+        "ignore_terminations",
+        "max_episode_steps",
+        "verbose",
+        "control_parts",
+        "active_joint_ids",
+        "filter_visual_rand",
+        "filter_dataset_saving",
+        "init_rollout_buffer",
+        "extensions",
+    ):
         assert getattr(cfg, name) == ENV_FIELDS[name], name
-    assert (cfg.sim_cfg.width, cfg.sim_cfg.cpu_num, cfg.sim_cfg.headless, cfg.sim_cfg.sim_device) == (320, 2, False, "cpu")
+    assert (cfg.sim_cfg.width, cfg.sim_cfg.cpu_num, cfg.sim_cfg.headless, cfg.sim_cfg.sim_device) == (
+        320,
+        2,
+        False,
+        "cpu",
+    )
     assert (cfg.sim_cfg.gpu_id, cfg.sim_cfg.arena_space, cfg.sim_cfg.physics_dt) == (1, 3.0, 0.002)
     assert cfg.sim_cfg.physics_substeps == 2
     assert cfg.sim_cfg.physics_config.gravity == (0, 0, -1.0)
@@ -149,17 +195,23 @@ def _without(data: dict) -> dict:
     return {k: v for k, v in data.items() if k not in ("num_envs", "max_episode_steps")}
 
 
-@pytest.mark.parametrize("mutate, path, hint", [
-    (lambda d: d["env"].update(evnts={}), "env.evnts", "Did you mean 'events'"),
-    (lambda d: d["rigid_object"][0].update(shpe={}), "rigid_object[0].shpe", "Did you mean 'shape'"),
-    (lambda d: d.update(robto={}), "robto", "Did you mean 'robot'"),
-    (lambda d: d["env"]["events"]["tick"].update(intervl_step=3), "env.events.tick.intervl_step",
-     "Did you mean 'interval_step'"),
-    (lambda d: d.update(sim_cfg={"physics_dtt": 0.1}), "sim_cfg.physics_dtt", "Did you mean 'physics_dt'"),
-    (lambda d: d.update(seed=3), "seed", "belongs inside 'env'"),
-    (lambda d: d["env"].update(robot={}), "env.robot", "top-level section"),
-    (lambda d: d["env"].update(num_envs=4), "env.num_envs", "also given at num_envs"),
-])
+@pytest.mark.parametrize(
+    "mutate, path, hint",
+    [
+        (lambda d: d["env"].update(evnts={}), "env.evnts", "Did you mean 'events'"),
+        (lambda d: d["rigid_object"][0].update(shpe={}), "rigid_object[0].shpe", "Did you mean 'shape'"),
+        (lambda d: d.update(robto={}), "robto", "Did you mean 'robot'"),
+        (
+            lambda d: d["env"]["events"]["tick"].update(intervl_step=3),
+            "env.events.tick.intervl_step",
+            "Did you mean 'interval_step'",
+        ),
+        (lambda d: d.update(sim_cfg={"physics_dtt": 0.1}), "sim_cfg.physics_dtt", "Did you mean 'physics_dt'"),
+        (lambda d: d.update(seed=3), "seed", "belongs inside 'env'"),
+        (lambda d: d["env"].update(robot={}), "env.robot", "top-level section"),
+        (lambda d: d["env"].update(num_envs=4), "env.num_envs", "also given at num_envs"),
+    ],
+)
 def test_unknown_or_misplaced_keys_name_path_and_suggest(mutate: Any, path: str, hint: str) -> None:
     data = gym_config()
     mutate(data)
@@ -168,19 +220,22 @@ def test_unknown_or_misplaced_keys_name_path_and_suggest(mutate: Any, path: str,
     assert hint in str(err)
 
 
-@pytest.mark.parametrize("mutate, path", [
-    (lambda d: d["env"]["events"]["tick"].update(interval_step="ten"), "env.events.tick.interval_step"),
-    (lambda d: d.update(physics_dt="fast"), "physics_dt"),
-    (lambda d: d.update(device=0), "device"),
-    (lambda d: d.update(physics_config={"solver": "Newtn"}), "physics_config.solver"),
-    (lambda d: d["rigid_object"][0].update(attrs={"mass": "heavy"}), "rigid_object[0].attrs.mass"),
-    (lambda d: d["env"].update(seed="zero"), "env.seed"),
-    (lambda d: d.update(max_episodes=0), "max_episodes"),
-    (lambda d: d["env"].update(events=["tick"]), "env.events"),
-    (lambda d: d["env"]["events"]["tick"].pop("func"), "env.events.tick.func"),
-    (lambda d: d["env"].update(observations={"o": {"func": "g"}}), "env.observations.o.name"),
-    (lambda d: d["rigid_object"][0].update(shape={"shape_type": "Mesh"}), "rigid_object[0].shape.fpath"),
-])
+@pytest.mark.parametrize(
+    "mutate, path",
+    [
+        (lambda d: d["env"]["events"]["tick"].update(interval_step="ten"), "env.events.tick.interval_step"),
+        (lambda d: d.update(physics_dt="fast"), "physics_dt"),
+        (lambda d: d.update(device=0), "device"),
+        (lambda d: d.update(physics_config={"solver": "Newtn"}), "physics_config.solver"),
+        (lambda d: d["rigid_object"][0].update(attrs={"mass": "heavy"}), "rigid_object[0].attrs.mass"),
+        (lambda d: d["env"].update(seed="zero"), "env.seed"),
+        (lambda d: d.update(max_episodes=0), "max_episodes"),
+        (lambda d: d["env"].update(events=["tick"]), "env.events"),
+        (lambda d: d["env"]["events"]["tick"].pop("func"), "env.events.tick.func"),
+        (lambda d: d["env"].update(observations={"o": {"func": "g"}}), "env.observations.o.name"),
+        (lambda d: d["rigid_object"][0].update(shape={"shape_type": "Mesh"}), "rigid_object[0].shape.fpath"),
+    ],
+)
 def test_wrong_types_and_missing_values_name_the_path(mutate: Any, path: str) -> None:
     data = gym_config()
     mutate(data)
@@ -228,8 +283,12 @@ def test_overrides_apply_only_when_given() -> None:
 def test_file_errors_name_the_file(tmp_path: Path) -> None:
     (tmp_path / "list.yaml").write_text("- a\n- b\n")
     (tmp_path / "bad.json").write_text('{"id": ')
-    for name, text in (("list.yaml", "must be a mapping"), ("bad.json", "invalid JSON"),
-                       ("missing.json", "cannot read"), ("c.toml", "unsupported")):
+    for name, text in (
+        ("list.yaml", "must be a mapping"),
+        ("bad.json", "invalid JSON"),
+        ("missing.json", "cannot read"),
+        ("c.toml", "unsupported"),
+    ):
         with pytest.raises(ConfigError, match=text) as info:
             load_config_file(tmp_path / name)
         assert str(tmp_path / name) in str(info.value)

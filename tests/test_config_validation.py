@@ -35,8 +35,16 @@ def raise_path(fn: Any, *args: Any, **kwargs: Any) -> ConfigError:
 
 
 # -- value checks ----------------------------------------------------------------------------------
-@pytest.mark.parametrize("value, expected", [("x", "expected a finite number"), (math.nan, "finite"),
-                                             (math.inf, "finite"), (True, "got bool"), (-1.0, "must be >= 0")])
+@pytest.mark.parametrize(
+    "value, expected",
+    [
+        ("x", "expected a finite number"),
+        (math.nan, "finite"),
+        (math.inf, "finite"),
+        (True, "got bool"),
+        (-1.0, "must be >= 0"),
+    ],
+)
 def test_check_number_rejects(value: Any, expected: str) -> None:
     err = raise_path(check_number, value, "attrs.mass", low=0.0)
     assert err.path == "attrs.mass"
@@ -63,7 +71,7 @@ def test_check_range_rules() -> None:
 
 def test_check_int_bounds_and_types() -> None:
     assert check_int(3, "n") == 3
-    assert "1000000" in raise_path(check_int, 10 ** 7, "num_envs", high=10 ** 6).reason
+    assert "1000000" in raise_path(check_int, 10**7, "num_envs", high=10**6).reason
     assert "got float 2.5" in raise_path(check_int, 2.5, "n").reason
 
 
@@ -76,24 +84,27 @@ def _set(cfg: Any, path: list, value: Any) -> Any:
     return cfg
 
 
-@pytest.mark.parametrize("path, value, where", [
-    (["rigid_object", 0, "attrs", "mass"], -0.1, "rigid_object[0].attrs.mass"),
-    (["rigid_object", 0, "attrs", "static_friction"], -0.5, "rigid_object[0].attrs.static_friction"),
-    (["rigid_object", 0, "attrs", "restitution"], 1.5, "rigid_object[0].attrs.restitution"),
-    (["rigid_object", 0, "attrs", "min_position_iters"], 0, "rigid_object[0].attrs.min_position_iters"),
-    (["rigid_object", 0, "body_scale"], (1.0, 0.0, 1.0), "rigid_object[0].body_scale[1]"),
-    (["rigid_object", 0, "body_scale"], (1.0, 1.0), "rigid_object[0].body_scale"),
-    (["rigid_object", 0, "init_pos"], (0.0, math.nan, 0.0), "rigid_object[0].init_pos[1]"),
-    (["rigid_object", 0, "init_rot"], (0.0, 0.0, 0.0, 1.0), "rigid_object[0].init_rot"),
-    (["rigid_object", 0, "shape", "size"], [0.05, 0.05], "rigid_object[0].shape.size"),
-    (["background", 0, "attrs", "dynamic_friction"], math.inf, "background[0].attrs.dynamic_friction"),
-    (["light", "direct", 0, "intensity"], -1.0, "light.direct[0].intensity"),
-    (["light", "direct", 0, "color"], (1.5, 1.0, 1.0), "light.direct[0].color[0]"),
-    (["robot", "init_qpos"], [0.0] * 6 + [math.nan, 0.0, 0.0], "robot.init_qpos[6]"),
-    (["robot", "drive_pros", "damping"], {"joint1": -5.0}, "robot.drive_pros.damping.joint1"),
-    (["sim_cfg", "physics_config", "iterations"], 0, "sim_cfg.physics_config.iterations"),
-    (["sim_cfg", "physics_substeps"], 10 ** 6, "sim_cfg.physics_substeps"),
-])
+@pytest.mark.parametrize(
+    "path, value, where",
+    [
+        (["rigid_object", 0, "attrs", "mass"], -0.1, "rigid_object[0].attrs.mass"),
+        (["rigid_object", 0, "attrs", "static_friction"], -0.5, "rigid_object[0].attrs.static_friction"),
+        (["rigid_object", 0, "attrs", "restitution"], 1.5, "rigid_object[0].attrs.restitution"),
+        (["rigid_object", 0, "attrs", "min_position_iters"], 0, "rigid_object[0].attrs.min_position_iters"),
+        (["rigid_object", 0, "body_scale"], (1.0, 0.0, 1.0), "rigid_object[0].body_scale[1]"),
+        (["rigid_object", 0, "body_scale"], (1.0, 1.0), "rigid_object[0].body_scale"),
+        (["rigid_object", 0, "init_pos"], (0.0, math.nan, 0.0), "rigid_object[0].init_pos[1]"),
+        (["rigid_object", 0, "init_rot"], (0.0, 0.0, 0.0, 1.0), "rigid_object[0].init_rot"),
+        (["rigid_object", 0, "shape", "size"], [0.05, 0.05], "rigid_object[0].shape.size"),
+        (["background", 0, "attrs", "dynamic_friction"], math.inf, "background[0].attrs.dynamic_friction"),
+        (["light", "direct", 0, "intensity"], -1.0, "light.direct[0].intensity"),
+        (["light", "direct", 0, "color"], (1.5, 1.0, 1.0), "light.direct[0].color[0]"),
+        (["robot", "init_qpos"], [0.0] * 6 + [math.nan, 0.0, 0.0], "robot.init_qpos[6]"),
+        (["robot", "drive_pros", "damping"], {"joint1": -5.0}, "robot.drive_pros.damping.joint1"),
+        (["sim_cfg", "physics_config", "iterations"], 0, "sim_cfg.physics_config.iterations"),
+        (["sim_cfg", "physics_substeps"], 10**6, "sim_cfg.physics_substeps"),
+    ],
+)
 def test_physical_values_fail_before_the_scene_is_built(monkeypatch, path: list, value: Any, where: str) -> None:
     import embodichain_core.envs.embodied_env as embodied
 
@@ -128,8 +139,9 @@ def test_close_modes_catches_typos_only() -> None:
     assert close_modes("test", ["reset"]) == []
 
 
-@pytest.mark.parametrize("mode, suggestion", [("rset", "reset"), ("intervall", "interval"), ("startp", "startup"),
-                                              (" reset", "reset")])
+@pytest.mark.parametrize(
+    "mode, suggestion", [("rset", "reset"), ("intervall", "interval"), ("startp", "startup"), (" reset", "reset")]
+)
 def test_a_typo_of_an_event_mode_is_an_error_with_the_suggestion(mode: str, suggestion: str) -> None:
     cfg = base_cfg(events={"move": EventCfg(func=nudge, mode=mode, params={"entity_cfg": {"uid": "cube"}})})
     err = raise_path(cfg.validate)
@@ -144,8 +156,10 @@ def test_declared_custom_modes(make_env) -> None:
         warnings.simplefilter("error")
         env = make_env(base_cfg(events=events, custom_event_modes=["resets"]))
     assert env.event_manager.functors_of("resets") == ["lift"]
-    cfg = base_cfg(events={"x": EventCfg(func=nudge, mode="atach", params={"entity_cfg": {"uid": "cube"}})},
-                   custom_event_modes=["attach"])
+    cfg = base_cfg(
+        events={"x": EventCfg(func=nudge, mode="atach", params={"entity_cfg": {"uid": "cube"}})},
+        custom_event_modes=["attach"],
+    )
     assert "Did you mean 'attach'" in raise_path(cfg.validate).reason
     assert raise_path(base_cfg(custom_event_modes=["reset"]).validate).path == "env.custom_event_modes[0]"
 
@@ -171,18 +185,21 @@ def test_interval_steps_are_bounded_and_warn_when_they_never_fire(make_env) -> N
         warnings.simplefilter("error")
         make_env(events={"tick": event.replace(is_global=True)}, max_episode_steps=100)
     assert raise_path(base_cfg(events={"tick": event.replace(interval_step=0)}).validate).path.endswith("interval_step")
-    too_big = event.replace(interval_step=10 ** 9, mode="reset")
+    too_big = event.replace(interval_step=10**9, mode="reset")
     assert "10000000" in raise_path(base_cfg(events={"tick": too_big}).validate).reason
 
 
-@pytest.mark.parametrize("params, where", [
-    ({}, "env.events.e.params"),
-    ({"entity_cfg": {"uid": "cub"}}, "env.events.e.params.entity_cfg.uid"),
-    ({"entity_cfg": "cube"}, "env.events.e.params.entity_cfg"),
-    ({"entity_cfg": {"uid": "cube"}, "offset_range": [0.2, 0.1]}, "env.events.e.params.offset_range"),
-    ({"entity_cfg": {"uid": "cube"}, "relative": "yes"}, "env.events.e.params.relative"),
-    ({"entity_cfg": {"uid": "cube"}, "ofset_range": [0, 1]}, "env.events.e.params.ofset_range"),
-])
+@pytest.mark.parametrize(
+    "params, where",
+    [
+        ({}, "env.events.e.params"),
+        ({"entity_cfg": {"uid": "cub"}}, "env.events.e.params.entity_cfg.uid"),
+        ({"entity_cfg": "cube"}, "env.events.e.params.entity_cfg"),
+        ({"entity_cfg": {"uid": "cube"}, "offset_range": [0.2, 0.1]}, "env.events.e.params.offset_range"),
+        ({"entity_cfg": {"uid": "cube"}, "relative": "yes"}, "env.events.e.params.relative"),
+        ({"entity_cfg": {"uid": "cube"}, "ofset_range": [0, 1]}, "env.events.e.params.ofset_range"),
+    ],
+)
 def test_event_params_are_checked_before_the_build(params: dict, where: str) -> None:
     err = raise_path(base_cfg(events={"e": EventCfg(func=nudge, params=params)}).validate)
     assert err.path == where, err
@@ -213,18 +230,21 @@ def test_modify_of_a_missing_observation_is_a_config_error_at_build(make_env) ->
 
 
 # -- functor params by naming convention ---------------------------------------------------------
-@pytest.mark.parametrize("params, key, text", [
-    ({"mass_range": [0.5, 0.1]}, "mass_range", "above high"),
-    ({"mass_range": [0.0, 0.1]}, "mass_range", "> 0"),
-    ({"friction_range": [-0.1, 0.5]}, "friction_range", ">= 0"),
-    ({"color_range": [[0.1] * 3, [1.2] * 3]}, "color_range", "in [0, 1]"),
-    ({"base_color_range": [[0.1, 0.1], [1, 1]]}, "base_color_range[0]", "RGB"),
-    ({"scale_factor_range": [0.0, 1.0]}, "scale_factor_range", "> 0"),
-    ({"random_texture_prob": 1.5}, "random_texture_prob", "probability"),
-    ({"mass_range": {"link1": [2.0, 1.0]}}, "mass_range.link1", "above high"),
-    ({"strength": [1.0, math.nan]}, "strength[1]", "NaN"),
-    ({"position_range": "far"}, "position_range", "[low, high]"),
-])
+@pytest.mark.parametrize(
+    "params, key, text",
+    [
+        ({"mass_range": [0.5, 0.1]}, "mass_range", "above high"),
+        ({"mass_range": [0.0, 0.1]}, "mass_range", "> 0"),
+        ({"friction_range": [-0.1, 0.5]}, "friction_range", ">= 0"),
+        ({"color_range": [[0.1] * 3, [1.2] * 3]}, "color_range", "in [0, 1]"),
+        ({"base_color_range": [[0.1, 0.1], [1, 1]]}, "base_color_range[0]", "RGB"),
+        ({"scale_factor_range": [0.0, 1.0]}, "scale_factor_range", "> 0"),
+        ({"random_texture_prob": 1.5}, "random_texture_prob", "probability"),
+        ({"mass_range": {"link1": [2.0, 1.0]}}, "mass_range.link1", "above high"),
+        ({"strength": [1.0, math.nan]}, "strength[1]", "NaN"),
+        ({"position_range": "far"}, "position_range", "[low, high]"),
+    ],
+)
 def test_named_params(params: dict, key: str, text: str) -> None:
     err = raise_path(check_named_params, params, "env.events.e", "f")
     assert err.path == f"env.events.e.params.{key}"
@@ -287,7 +307,7 @@ def test_memory_check_runs_before_anything_is_allocated(monkeypatch) -> None:
     monkeypatch.setenv(MEMORY_LIMIT_ENV, "0.001")
     assert raise_path(EmbodiedEnv, base_cfg(num_envs=64)).path == "num_envs"
     monkeypatch.delenv(MEMORY_LIMIT_ENV)
-    assert "1000000" in raise_path(EmbodiedEnv, base_cfg(num_envs=10 ** 7)).reason
+    assert "1000000" in raise_path(EmbodiedEnv, base_cfg(num_envs=10**7)).reason
 
 
 def test_available_memory_reads_the_machine() -> None:
@@ -340,7 +360,7 @@ def test_entity_uids_are_unique_before_the_build() -> None:
 
 
 def test_the_loader_bounds_num_envs_before_the_env_allocates_anything() -> None:
-    err = raise_path(load_gym_config, {**_file_cfg(), "num_envs": 10 ** 9})
+    err = raise_path(load_gym_config, {**_file_cfg(), "num_envs": 10**9})
     assert err.path == "num_envs"
     assert "1000000" in err.reason
     assert raise_path(load_gym_config, _file_cfg(), {"num_envs": 0}).path == "num_envs"

@@ -15,7 +15,7 @@ from embodichain_core.utils.configclass import MISSING
 
 PACKAGE = Path(embodichain_core.__file__).resolve().parent
 
-SNIPPET = '''
+SNIPPET = """
 from embodichain_core.utils.configclass import MISSING, configclass
 
 
@@ -42,16 +42,26 @@ reveal_type(arm.to_dict())
 reveal_type(arm.validate())
 ArmCfg(uid=1)
 ArmCfg(size=2)
-'''
+"""
 
 
 def _mypy(tmp_path: Path, source: str) -> list[str]:
     (tmp_path / "snippet.py").write_text(source)
     (tmp_path / "mypy.ini").write_text(
         "[mypy]\npython_version = 3.10\nignore_missing_imports = True\nfollow_imports = silent\n"
-        f"mypy_path = {PACKAGE.parent}\nplugins = {PACKAGE / 'utils' / 'mypy_plugin.py'}\n")
-    out, err, _ = api.run(["--config-file", str(tmp_path / "mypy.ini"), "--cache-dir", str(tmp_path / "cache"),
-                           "--no-error-summary", "--hide-error-context", str(tmp_path / "snippet.py")])
+        f"mypy_path = {PACKAGE.parent}\nplugins = {PACKAGE / 'utils' / 'mypy_plugin.py'}\n"
+    )
+    out, err, _ = api.run(
+        [
+            "--config-file",
+            str(tmp_path / "mypy.ini"),
+            "--cache-dir",
+            str(tmp_path / "cache"),
+            "--no-error-summary",
+            "--hide-error-context",
+            str(tmp_path / "snippet.py"),
+        ]
+    )
     assert not err, err
     return [re.sub(r"^.*snippet\.py:\d+: ", "", line) for line in out.splitlines()]
 

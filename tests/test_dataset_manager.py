@@ -27,8 +27,9 @@ class EpisodeRecorder(DatasetFunctor):
         self.first_obs: list[list[int]] = []
         self.finalized = 0
 
-    def record_step(self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
-                    truncated: torch.Tensor, info: dict) -> None:
+    def record_step(
+        self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor, truncated: torch.Tensor, info: dict
+    ) -> None:
         for i in range(self.num_envs):
             self.frames[i].append((obs["robot"]["qpos"][i].clone(), bool(terminated[i]), bool(truncated[i])))
 
@@ -63,8 +64,10 @@ class BrokenFinalize(EpisodeRecorder):
 
 
 def make_recording_env(make_env: Any, make_cfg: Any, save_failed: bool = False, **overrides: Any) -> Any:
-    cfg = make_cfg(dataset={"rec": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "t"},
-                                                      save_failed_episodes=save_failed)}, **overrides)
+    cfg = make_cfg(
+        dataset={"rec": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "t"}, save_failed_episodes=save_failed)},
+        **overrides,
+    )
     env = make_env(cfg, env_cls=FlagEnv)
     return env, env.dataset_manager.get_functor("rec")
 
@@ -153,10 +156,12 @@ def test_finalize_is_idempotent_and_never_commits_partial_episodes(make_env, mak
 
 
 def test_finalize_attempts_every_recorder_and_reraises_one_error_marked(make_env, make_cfg) -> None:
-    cfg = make_cfg(dataset={
-        "broken": DatasetFunctorCfg(func=BrokenFinalize),
-        "ok": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "ok"}),
-    })
+    cfg = make_cfg(
+        dataset={
+            "broken": DatasetFunctorCfg(func=BrokenFinalize),
+            "ok": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "ok"}),
+        }
+    )
     env = make_env(cfg, env_cls=FlagEnv)
     broken, ok = env.dataset_manager.get_functor("broken"), env.dataset_manager.get_functor("ok")
     with pytest.raises(OSError, match="disk full") as err:  # the recorder's own error, as it is
@@ -183,14 +188,18 @@ def test_dataset_params_are_checked(make_env, make_cfg) -> None:
 
 
 def test_plain_metadata_next_to_recorders_is_ignored(make_env, make_cfg) -> None:
-    env = make_env(make_cfg(dataset={"robot_meta": {"robot_type": "arm"},
-                                     "rec": {"func": EpisodeRecorder, "params": {"tag": "d"}}}))
+    env = make_env(
+        make_cfg(
+            dataset={"robot_meta": {"robot_type": "arm"}, "rec": {"func": EpisodeRecorder, "params": {"tag": "d"}}}
+        )
+    )
     assert env.dataset_manager.active_functors == ["rec"]
 
 
 def test_filter_dataset_saving_disables_the_manager(make_env, make_cfg) -> None:
-    env = make_env(make_cfg(filter_dataset_saving=True,
-                            dataset={"rec": DatasetFunctorCfg(func=EpisodeRecorder)}), env_cls=FlagEnv)
+    env = make_env(
+        make_cfg(filter_dataset_saving=True, dataset={"rec": DatasetFunctorCfg(func=EpisodeRecorder)}), env_cls=FlagEnv
+    )
     assert env.dataset_manager is None
     env.reset()
     env.success_flags[:] = True

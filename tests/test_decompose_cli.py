@@ -28,7 +28,7 @@ def l_shape_mesh() -> trimesh.Trimesh:
 def table_rows(output: str) -> list[list[str]]:
     lines = output.strip().splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith("mesh"))
-    return [line.split() for line in lines[start + 2:]]
+    return [line.split() for line in lines[start + 2 :]]
 
 
 def test_mesh_file_first_run_then_cached(tmp_path, capsys):
@@ -76,7 +76,13 @@ def test_report_object(tmp_path):
     assert not row.cached
     assert row.seconds >= 0
     assert report.format_table().splitlines()[0].split() == [
-        "mesh", "components", "convex", "hulls", "cached", "time", "[s]"
+        "mesh",
+        "components",
+        "convex",
+        "hulls",
+        "cached",
+        "time",
+        "[s]",
     ]
 
 

@@ -92,8 +92,14 @@ def test_mkdocs_build_is_strict_and_passes(tmp_path: Path) -> None:
     assert config["strict"] is True
     assert config["theme"]["name"] == "material"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
-    out = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
-                         cwd=REPO, capture_output=True, text=True, timeout=300, env=env)
+    out = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
     assert out.returncode == 0, f"mkdocs build --strict failed:\n{out.stdout}\n{out.stderr}"
     assert (tmp_path / "site" / "plugins" / "index.html").is_file()
 
@@ -121,8 +127,11 @@ def test_cli_reference_covers_every_builtin_command_and_option() -> None:
 def test_every_hookspec_is_documented() -> None:
     from embodichain_core.plugins import hookspecs
 
-    specs = [name for name, obj in vars(hookspecs).items()
-             if callable(obj) and getattr(obj, "embodichain_spec", None) is not None]
+    specs = [
+        name
+        for name, obj in vars(hookspecs).items()
+        if callable(obj) and getattr(obj, "embodichain_spec", None) is not None
+    ]
     assert len(specs) >= 6
     missing = set(specs)
     for page in HOOK_PAGES:
@@ -150,7 +159,9 @@ def test_meta_checks_catch_a_missing_name(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
     page.write_text("`randomize_light` and PushCube-v1, see `joint_pos_rel`.\n")
     assert undocumented(["randomize_light", "PushCube-v1", "joint_pos", "PushCube-v10"], page) == [
-        "PushCube-v10", "joint_pos"]
+        "PushCube-v10",
+        "joint_pos",
+    ]
     assert undocumented(["anything"], tmp_path / "absent.md") == ["anything"]
 
 
@@ -209,6 +220,7 @@ def sentences(text: str) -> list[str]:
 
 
 # -- make targets ------------------------------------------------------------------------------------
+
 
 def makefile_targets() -> set[str]:
     """The targets the Makefile defines (``name:`` rules; variables and ``$(STAMP)`` left out)."""
@@ -274,8 +286,9 @@ def test_make_run_is_documented_as_the_makefile_main_job() -> None:
             wrong.append(f"{rel(page)}:{n}: does not name the main job's task {task_id}: {unit!r}")
         for sentence in sentences(unit):
             if "make run" in sentence and "demo scene" in sentence:
-                wrong.append(f"{rel(page)}:{n}: `make run` is the main job ({task_id}), not the demo scene: "
-                             f"{sentence!r}")
+                wrong.append(
+                    f"{rel(page)}:{n}: `make run` is the main job ({task_id}), not the demo scene: {sentence!r}"
+                )
         for shown in re.findall(r"`make run` is `([^`]+)`", unit):
             if shown != command:
                 wrong.append(f"{rel(page)}:{n}: `make run` is `{command}` (Makefile), not `{shown}`")
@@ -283,6 +296,7 @@ def test_make_run_is_documented_as_the_makefile_main_job() -> None:
 
 
 # -- versions ----------------------------------------------------------------------------------------
+
 
 def setup_versions() -> dict[str, str]:
     """Default versions in scripts/setup_env.sh: ``{"torch": ..., "torchvision": ...}``."""
@@ -311,30 +325,38 @@ def cited_versions(page: Path) -> list[tuple[int, str, str]]:
 
 def same_release(cited: str, actual: str) -> bool:
     """``2.10`` and ``2.10.0`` cite ``2.10.0``; ``2.13`` does not."""
-    return actual.split(".")[:len(cited.split("."))] == cited.split(".")
+    return actual.split(".")[: len(cited.split("."))] == cited.split(".")
 
 
 def test_cited_torch_versions_are_the_set_up_s() -> None:
     versions = setup_versions()
     cited = [(page, *c) for page in CHECKED_PAGES for c in cited_versions(page)]
     assert any(page.name == "getting_started.md" and package == "torch" for page, _, package, _ in cited), (
-        "docs/getting_started.md no longer cites the torch version the set-up installs")
-    wrong = [f"{rel(page)}:{n}: {package} {version} (scripts/setup_env.sh installs {versions[package]})"
-             for page, n, package, version in cited if not same_release(version, versions[package])]
+        "docs/getting_started.md no longer cites the torch version the set-up installs"
+    )
+    wrong = [
+        f"{rel(page)}:{n}: {package} {version} (scripts/setup_env.sh installs {versions[package]})"
+        for page, n, package, version in cited
+        if not same_release(version, versions[package])
+    ]
     assert not wrong, "docs cite versions the set-up does not install:\n" + "\n".join(wrong)
 
 
 def test_the_documented_set_up_variables_exist() -> None:
     """Every ``TORCH_*`` variable the docs tell users to set is read by scripts/setup_env.sh."""
     script = (REPO / "scripts" / "setup_env.sh").read_text(encoding="utf-8")
-    documented = {var for page in CHECKED_PAGES
-                  for var in re.findall(r"\b(TORCH\w*_(?:VERSION|URL))\b", page.read_text(encoding="utf-8"))}
+    documented = {
+        var
+        for page in CHECKED_PAGES
+        for var in re.findall(r"\b(TORCH\w*_(?:VERSION|URL))\b", page.read_text(encoding="utf-8"))
+    }
     assert "TORCH_INDEX_URL" in documented, "README/getting_started no longer document TORCH_INDEX_URL"
     missing = sorted(var for var in documented if not re.search(rf"\${{{var}\b|\${var}\b", script))
     assert not missing, f"scripts/setup_env.sh does not read {missing}"
 
 
 # -- CLI flags ---------------------------------------------------------------------------------------
+
 
 def command_parsers() -> dict[str, argparse.ArgumentParser]:
     """The parser of every installed ``embodichain`` command whose module has ``build_parser``."""
@@ -381,8 +403,12 @@ def bad_flags(command_line: str, parsers: dict[str, argparse.ArgumentParser]) ->
     valid = {o for a in parser._actions for o in a.option_strings}
     bad = []
     for token in tokens[1:]:
-        subs = {name: sub for a in parser._actions if isinstance(a, argparse._SubParsersAction)
-                for name, sub in a.choices.items()}
+        subs = {
+            name: sub
+            for a in parser._actions
+            if isinstance(a, argparse._SubParsersAction)
+            for name, sub in a.choices.items()
+        }
         if token in subs:
             parser = subs[token]
             valid |= {o for a in parser._actions for o in a.option_strings}
@@ -409,6 +435,7 @@ def test_flag_check_catches_a_wrong_flag() -> None:
 
 
 # -- links -------------------------------------------------------------------------------------------
+
 
 def slugify(title: str) -> str:
     """The anchor Python-Markdown's ``toc`` extension gives a heading (its default slugify)."""
@@ -460,13 +487,18 @@ def test_every_relative_link_resolves() -> None:
 def test_link_check_catches_a_broken_link(tmp_path: Path) -> None:
     (tmp_path / "a.md").write_text("# A page\n\n## The `main` job\n\ntext\n")
     page = tmp_path / "b.md"
-    page.write_text("[ok](a.md#the-main-job) [self](#b) [gone](gone.md) [bad](a.md#nope) "
-                    "[web](https://example.org) `[code](x.md)`\n\n# B\n")
+    page.write_text(
+        "[ok](a.md#the-main-job) [self](#b) [gone](gone.md) [bad](a.md#nope) "
+        "[web](https://example.org) `[code](x.md)`\n\n# B\n"
+    )
     assert [link.split(": ", 1)[1] for link in broken_links(page)] == [
-        "gone.md (no such file)", "a.md#nope (no heading #nope in a.md)"]
+        "gone.md (no such file)",
+        "a.md#nope (no heading #nope in a.md)",
+    ]
 
 
 # -- documented imports ------------------------------------------------------------------------------
+
 
 def repo_packages() -> set[str]:
     """Top-level packages of the core and of the plugins kept in plugins/."""
@@ -474,8 +506,10 @@ def repo_packages() -> set[str]:
     return {"embodichain_core", *plugin_packages}
 
 
-_IMPORT = re.compile(r"^[ \t]*(from[ \t]+([\w.]+)[ \t]+import[ \t]+(?:\([^)]*\)|[^\n#]+)|import[ \t]+([\w.]+)(?:[ \t]+as[ \t]+\w+)?)",
-                     re.MULTILINE)
+_IMPORT = re.compile(
+    r"^[ \t]*(from[ \t]+([\w.]+)[ \t]+import[ \t]+(?:\([^)]*\)|[^\n#]+)|import[ \t]+([\w.]+)(?:[ \t]+as[ \t]+\w+)?)",
+    re.MULTILINE,
+)
 
 
 def documented_imports(page: Path) -> list[tuple[int, str]]:
@@ -509,8 +543,9 @@ def test_every_documented_import_works() -> None:
         "print(json.dumps(failed))\n"
     )
     payload = json.dumps([(f"{page}:{n}", stmt) for page, n, stmt in statements])
-    out = subprocess.run([sys.executable, "-c", script, payload], capture_output=True, text=True, timeout=300,
-                         check=False, cwd=REPO)
+    out = subprocess.run(
+        [sys.executable, "-c", script, payload], capture_output=True, text=True, timeout=300, check=False, cwd=REPO
+    )
     assert out.returncode == 0, out.stderr
     failed = json.loads(out.stdout.strip().splitlines()[-1])
     assert not failed, "documented imports that fail:\n" + "\n".join(failed)
@@ -518,8 +553,12 @@ def test_every_documented_import_works() -> None:
 
 def test_import_check_finds_multiline_imports(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
-    page.write_text("```python\nfrom embodichain_core.plugins import (\n    get_functor, list_plugins,\n)\n"
-                    "import embodichain_core.gym_utils as gu\nfrom other_pkg import x\n```\n"
-                    "from embodichain_core import not_in_a_code_block\n")
-    assert documented_imports(page) == [(2, "from embodichain_core.plugins import ( get_functor, list_plugins, )"),
-                                        (5, "import embodichain_core.gym_utils as gu")]
+    page.write_text(
+        "```python\nfrom embodichain_core.plugins import (\n    get_functor, list_plugins,\n)\n"
+        "import embodichain_core.gym_utils as gu\nfrom other_pkg import x\n```\n"
+        "from embodichain_core import not_in_a_code_block\n"
+    )
+    assert documented_imports(page) == [
+        (2, "from embodichain_core.plugins import ( get_functor, list_plugins, )"),
+        (5, "import embodichain_core.gym_utils as gu"),
+    ]

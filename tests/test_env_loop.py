@@ -26,8 +26,11 @@ def cube_pose(env: Any, obs: dict, entity_cfg: SceneEntityCfg) -> torch.Tensor:
     return env.scene[entity_cfg.uid].get_local_pose()
 
 
-CUBE_OBS = {"cube": ObservationCfg(func=cube_pose, mode="add", name="object/cube_pose",
-                                   params={"entity_cfg": SceneEntityCfg(uid="cube")})}
+CUBE_OBS = {
+    "cube": ObservationCfg(
+        func=cube_pose, mode="add", name="object/cube_pose", params={"entity_cfg": SceneEntityCfg(uid="cube")}
+    )
+}
 
 
 def leaves(obs: Any, prefix: str = "") -> dict[str, torch.Tensor]:
@@ -130,10 +133,18 @@ def jitter_cube(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, xy_range: tu
 
 
 def seeded_cfg(seed: int) -> EmbodiedEnvCfg:
-    return base_cfg(num_envs=3, seed=seed, observations=CUBE_OBS, events={
-        "jitter": EventCfg(func=jitter_cube, mode="reset",
-                           params={"entity_cfg": SceneEntityCfg(uid="cube"), "xy_range": ((-0.1, -0.1), (0.1, 0.1))}),
-    })
+    return base_cfg(
+        num_envs=3,
+        seed=seed,
+        observations=CUBE_OBS,
+        events={
+            "jitter": EventCfg(
+                func=jitter_cube,
+                mode="reset",
+                params={"entity_cfg": SceneEntityCfg(uid="cube"), "xy_range": ((-0.1, -0.1), (0.1, 0.1))},
+            ),
+        },
+    )
 
 
 def rollout(env: Any, steps: int = 20) -> list[dict[str, torch.Tensor]]:
@@ -215,11 +226,21 @@ def test_target_control_frequency(make_env, make_cfg) -> None:
         make_env(make_cfg(target_control_frequency=30))
 
 
-@pytest.mark.parametrize("field,value", [
-    ("physics_dt", 0.0), ("physics_dt", -0.01), ("physics_dt", math.nan), ("physics_dt", math.inf),
-    ("sim_steps_per_control", 0), ("sim_steps_per_control", True), ("sim_steps_per_control", 1.5),
-    ("target_control_frequency", 0.0), ("target_control_frequency", -20.0), ("target_control_frequency", math.inf),
-])
+@pytest.mark.parametrize(
+    "field,value",
+    [
+        ("physics_dt", 0.0),
+        ("physics_dt", -0.01),
+        ("physics_dt", math.nan),
+        ("physics_dt", math.inf),
+        ("sim_steps_per_control", 0),
+        ("sim_steps_per_control", True),
+        ("sim_steps_per_control", 1.5),
+        ("target_control_frequency", 0.0),
+        ("target_control_frequency", -20.0),
+        ("target_control_frequency", math.inf),
+    ],
+)
 def test_invalid_timing_raises(make_env, make_cfg, field: str, value: Any) -> None:
     cfg = make_cfg()
     if field == "physics_dt":
@@ -404,8 +425,10 @@ def test_filter_visual_rand_with_registered_names(make_env) -> None:
 
     with isolated_plugins():
         register_plugin(VisualPlugin(), name="ec-loop-visual")
-        events = {"rand": EventCfg(func="randomize_ec_loop_color", mode="reset"),
-                  "set": EventCfg(func="set_ec_loop_color", mode="reset")}
+        events = {
+            "rand": EventCfg(func="randomize_ec_loop_color", mode="reset"),
+            "set": EventCfg(func="set_ec_loop_color", mode="reset"),
+        }
         assert make_env(events=events).event_manager.active_functors == ["rand", "set"]
         assert make_env(events=events, filter_visual_rand=True).event_manager.active_functors == ["set"]
 

@@ -32,12 +32,23 @@ def cube_pose(env: Any, obs: Any, entity_cfg: SceneEntityCfg) -> torch.Tensor:
 
 def stream_cfg(num_envs: int, seed: int = 11) -> Any:
     params = {"entity_cfg": CUBE, "xy_range": ((-0.1, -0.1), (0.1, 0.1))}
-    return base_cfg(num_envs=num_envs, seed=seed, max_episode_steps=4, events={
-        "jitter": EventCfg(func=jitter_cube, mode="reset", params=params),
-        "nudge": EventCfg(func=jitter_cube, mode="interval", interval_step=3,
-                          params={"entity_cfg": CUBE, "xy_range": ((-0.01, -0.01), (0.01, 0.01))}),
-    }, observations={"cube": ObservationCfg(func=cube_pose, mode="add", name="object/cube_pose",
-                                            params={"entity_cfg": CUBE})})
+    return base_cfg(
+        num_envs=num_envs,
+        seed=seed,
+        max_episode_steps=4,
+        events={
+            "jitter": EventCfg(func=jitter_cube, mode="reset", params=params),
+            "nudge": EventCfg(
+                func=jitter_cube,
+                mode="interval",
+                interval_step=3,
+                params={"entity_cfg": CUBE, "xy_range": ((-0.01, -0.01), (0.01, 0.01))},
+            ),
+        },
+        observations={
+            "cube": ObservationCfg(func=cube_pose, mode="add", name="object/cube_pose", params={"entity_cfg": CUBE})
+        },
+    )
 
 
 def env0_trace(make_env: Any, num_envs: int, diverge_at: int | None = None, steps: int = 14) -> list[torch.Tensor]:
@@ -98,12 +109,15 @@ def test_an_episode_replays_on_another_slot_from_its_seed(make_env) -> None:
     assert torch.equal(obs["object"]["cube_pose"][0], start_of_env2)
 
 
-@pytest.mark.parametrize("seeds, match", [
-    ([1, 2], "2 value"),
-    ([-1], r"ints in \[0, 2\*\*64\)"),
-    (["a"], r"ints in \[0, 2\*\*64\)"),
-    ([2**64], r"ints in \[0, 2\*\*64\)"),
-])
+@pytest.mark.parametrize(
+    "seeds, match",
+    [
+        ([1, 2], "2 value"),
+        ([-1], r"ints in \[0, 2\*\*64\)"),
+        (["a"], r"ints in \[0, 2\*\*64\)"),
+        ([2**64], r"ints in \[0, 2\*\*64\)"),
+    ],
+)
 def test_bad_episode_seeds_option_is_a_clear_error(make_env, seeds: list, match: str) -> None:
     env = make_env(stream_cfg(2))
     with pytest.raises(ValueError, match=match) as err:

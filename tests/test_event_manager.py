@@ -48,8 +48,10 @@ def test_startup_runs_once_with_none(make_env) -> None:
 def test_reset_events_get_only_the_reset_ids(make_env, make_cfg) -> None:
     from core_testlib import FlagEnv
 
-    env = make_env(make_cfg(num_envs=3, events={"r": EventCfg(func=log_event, mode="reset", params={"tag": "reset"})}),
-                   env_cls=FlagEnv)
+    env = make_env(
+        make_cfg(num_envs=3, events={"r": EventCfg(func=log_event, mode="reset", params={"tag": "reset"})}),
+        env_cls=FlagEnv,
+    )
     assert tags(env, "reset") == []  # construction runs startup events only
     env.reset()
     assert tags(env, "reset") == [[0, 1, 2]]
@@ -74,8 +76,10 @@ def test_interval_counters_are_per_env_and_restart_on_partial_reset(make_env) ->
 
 
 def test_interval_counters_restart_on_auto_reset(make_env) -> None:
-    env = make_env(max_episode_steps=4,
-                   events={"tick": EventCfg(func=log_event, mode="interval", interval_step=3, params={"tag": "tick"})})
+    env = make_env(
+        max_episode_steps=4,
+        events={"tick": EventCfg(func=log_event, mode="interval", interval_step=3, params={"tag": "tick"})},
+    )
     env.reset()
     fired = run_steps(env, 12, "tick")
     # step 3 of each 4-step episode: global steps 3, 7, 11 (never 6, 9, 12)
@@ -83,18 +87,23 @@ def test_interval_counters_restart_on_auto_reset(make_env) -> None:
 
 
 def test_global_interval_fires_all_envs_together(make_env) -> None:
-    env = make_env(num_envs=3, events={
-        "glob": EventCfg(func=log_event, mode="interval", interval_step=3, is_global=True, params={"tag": "g"}),
-    })
+    env = make_env(
+        num_envs=3,
+        events={
+            "glob": EventCfg(func=log_event, mode="interval", interval_step=3, is_global=True, params={"tag": "g"}),
+        },
+    )
     env.reset()
     fired = run_steps(env, 10, "g")
     assert fired == {3: [None], 6: [None], 9: [None]}
 
 
 def test_global_interval_ignores_partial_resets(make_env) -> None:
-    env = make_env(events={
-        "glob": EventCfg(func=log_event, mode="interval", interval_step=3, is_global=True, params={"tag": "g"}),
-    })
+    env = make_env(
+        events={
+            "glob": EventCfg(func=log_event, mode="interval", interval_step=3, is_global=True, params={"tag": "g"}),
+        }
+    )
     env.reset()
     fired = run_steps(env, 6, "g", on_step=lambda k: k == 2 and env.reset(options={"reset_ids": [0]}))
     assert sorted(fired) == [3, 6]
@@ -132,9 +141,13 @@ def test_event_moves_only_selected_envs(make_env) -> None:
         pose[:, 2] += dz
         obj.set_local_pose(pose, env_ids)
 
-    env = make_env(num_envs=3, custom_event_modes=["custom"], events={
-        "lift": EventCfg(func=lift, mode="custom", params={"entity_cfg": SceneEntityCfg(uid="cube"), "dz": 0.5}),
-    })
+    env = make_env(
+        num_envs=3,
+        custom_event_modes=["custom"],
+        events={
+            "lift": EventCfg(func=lift, mode="custom", params={"entity_cfg": SceneEntityCfg(uid="cube"), "dz": 0.5}),
+        },
+    )
     env.reset()
     before = env.scene["cube"].get_local_pose().clone()
     env.event_manager.apply("custom", torch.tensor([0, 2]))
@@ -159,9 +172,12 @@ class CountingEvent(Functor):
 
 
 def test_class_event_functor_reset_gets_the_reset_ids(make_env) -> None:
-    env = make_env(num_envs=3, events={
-        "count": EventCfg(func=CountingEvent, mode="interval", interval_step=1, params={"gain": 2.0}),
-    })
+    env = make_env(
+        num_envs=3,
+        events={
+            "count": EventCfg(func=CountingEvent, mode="interval", interval_step=1, params={"gain": 2.0}),
+        },
+    )
     functor = env.event_manager.get_functor("count")
     assert isinstance(functor, CountingEvent)
     assert functor.cfg.params["gain"] == 2.0

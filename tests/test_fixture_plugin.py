@@ -28,16 +28,20 @@ def test_the_fixture_plugin_is_not_installed_for_users(fixture_plugins_site: Pat
     """Without the test's exposure a fresh interpreter knows no fixture plugin."""
     path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != str(fixture_plugins_site)]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}
-    code = ("import importlib.metadata as md, embodichain_core, gymnasium as gym\n"
-            "dists = [d.metadata['Name'] for d in md.distributions()]\n"
-            "print('embodichain-fixture' in dists, 'FixtureReach-v0' in gym.registry)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env,
-                         check=False)
+    code = (
+        "import importlib.metadata as md, embodichain_core, gymnasium as gym\n"
+        "dists = [d.metadata['Name'] for d in md.distributions()]\n"
+        "print('embodichain-fixture' in dists, 'FixtureReach-v0' in gym.registry)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env, check=False
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["False", "False"], (
         "the test-only plugin embodichain-fixture is installed in this environment (an older "
         "scripts/setup_env.sh installed it): run scripts/setup_env.sh again or "
-        "pip uninstall embodichain-fixture")
+        "pip uninstall embodichain-fixture"
+    )
 
 
 def test_task_id_registered_on_import_without_importing_the_task_module():

@@ -59,8 +59,19 @@ SCENE = """
 </mujoco>
 """
 
-DERIVED = ("body_invweight0", "body_subtreemass", "body_sameframe", "dof_M0", "dof_invweight0", "dof_length",
-           "bvh_aabb", "geom_sameframe", "site_sameframe", "actuator_acc0", "tendon_invweight0")
+DERIVED = (
+    "body_invweight0",
+    "body_subtreemass",
+    "body_sameframe",
+    "dof_M0",
+    "dof_invweight0",
+    "dof_length",
+    "bvh_aabb",
+    "geom_sameframe",
+    "site_sameframe",
+    "actuator_acc0",
+    "tendon_invweight0",
+)
 
 
 def _spec(light_mode: str = "fixed", xml: str = SCENE) -> mujoco.MjSpec:
@@ -78,8 +89,14 @@ def _sims(light_mode: str = "fixed", xml: str = SCENE) -> tuple[BatchSim, BatchS
     return fast, full, model
 
 
-def _write(sims: tuple[BatchSim, ...], model: mujoco.MjModel, name: str, env_ids: list[int], rng: np.random.Generator,
-           rotate: bool = True):
+def _write(
+    sims: tuple[BatchSim, ...],
+    model: mujoco.MjModel,
+    name: str,
+    env_ids: list[int],
+    rng: np.random.Generator,
+    rotate: bool = True,
+):
     body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
     mass = rng.uniform(0.1, 3.0, len(env_ids))
     inertia = rng.uniform(1e-4, 1e-2, (len(env_ids), 3))
@@ -184,7 +201,10 @@ def test_a_com_moved_off_a_geom_frame_keeps_the_geom_in_place(monkeypatch):
     for sim in (fast, full):
         same = mujoco.mjtSameFrame
         assert list(np.asarray(sim.model_field("geom_sameframe"))[[0, 1, 3], geom]) == [
-            int(same.mjSAMEFRAME_INERTIA), int(same.mjSAMEFRAME_INERTIAROT), int(same.mjSAMEFRAME_INERTIAROT)]
+            int(same.mjSAMEFRAME_INERTIA),
+            int(same.mjSAMEFRAME_INERTIAROT),
+            int(same.mjSAMEFRAME_INERTIAROT),
+        ]
     geom_xpos = fast.get_data(1).geom_xpos[geom]
     np.testing.assert_allclose(geom_xpos, fast.get_data(0).geom_xpos[geom], atol=1e-12)
 

@@ -62,8 +62,13 @@ def test_missing_param_names_functor_and_param(make_env) -> None:
 
 def test_param_errors_in_other_sections(make_env) -> None:
     with pytest.raises(ConfigError) as err:
-        make_env(observations={"q": ObservationCfg(func=joint_obs, mode="add", name="q",
-                                                   params={"entity_cfg": SceneEntityCfg(uid="arm"), "scale": 2})})
+        make_env(
+            observations={
+                "q": ObservationCfg(
+                    func=joint_obs, mode="add", name="q", params={"entity_cfg": SceneEntityCfg(uid="arm"), "scale": 2}
+                )
+            }
+        )
     assert err.value.path == "env.observations.q.params.scale"
 
     def reward(env: Any, obs: Any, action: Any, info: dict, target: float) -> torch.Tensor:
@@ -128,22 +133,37 @@ def test_missing_or_bad_func(make_env) -> None:
 
 
 def test_module_attr_string_resolves(make_env) -> None:
-    env = make_env(events={"x": EventCfg(func=f"{__name__}:nudge_cube", mode="reset",
-                                         params={"entity_cfg": {"uid": "cube"}, "offset": 0.25})})
+    env = make_env(
+        events={
+            "x": EventCfg(
+                func=f"{__name__}:nudge_cube", mode="reset", params={"entity_cfg": {"uid": "cube"}, "offset": 0.25}
+            )
+        }
+    )
     env.reset()
     assert env.scene["cube"].get_local_pose()[:, 0].tolist() == pytest.approx([0.75, 0.75])
 
 
 # -- ranges -------------------------------------------------------------------------------------------------
 def test_inverted_range_is_rejected(make_env) -> None:
-    bad = {"s": EventCfg(func=sample_pose, mode="reset",
-                         params={"entity_cfg": CUBE, "position_range": [[-0.1, 0.2, 0.0], [0.1, 0.1, 0.0]]})}
+    bad = {
+        "s": EventCfg(
+            func=sample_pose,
+            mode="reset",
+            params={"entity_cfg": CUBE, "position_range": [[-0.1, 0.2, 0.0], [0.1, 0.1, 0.0]]},
+        )
+    }
     with pytest.raises(ConfigError) as err:
         make_env(events=bad)
     assert err.value.path == "env.events.s.params.position_range"
     assert "sample_pose" in err.value.reason
-    ok = {"s": EventCfg(func=sample_pose, mode="reset",
-                        params={"entity_cfg": CUBE, "position_range": [[-0.1, 0.1, 0.0], [0.1, 0.2, 0.0]]})}
+    ok = {
+        "s": EventCfg(
+            func=sample_pose,
+            mode="reset",
+            params={"entity_cfg": CUBE, "position_range": [[-0.1, 0.1, 0.0], [0.1, 0.2, 0.0]]},
+        )
+    }
     make_env(events=ok)
 
 
@@ -161,8 +181,15 @@ def test_entity_dict_and_nested_entities_are_resolved(make_env) -> None:
         env.__dict__["targets"] = targets
 
     with pytest.raises(ConfigError) as err:
-        make_env(events={"p": EventCfg(func=pair, mode="reset",
-                                       params={"targets": [SceneEntityCfg(uid="cube"), SceneEntityCfg(uid="tabel")]})})
+        make_env(
+            events={
+                "p": EventCfg(
+                    func=pair,
+                    mode="reset",
+                    params={"targets": [SceneEntityCfg(uid="cube"), SceneEntityCfg(uid="tabel")]},
+                )
+            }
+        )
     assert err.value.path == "env.events.p.params.targets[1].uid"
     assert "'table'" in err.value.reason
     env = make_env(events=nudge(entity_cfg={"uid": "cube"}, offset=0.1))
@@ -172,10 +199,23 @@ def test_entity_dict_and_nested_entities_are_resolved(make_env) -> None:
 
 
 def test_joint_names_resolve_to_ids(make_env) -> None:
-    env = make_env(events={"r": EventCfg(func=record_joints, mode="reset",
-                                         params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names=["joint[2-4]"])})},
-                   observations={"q": ObservationCfg(func=joint_obs, mode="add", name="fingers", params={
-                       "entity_cfg": SceneEntityCfg(uid="arm", joint_names="finger_.*")})})
+    env = make_env(
+        events={
+            "r": EventCfg(
+                func=record_joints,
+                mode="reset",
+                params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names=["joint[2-4]"])},
+            )
+        },
+        observations={
+            "q": ObservationCfg(
+                func=joint_obs,
+                mode="add",
+                name="fingers",
+                params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names="finger_.*")},
+            )
+        },
+    )
     env.reset()
     assert env.seen_joint_ids == [1, 2, 3]
     assert env.observation_manager.get_functor_cfg("q").params["entity_cfg"].joint_ids == [7, 8]
@@ -188,22 +228,43 @@ def test_joint_names_resolve_to_ids(make_env) -> None:
 
 def test_joint_names_that_match_nothing(make_env) -> None:
     with pytest.raises(ConfigError) as err:
-        make_env(events={"r": EventCfg(func=record_joints, mode="reset",
-                                       params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names=["elbow_.*"])})})
+        make_env(
+            events={
+                "r": EventCfg(
+                    func=record_joints,
+                    mode="reset",
+                    params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names=["elbow_.*"])},
+                )
+            }
+        )
     assert err.value.path == "env.events.r.params.entity_cfg.joint_names"
     assert "elbow_" in err.value.reason
 
 
 def test_joint_names_and_ids_must_agree(make_env) -> None:
     with pytest.raises(ConfigError, match="disagrees"):
-        make_env(events={"r": EventCfg(func=record_joints, mode="reset", params={
-            "entity_cfg": SceneEntityCfg(uid="arm", joint_names=["joint1"], joint_ids=[3])})})
+        make_env(
+            events={
+                "r": EventCfg(
+                    func=record_joints,
+                    mode="reset",
+                    params={"entity_cfg": SceneEntityCfg(uid="arm", joint_names=["joint1"], joint_ids=[3])},
+                )
+            }
+        )
 
 
 def test_joint_names_on_an_entity_without_joints(make_env) -> None:
     with pytest.raises(ConfigError, match=r"env\.events\.r\.params\.entity_cfg.*no joints"):
-        make_env(events={"r": EventCfg(func=record_joints, mode="reset",
-                                       params={"entity_cfg": SceneEntityCfg(uid="point", joint_names=["x"])})})
+        make_env(
+            events={
+                "r": EventCfg(
+                    func=record_joints,
+                    mode="reset",
+                    params={"entity_cfg": SceneEntityCfg(uid="point", joint_names=["x"])},
+                )
+            }
+        )
 
 
 # -- registered functors ----------------------------------------------------------------------------------------
@@ -227,8 +288,13 @@ def test_registered_functor_name_resolves_and_unknown_suggests() -> None:
 
     with isolated_plugins():
         register_plugin(LiftPlugin(), name="ec-test-lift")
-        cfg = base_cfg(events={"lift": EventCfg(func="ec_test_lift_cube", mode="reset",
-                                                params={"entity_cfg": {"uid": "cube"}, "dz": 0.5})})
+        cfg = base_cfg(
+            events={
+                "lift": EventCfg(
+                    func="ec_test_lift_cube", mode="reset", params={"entity_cfg": {"uid": "cube"}, "dz": 0.5}
+                )
+            }
+        )
         env = EmbodiedEnv(cfg)
         env.reset()
         assert env.scene["cube"].get_local_pose()[:, 2].tolist() == pytest.approx([0.55, 0.55])

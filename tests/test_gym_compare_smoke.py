@@ -19,8 +19,13 @@ CONTENDERS = ("ours", "raw", "sync", "async")
 @pytest.mark.timeout(300)
 def test_quick_run_writes_json(tmp_path):
     out = tmp_path / "gym_compare.json"
-    proc = subprocess.run([sys.executable, SCRIPT, "--quick", "--async-max", "1", "--out", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=280)
+    proc = subprocess.run(
+        [sys.executable, SCRIPT, "--quick", "--async-max", "1", "--out", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=280,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "| num_envs |" in proc.stdout
     assert "ours / Sync" in proc.stdout
@@ -50,8 +55,13 @@ def test_quick_run_writes_json(tmp_path):
 @pytest.mark.timeout(300)
 def test_cpu_clock_leaves_out_the_async_contender(tmp_path):
     out = tmp_path / "gym_compare_cpu.json"
-    proc = subprocess.run([sys.executable, SCRIPT, "--quick", "--num-envs", "1", "--clock", "cpu", "--out", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=280)
+    proc = subprocess.run(
+        [sys.executable, SCRIPT, "--quick", "--num-envs", "1", "--clock", "cpu", "--out", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=280,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     data = json.loads(out.read_text())
     assert data["settings"]["clock"] == "cpu"
@@ -72,8 +82,12 @@ def test_the_gym_env_runs_the_env_model(tmp_path):
         gym_env = gym_compare.gym_factory(ours, str(tmp_path))()
         inner = gym_env.unwrapped
         model = ours.scene.model
-        assert (inner.model.nq, inner.model.nv, inner.model.nu, inner.model.ngeom) == \
-            (model.nq, model.nv, model.nu, model.ngeom)
+        assert (inner.model.nq, inner.model.nv, inner.model.nu, inner.model.ngeom) == (
+            model.nq,
+            model.nv,
+            model.nu,
+            model.ngeom,
+        )
         assert inner.frame_skip == ours.sim_steps_per_control * ours.sim.substeps == 20
         gym_env.reset(seed=0)
         action = gym_env.action_space.sample()

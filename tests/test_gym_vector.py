@@ -16,11 +16,14 @@ pytestmark = pytest.mark.usefixtures("fixture_plugins")
 TASK = "FixtureReach-v0"  # 3 actions, 15-step episodes (tests/fixture_plugins)
 
 
-@pytest.mark.parametrize("mode, vector_kwargs, wrappers", [
-    ("sync", {}, []), ("async", {"context": "spawn"}, []), ("sync", {}, [UnbatchedEnv])])
+@pytest.mark.parametrize(
+    "mode, vector_kwargs, wrappers",
+    [("sync", {}, []), ("async", {"context": "spawn"}, []), ("sync", {}, [UnbatchedEnv])],
+)
 def test_gymnasium_vector_envs_over_unbatched_envs(mode: str, vector_kwargs: dict, wrappers: list) -> None:
-    venv = gym.make_vec(TASK, num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs,
-                        wrappers=wrappers, verbose=False)
+    venv = gym.make_vec(
+        TASK, num_envs=2, vectorization_mode=mode, vector_kwargs=vector_kwargs, wrappers=wrappers, verbose=False
+    )
     try:
         assert venv.single_observation_space["object"]["cube_pos"].shape == (3,)
         assert venv.single_action_space.shape == (3,)

@@ -17,9 +17,16 @@ def _write(tmp_path, name, mesh):
 def test_envs_run_different_meshes_and_collide_with_their_own(tmp_path):
     small = _write(tmp_path, "small.obj", trimesh.creation.box((0.04, 0.04, 0.04)))
     tall = _write(tmp_path, "tall.obj", trimesh.creation.box((0.04, 0.04, 0.20)))
-    two = _write(tmp_path, "two.obj", trimesh.util.concatenate([
-        trimesh.creation.box((0.04, 0.04, 0.04)),
-        trimesh.creation.box((0.04, 0.04, 0.04)).apply_translation((0.1, 0, 0))]))
+    two = _write(
+        tmp_path,
+        "two.obj",
+        trimesh.util.concatenate(
+            [
+                trimesh.creation.box((0.04, 0.04, 0.04)),
+                trimesh.creation.box((0.04, 0.04, 0.04)).apply_translation((0.1, 0, 0)),
+            ]
+        ),
+    )
     scene = Scene(SimulationManagerCfg(), num_envs=3)
     scene.add_rigid_object(RigidObjectCfg(uid="obj", shape=MeshCfg(fpath=small), init_pos=(0, 0, 0.3)))
     scene.reserve_mesh_variants("obj", [small, tall, two])

@@ -37,11 +37,14 @@ def scale(env: Any, data: torch.Tensor, factor: float) -> torch.Tensor:
 
 
 def test_add_nested_name_creates_levels_and_space(make_env) -> None:
-    env = make_env(observations={
-        "cube": ObservationCfg(func=cube_pos, mode="add", name="object/cube/pos",
-                               params={"entity_cfg": SceneEntityCfg(uid="cube")}),
-        "idx": ObservationCfg(func=env_index, mode="add", name="robot/index"),
-    })
+    env = make_env(
+        observations={
+            "cube": ObservationCfg(
+                func=cube_pos, mode="add", name="object/cube/pos", params={"entity_cfg": SceneEntityCfg(uid="cube")}
+            ),
+            "idx": ObservationCfg(func=env_index, mode="add", name="robot/index"),
+        }
+    )
     obs, _ = env.reset()
     assert torch.allclose(obs["object"]["cube"]["pos"], torch.tensor([CUBE_INIT] * 2))
     assert set(obs["robot"]) == {"qpos", "qvel", "qf", "index"}
@@ -65,11 +68,13 @@ def test_modify_keeps_returned_tensor(make_env) -> None:
 
 
 def test_modify_in_place_and_declaration_order(make_env) -> None:
-    env = make_env(observations={
-        "idx": ObservationCfg(func=env_index, mode="add", name="extra/idx"),
-        "fill": ObservationCfg(func=fill_in_place, mode="modify", name="robot/qvel", params={"value": 3.0}),
-        "scale_idx": ObservationCfg(func=scale, mode="modify", name="extra/idx", params={"factor": 4.0}),
-    })
+    env = make_env(
+        observations={
+            "idx": ObservationCfg(func=env_index, mode="add", name="extra/idx"),
+            "fill": ObservationCfg(func=fill_in_place, mode="modify", name="robot/qvel", params={"value": 3.0}),
+            "scale_idx": ObservationCfg(func=scale, mode="modify", name="extra/idx", params={"factor": 4.0}),
+        }
+    )
     obs, _ = env.reset()
     assert torch.all(obs["robot"]["qvel"] == 3.0)
     assert obs["extra"]["idx"][:, 0].tolist() == [0.0, 4.0]  # modify ran after the add it reads
@@ -109,11 +114,14 @@ class TaskRewardEnv(EmbodiedEnv):
 
 
 def test_add_terms_are_weighted_and_info_is_unweighted(make_env) -> None:
-    env = make_env(num_envs=3, rewards={
-        "c": RewardCfg(func=const, weight=0.5, params={"value": 2.0}),
-        "i": RewardCfg(func=by_index, weight=-3.0),
-        "s": RewardCfg(func=scalar, weight=4.0),
-    })
+    env = make_env(
+        num_envs=3,
+        rewards={
+            "c": RewardCfg(func=const, weight=0.5, params={"value": 2.0}),
+            "i": RewardCfg(func=by_index, weight=-3.0),
+            "s": RewardCfg(func=scalar, weight=4.0),
+        },
+    )
     env.reset()
     _, reward, _, _, info = env.step(zero_action(env))
     assert reward.shape == (3,)
@@ -126,19 +134,25 @@ def test_add_terms_are_weighted_and_info_is_unweighted(make_env) -> None:
 
 
 def test_task_reward_plus_terms(make_env, make_cfg) -> None:
-    env = make_env(make_cfg(rewards={"c": RewardCfg(func=const, weight=2.0, params={"value": 1.5})}),
-                   env_cls=TaskRewardEnv)
+    env = make_env(
+        make_cfg(rewards={"c": RewardCfg(func=const, weight=2.0, params={"value": 1.5})}), env_cls=TaskRewardEnv
+    )
     env.reset()
     _, reward, *_ = env.step(zero_action(env))
     assert torch.allclose(reward, torch.full((2,), 103.0))
 
 
 def test_replace_overrides_task_reward_and_earlier_terms(make_env, make_cfg) -> None:
-    env = make_env(make_cfg(rewards={
-        "before": RewardCfg(func=const, weight=1.0, params={"value": 1.0}),
-        "over": RewardCfg(func=const, mode="replace", weight=2.0, params={"value": 3.0}),
-        "after": RewardCfg(func=const, weight=2.0, params={"value": 0.5}),
-    }), env_cls=TaskRewardEnv)
+    env = make_env(
+        make_cfg(
+            rewards={
+                "before": RewardCfg(func=const, weight=1.0, params={"value": 1.0}),
+                "over": RewardCfg(func=const, mode="replace", weight=2.0, params={"value": 3.0}),
+                "after": RewardCfg(func=const, weight=2.0, params={"value": 0.5}),
+            }
+        ),
+        env_cls=TaskRewardEnv,
+    )
     env.reset()
     _, reward, _, _, info = env.step(zero_action(env))
     assert torch.allclose(reward, torch.full((2,), 2.0 * 3.0 + 2.0 * 0.5))
@@ -198,9 +212,11 @@ class ProgressReward(Functor):
 
 
 def test_class_functors_reset_with_reset_ids(make_env) -> None:
-    env = make_env(num_envs=3,
-                   observations={"cached": ObservationCfg(func=CachedObs, mode="add", name="cached")},
-                   rewards={"progress": RewardCfg(func=ProgressReward)})
+    env = make_env(
+        num_envs=3,
+        observations={"cached": ObservationCfg(func=CachedObs, mode="add", name="cached")},
+        rewards={"progress": RewardCfg(func=ProgressReward)},
+    )
     obs_functor = env.observation_manager.get_functor("cached")
     rew_functor = env.reward_manager.get_functor("progress")
     env.reset()

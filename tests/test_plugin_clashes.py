@@ -136,8 +136,10 @@ def write_dist(root: Path, dist: str, module: str, source: str, entry_point: str
 @pytest.fixture
 def dist_roots(tmp_path: Path) -> dict[str, Path]:
     """One folder per fixture distribution (not yet on sys.path)."""
-    return {name: write_dist(tmp_path / name, f"ecclash-{name}", f"ecclash_{name}",
-                             PLUGIN_SOURCE.replace("@NAME@", name)) for name in DISTS}
+    return {
+        name: write_dist(tmp_path / name, f"ecclash-{name}", f"ecclash_{name}", PLUGIN_SOURCE.replace("@NAME@", name))
+        for name in DISTS
+    }
 
 
 @pytest.fixture(autouse=True)
@@ -154,8 +156,9 @@ def only_fixture_entry_points(monkeypatch: pytest.MonkeyPatch) -> None:
     """Real ``importlib.metadata`` discovery, restricted to the fixture distributions
     (core tests use no installed plugin)."""
     real = manager._iter_entry_points
-    monkeypatch.setattr(manager, "_iter_entry_points",
-                        lambda: [ep for ep in real() if ep.dist.name.startswith("ecclash")])
+    monkeypatch.setattr(
+        manager, "_iter_entry_points", lambda: [ep for ep in real() if ep.dist.name.startswith("ecclash")]
+    )
 
 
 def install(monkeypatch: pytest.MonkeyPatch, roots: dict[str, Path], order: tuple[str, ...]) -> list[str]:
@@ -176,7 +179,10 @@ def test_both_plugins_load_and_qualified_names_resolve(
         warnings.simplefilter("error")  # a clash is neither a load failure nor a warning
         with isolated_plugins(load_entry_points=True) as pm:
             assert {i.name: i.status for i in list_plugins()} == {
-                "embodichain-core": "loaded", "ecclash-alpha": "loaded", "ecclash-beta": "loaded"}
+                "embodichain-core": "loaded",
+                "ecclash-alpha": "loaded",
+                "ecclash-beta": "loaded",
+            }
             alpha, beta = sys.modules["ecclash_alpha"], sys.modules["ecclash_beta"]
             functors = pm.registry("functors")
             assert functors.get("ecclash-alpha:shared_event") is alpha.shared_event
@@ -205,13 +211,19 @@ def test_ambiguous_bare_names_raise_one_error_naming_both(
         assert str(info.value) == (
             "functor 'shared_event' is ambiguous: it is provided by 'ecclash-alpha' and 'ecclash-beta'. "
             "Use a qualified name: 'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event'; or prefer "
-            "one provider with EMBODICHAIN_PLUGIN_PRIORITY=ecclash-alpha,ecclash-beta (first listed wins).")
-        with pytest.raises(ConfigError, match=r"env\.events\.e\.func.*'shared_event' is ambiguous.*"
-                                              r"'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event'"):
+            "one provider with EMBODICHAIN_PLUGIN_PRIORITY=ecclash-alpha,ecclash-beta (first listed wins)."
+        )
+        with pytest.raises(
+            ConfigError,
+            match=r"env\.events\.e\.func.*'shared_event' is ambiguous.*"
+            r"'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event'",
+        ):
             resolve_func("shared_event", "event", "env.events.e")
         with pytest.raises(AmbiguousNameError, match="'ecclash-alpha/ClashTask-v0' or 'ecclash-beta/ClashTask-v0'"):
             gym.make("ClashTask-v0")
-        with pytest.raises(ConfigError, match=r"robot\.class_type.*'ecclash-alpha:ClashArm' or 'ecclash-beta:ClashArm'"):
+        with pytest.raises(
+            ConfigError, match=r"robot\.class_type.*'ecclash-alpha:ClashArm' or 'ecclash-beta:ClashArm'"
+        ):
             RobotCfg.from_dict({"class_type": "ClashArm"}, "robot")
         with pytest.raises(ConfigError, match=r"sensor\.sensor_type.*ClashCam' is ambiguous"):
             SensorCfg.from_dict({"sensor_type": "ClashCam", "uid": "cam"}, "sensor")
@@ -231,8 +243,10 @@ def test_configs_resolve_qualified_names(
         beta = sys.modules["ecclash_beta"]
         assert resolve_func("ecclash-beta:shared_event", "event", "env.events.e") is beta.shared_event
         assert resolve_func("json:dumps", "event", "env.events.e") is json.dumps  # still an import path
-        with pytest.raises(ConfigError, match="'ecclash-beta' provides no functor 'shared_evnt'. "
-                                              "Did you mean 'ecclash-beta:shared_event'"):
+        with pytest.raises(
+            ConfigError,
+            match="'ecclash-beta' provides no functor 'shared_evnt'. Did you mean 'ecclash-beta:shared_event'",
+        ):
             resolve_func("ecclash-beta:shared_evnt", "event", "env.events.e")
         with pytest.raises(ConfigError, match="Did you mean 'ecclash-beta'"):
             resolve_func("ecclash-betta:shared_event", "event", "env.events.e")
@@ -280,9 +294,15 @@ def test_outcome_is_the_same_in_both_orders(
                 outcomes.append(_outcome())
     assert outcomes[0] == outcomes[1]
     assert "is ambiguous" in outcomes[0]["functors:shared_event"] or priority
-    assert outcomes[0]["gym"] == ["ClashTask-v0", "alphaOnly-v0", "betaOnly-v0", "ecclash-alpha/ClashTask-v0",
-                                  "ecclash-alpha/alphaOnly-v0", "ecclash-beta/ClashTask-v0",
-                                  "ecclash-beta/betaOnly-v0"]
+    assert outcomes[0]["gym"] == [
+        "ClashTask-v0",
+        "alphaOnly-v0",
+        "betaOnly-v0",
+        "ecclash-alpha/ClashTask-v0",
+        "ecclash-alpha/alphaOnly-v0",
+        "ecclash-beta/ClashTask-v0",
+        "ecclash-beta/betaOnly-v0",
+    ]
 
 
 @pytest.mark.parametrize("order", ORDERS, ids=["alpha-first", "beta-first"])
@@ -338,8 +358,9 @@ def test_register_env_never_replaces_a_plugin_id(monkeypatch: pytest.MonkeyPatch
         assert gym.registry["ClashTask-v0"] is spec
 
 
-def test_command_clash(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path],
-                       capsys: pytest.CaptureFixture[str]) -> None:
+def test_command_clash(
+    monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
     from embodichain_core.cli.main import main
 
     install(monkeypatch, dist_roots, DISTS[::-1])
@@ -362,16 +383,24 @@ def test_command_clash(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Pa
         assert "ambiguous: provided by ecclash-alpha, ecclash-beta" in help_text
 
 
-def test_entry_point_name_declared_by_two_distributions(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                                        dist_roots: dict[str, Path]) -> None:
-    squatter = write_dist(tmp_path / "squatter", "ecclash-squatter", "ecclash_squatter",
-                          PLUGIN_SOURCE.replace("@NAME@", "squatter"), entry_point="ecclash-alpha")
+def test_entry_point_name_declared_by_two_distributions(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path]
+) -> None:
+    squatter = write_dist(
+        tmp_path / "squatter",
+        "ecclash-squatter",
+        "ecclash_squatter",
+        PLUGIN_SOURCE.replace("@NAME@", "squatter"),
+        entry_point="ecclash-alpha",
+    )
     monkeypatch.syspath_prepend(str(squatter))
     install(monkeypatch, dist_roots, DISTS)
     names = [ep.name for ep in manager._iter_entry_points()]
     assert names.count("ecclash-alpha") == 2  # pluggy would have kept only one of them
-    with pytest.warns(NameClashWarning, match="entry point 'ecclash-alpha' is declared by 2 distributions: "
-                                              "'ecclash-alpha' and 'ecclash-squatter'"):
+    with pytest.warns(
+        NameClashWarning,
+        match="entry point 'ecclash-alpha' is declared by 2 distributions: 'ecclash-alpha' and 'ecclash-squatter'",
+    ):
         with isolated_plugins(load_entry_points=True) as pm:
             infos = {i.name: i for i in list_plugins()}
             assert infos["ecclash-squatter"].status == infos["ecclash-alpha"].status == "loaded"
@@ -379,11 +408,15 @@ def test_entry_point_name_declared_by_two_distributions(tmp_path: Path, monkeypa
             assert pm.entry_point_clashes == {"ecclash-alpha": ["ecclash-alpha", "ecclash-squatter"]}
             assert pm.registry("functors").get("squatter_only").__module__ == "ecclash_squatter"
             assert pm.registry("functors").providers_of("shared_event") == [
-                "ecclash-alpha", "ecclash-beta", "ecclash-squatter"]
+                "ecclash-alpha",
+                "ecclash-beta",
+                "ecclash-squatter",
+            ]
 
 
-def test_list_shows_clashes_and_providers(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path],
-                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_list_shows_clashes_and_providers(
+    monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
     from embodichain_core.cli.main import main
 
     install(monkeypatch, dist_roots, DISTS)
@@ -391,24 +424,31 @@ def test_list_shows_clashes_and_providers(monkeypatch: pytest.MonkeyPatch, dist_
         assert main(["list", "plugins"]) == 0
         out = capsys.readouterr().out
         assert "name clashes (both plugins stay loaded; use the qualified names):" in out
-        assert ("  functor 'shared_event' is provided by 'ecclash-alpha' and 'ecclash-beta' "
-                "(use 'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event')") in out
-        assert "task 'ClashTask-v0' is provided by 'ecclash-alpha' and 'ecclash-beta' " \
-               "(use 'ecclash-alpha/ClashTask-v0' or 'ecclash-beta/ClashTask-v0')" in out
+        assert (
+            "  functor 'shared_event' is provided by 'ecclash-alpha' and 'ecclash-beta' "
+            "(use 'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event')"
+        ) in out
+        assert (
+            "task 'ClashTask-v0' is provided by 'ecclash-alpha' and 'ecclash-beta' "
+            "(use 'ecclash-alpha/ClashTask-v0' or 'ecclash-beta/ClashTask-v0')" in out
+        )
         row = next(line for line in out.splitlines() if line.startswith("ecclash-alpha "))
         assert row.split()[-1] == "6"  # one clash per kind
         assert main(["list", "plugins", "--json"]) == 0
         plugins = {r["name"]: r for r in json.loads(capsys.readouterr().out)}
-        assert {"kind": "robots", "name": "ClashArm", "providers": ["ecclash-alpha", "ecclash-beta"],
-                "qualified": ["ecclash-alpha:ClashArm", "ecclash-beta:ClashArm"]} in plugins["ecclash-beta"]["clashes"]
+        assert {
+            "kind": "robots",
+            "name": "ClashArm",
+            "providers": ["ecclash-alpha", "ecclash-beta"],
+            "qualified": ["ecclash-alpha:ClashArm", "ecclash-beta:ClashArm"],
+        } in plugins["ecclash-beta"]["clashes"]
         assert plugins["embodichain-core"]["clashes"] == []
         assert main(["list", "functors"]) == 0
         lines = capsys.readouterr().out.splitlines()
         assert lines[0].split()[:4] == ["NAME", "KIND", "CATEGORY", "PROVIDER"]
         rows = [line.split() for line in lines if line.startswith("shared_event")]
         assert [r[:2] for r in rows] == [["shared_event", "*"]] * 2
-        assert [r[4] for r in rows] == [
-            "ecclash-alpha", "ecclash-beta"]
+        assert [r[4] for r in rows] == ["ecclash-alpha", "ecclash-beta"]
         assert next(line for line in lines if line.startswith("beta_only")).split()[3] == "ecclash-beta"
         assert "  ecclash-beta:shared_event  (ecclash-beta)" in lines
         assert main(["list", "tasks", "--json"]) == 0
@@ -418,8 +458,9 @@ def test_list_shows_clashes_and_providers(monkeypatch: pytest.MonkeyPatch, dist_
         assert not tasks[("alphaOnly-v0", "ecclash-alpha")]["ambiguous"]
 
 
-def test_check_name_clashes_reports_installed_plugins(monkeypatch: pytest.MonkeyPatch,
-                                                      dist_roots: dict[str, Path]) -> None:
+def test_check_name_clashes_reports_installed_plugins(
+    monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path]
+) -> None:
     from embodichain_core.plugins import hookimpl
     from embodichain_core.testing import NameClashError, check_name_clashes
 
@@ -428,8 +469,9 @@ def test_check_name_clashes_reports_installed_plugins(monkeypatch: pytest.Monkey
     with pytest.raises(NameClashError) as info:  # its own installed copy is not a clash
         check_name_clashes(alpha)
     kinds = sorted((c.kind, c.providers) for c in info.value.clashes)
-    assert kinds == sorted((k, ("ecclash-alpha", "ecclash-beta"))
-                           for k in ("assets", "commands", "functors", "robots", "sensors", "tasks"))
+    assert kinds == sorted(
+        (k, ("ecclash-alpha", "ecclash-beta")) for k in ("assets", "commands", "functors", "robots", "sensors", "tasks")
+    )
     assert "functor 'shared_event' is provided by 'ecclash-alpha' and 'ecclash-beta'" in str(info.value)
 
     class Unique:
@@ -440,6 +482,7 @@ def test_check_name_clashes_reports_installed_plugins(monkeypatch: pytest.Monkey
 
     clashes = check_name_clashes(Unique(), name="my-plugin", raise_on_clash=False)
     assert [(c.name, c.providers, c.qualified) for c in clashes] == [
-        ("alpha_only", ("ecclash-alpha", "my-plugin"), ("ecclash-alpha:alpha_only", "my-plugin:alpha_only"))]
+        ("alpha_only", ("ecclash-alpha", "my-plugin"), ("ecclash-alpha:alpha_only", "my-plugin:alpha_only"))
+    ]
     assert check_name_clashes(Unique(), name="my-plugin", ignore=["alpha_only"]) == []
     assert "my-plugin:alpha_only" not in get_registry("functors")  # the global state is untouched

@@ -128,7 +128,7 @@ def test_failing_plugin_reported_others_load(monkeypatch: pytest.MonkeyPatch) ->
     with pytest.warns(PluginLoadWarning, match="'bad-plugin'") as record:
         with _load_with(monkeypatch, bad, good) as pm:
             assert pm.registry("functors").names() == ["joint_pos", "randomize_light"]
-            (name, tb), = failed_plugins()
+            ((name, tb),) = failed_plugins()
             infos = {i.name: i for i in list_plugins()}
     assert name == "bad-plugin"
     assert "Traceback" in tb
@@ -159,7 +159,10 @@ def test_clash_across_plugins_keeps_both(monkeypatch: pytest.MonkeyPatch, revers
         with _load_with(monkeypatch, *(eps[::-1] if reverse else eps)) as pm:
             functors = pm.registry("functors")
             assert {i.name: i.status for i in list_plugins()} == {
-                CORE_PLUGIN_NAME: "loaded", "plugin-a": "loaded", "plugin-b": "loaded"}
+                CORE_PLUGIN_NAME: "loaded",
+                "plugin-a": "loaded",
+                "plugin-b": "loaded",
+            }
             assert functors.get("plugin-a:randomize_light") is json.dumps
             assert functors.get("plugin-b:randomize_light") is json.loads
             assert functors.get("reach_reward") is json.dumps
@@ -168,7 +171,8 @@ def test_clash_across_plugins_keeps_both(monkeypatch: pytest.MonkeyPatch, revers
                 functors.get("randomize_light")
             assert [str(c) for c in pm.name_clashes()] == [
                 "functor 'randomize_light' is provided by 'plugin-a' and 'plugin-b' "
-                "(use 'plugin-a:randomize_light' or 'plugin-b:randomize_light')"]
+                "(use 'plugin-a:randomize_light' or 'plugin-b:randomize_light')"
+            ]
             assert not is_visual_randomization("randomize_light")  # ambiguous: decided at resolution
 
 
@@ -176,14 +180,19 @@ def test_plugins_are_named_after_their_distribution_and_load_sorted(monkeypatch:
     def dist(name: str) -> Any:
         return types.SimpleNamespace(name=name, version="2.0")
 
-    eps = [FakeEntryPoint("zeta", FunctorPlugin, dist=dist("Zeta_Plugin")),
-           FakeEntryPoint("alpha-main", OtherFunctorPlugin, dist=dist("Alpha.Plugin")),
-           FakeEntryPoint("alpha-plugin", TaskPlugin, dist=dist("Alpha.Plugin"))]
+    eps = [
+        FakeEntryPoint("zeta", FunctorPlugin, dist=dist("Zeta_Plugin")),
+        FakeEntryPoint("alpha-main", OtherFunctorPlugin, dist=dist("Alpha.Plugin")),
+        FakeEntryPoint("alpha-plugin", TaskPlugin, dist=dist("Alpha.Plugin")),
+    ]
     with _load_with(monkeypatch, *eps) as pm:
         infos = list_plugins()
         assert [(i.name, i.entry_point) for i in infos] == [
-            (CORE_PLUGIN_NAME, ""), ("alpha-plugin", "alpha-plugin"), ("alpha-plugin.alpha-main", "alpha-main"),
-            ("zeta-plugin", "zeta")]
+            (CORE_PLUGIN_NAME, ""),
+            ("alpha-plugin", "alpha-plugin"),
+            ("alpha-plugin.alpha-main", "alpha-main"),
+            ("zeta-plugin", "zeta"),
+        ]
         assert pm.registry("functors").get("zeta-plugin:joint_pos") is json.loads
         assert "alpha-plugin/EcTestTask-v0" in pm.registry("tasks")
 
@@ -320,8 +329,11 @@ def test_gym_id_from_outside_the_plugins_is_left_alone(plugin_manager: Any) -> N
             def embodichain_register_tasks(self, register: Any) -> None:
                 register("EcTestTask-v0", "other_pkg:OtherEnv")
 
-        with pytest.warns(NameClashWarning, match="'EcTestTask-v0' is already registered outside(.|\n)*"
-                                                  "'ec_test_tasks:TestEnv'(.|\n)*'clash/EcTestTask-v0'"):
+        with pytest.warns(
+            NameClashWarning,
+            match="'EcTestTask-v0' is already registered outside(.|\n)*"
+            "'ec_test_tasks:TestEnv'(.|\n)*'clash/EcTestTask-v0'",
+        ):
             register_plugin(Clash(), name="clash")  # the plugin still loads, under its namespace
         assert gymnasium.registry["EcTestTask-v0"].entry_point == "ec_test_tasks:TestEnv"
         assert gymnasium.registry["clash/EcTestTask-v0"].entry_point == "other_pkg:OtherEnv"

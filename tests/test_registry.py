@@ -72,7 +72,8 @@ def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pyte
     assert str(info.value) == (
         "functor 'randomize_light' is ambiguous: it is provided by 'plugin-a' and 'plugin-b'. Use a "
         "qualified name: 'plugin-a:randomize_light' or 'plugin-b:randomize_light'; or prefer one provider "
-        "with EMBODICHAIN_PLUGIN_PRIORITY=plugin-a,plugin-b (first listed wins).")
+        "with EMBODICHAIN_PLUGIN_PRIORITY=plugin-a,plugin-b (first listed wins)."
+    )
     assert info.value.providers == ["plugin-a", "plugin-b"]
     assert not isinstance(info.value, KeyError)
     monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated, plugin-b,plugin-a")
@@ -96,8 +97,10 @@ def test_same_provider_twice_with_another_target_is_an_error() -> None:
 def test_qualified_lookups_of_unknown_names_suggest() -> None:
     reg = Registry("functors")
     reg.add("randomize_light", "json:dumps", provider="plugin-a")
-    with pytest.raises(UnknownNameError, match="'plugin-a' provides no functor 'randomize_ligth'. "
-                                               "Did you mean 'plugin-a:randomize_light'"):
+    with pytest.raises(
+        UnknownNameError,
+        match="'plugin-a' provides no functor 'randomize_ligth'. Did you mean 'plugin-a:randomize_light'",
+    ):
         reg.get("plugin-a:randomize_ligth")
     with pytest.raises(UnknownNameError, match="no plugin named 'plugin-b' provides functors. Did you mean 'plugin-a'"):
         reg.get("plugin-b:randomize_light")

@@ -99,8 +99,13 @@ def test_model_actuators_are_replaced_with_a_notice(tmp_path: Path) -> None:
 
 
 def test_kept_servos_are_the_joints_drives(tmp_path: Path) -> None:
-    section = {"uid": "servo", "fpath": str(write_mjcf_arm(tmp_path)), "init_qpos": [0.3, 0.5, -0.4],
-               "keep_actuators": True, "drive_pros": {"stiffness": 300.0, "damping": 30.0, "armature": 0.01}}
+    section = {
+        "uid": "servo",
+        "fpath": str(write_mjcf_arm(tmp_path)),
+        "init_qpos": [0.3, 0.5, -0.4],
+        "keep_actuators": True,
+        "drive_pros": {"stiffness": 300.0, "damping": 30.0, "armature": 0.01},
+    }
     scene, notices = build(section)
     robot = scene["servo"]
     assert notices == []
@@ -121,9 +126,11 @@ def test_kept_servos_are_the_joints_drives(tmp_path: Path) -> None:
 
 def test_mjcf_missing_mesh_names_the_file_and_the_link(tmp_path: Path) -> None:
     path = tmp_path / "one_link.xml"
-    path.write_text('<mujoco><compiler meshdir="meshes"/><asset><mesh name="shell" file="shell.stl"/></asset>'
-                    '<worldbody><body name="link"><joint name="j" type="hinge"/>'
-                    '<geom type="mesh" mesh="shell" mass="1"/></body></worldbody></mujoco>')
+    path.write_text(
+        '<mujoco><compiler meshdir="meshes"/><asset><mesh name="shell" file="shell.stl"/></asset>'
+        '<worldbody><body name="link"><joint name="j" type="hinge"/>'
+        '<geom type="mesh" mesh="shell" mass="1"/></body></worldbody></mujoco>'
+    )
     with pytest.raises(ConfigError) as err:
         build({"uid": "one", "fpath": str(path)})
     assert err.value.path == "robot.fpath"
@@ -132,8 +139,12 @@ def test_mjcf_missing_mesh_names_the_file_and_the_link(tmp_path: Path) -> None:
 
 
 def test_kept_servos_drive_a_passive_articulation(tmp_path: Path) -> None:
-    section = {"uid": "servo", "fpath": str(write_mjcf_arm(tmp_path)), "keep_actuators": True,
-               "drive_pros": {"drive_type": "none"}}
+    section = {
+        "uid": "servo",
+        "fpath": str(write_mjcf_arm(tmp_path)),
+        "keep_actuators": True,
+        "drive_pros": {"drive_type": "none"},
+    }
     scene, notices = build(section)
     robot = scene["servo"]
     assert notices == []

@@ -82,9 +82,15 @@ def task() -> Iterator[Callable[[type], str]]:
 
 
 def write_config(path: Path, task_id: str, **top: Any) -> Path:
-    data = {"id": task_id, "num_envs": 2, "max_episode_steps": 4, "max_episodes": 2,
-            "env": {"seed": 0, "verbose": False}, "robot": {"uid": "arm", "mjcf": ARM_MJCF},
-            "rigid_object": [{"uid": "cube", "init_pos": [0.4, 0, 0.1]}]}
+    data = {
+        "id": task_id,
+        "num_envs": 2,
+        "max_episode_steps": 4,
+        "max_episodes": 2,
+        "env": {"seed": 0, "verbose": False},
+        "robot": {"uid": "arm", "mjcf": ARM_MJCF},
+        "rigid_object": [{"uid": "cube", "init_pos": [0.4, 0, 0.1]}],
+    }
     data.update(top)
     path.write_text(json.dumps(data))
     return path
@@ -134,14 +140,20 @@ def test_preview(tmp_path: Path, task: Callable, capsys: pytest.CaptureFixture) 
     assert "run-env summary" not in out
 
 
-@pytest.mark.parametrize("mutate, message", [
-    (lambda d: d["env"].update(evnts={}), "env.evnts: unknown env key 'evnts'. Did you mean 'events'?"),
-    (lambda d: d["env"].update(events={"push": {"func": "test_run_env_cli:no_such_event"}}),
-     "env.events.push.func: cannot import"),
-    (lambda d: d.update(id="RunEnvTestNope-v0"), "id: unknown task 'RunEnvTestNope-v0'"),
-])
-def test_config_errors_exit_2_with_the_path(tmp_path: Path, task: Callable, capsys: pytest.CaptureFixture,
-                                            mutate: Any, message: str) -> None:
+@pytest.mark.parametrize(
+    "mutate, message",
+    [
+        (lambda d: d["env"].update(evnts={}), "env.evnts: unknown env key 'evnts'. Did you mean 'events'?"),
+        (
+            lambda d: d["env"].update(events={"push": {"func": "test_run_env_cli:no_such_event"}}),
+            "env.events.push.func: cannot import",
+        ),
+        (lambda d: d.update(id="RunEnvTestNope-v0"), "id: unknown task 'RunEnvTestNope-v0'"),
+    ],
+)
+def test_config_errors_exit_2_with_the_path(
+    tmp_path: Path, task: Callable, capsys: pytest.CaptureFixture, mutate: Any, message: str
+) -> None:
     config = write_config(tmp_path / "c.json", task(PlainTask))
     data = json.loads(config.read_text())
     mutate(data)
@@ -174,11 +186,17 @@ def test_bare_task_without_default_cfg_needs_a_config(task: Callable, capsys: py
     assert "pass --gym_config to use --renderer" in capsys.readouterr().err
 
 
-def test_demo_action_list_retries_failed_attempts(tmp_path: Path, task: Callable,
-                                                  capsys: pytest.CaptureFixture) -> None:
+def test_demo_action_list_retries_failed_attempts(
+    tmp_path: Path, task: Callable, capsys: pytest.CaptureFixture
+) -> None:
     dataset = {"rec": {"func": f"{__name__}:Recorder", "params": {"out": str(tmp_path / "data")}}}
-    config = write_config(tmp_path / "c.json", task(DemoTask), max_episode_steps=10, max_episodes=2,
-                          env={"seed": 0, "verbose": False, "dataset": dataset})
+    config = write_config(
+        tmp_path / "c.json",
+        task(DemoTask),
+        max_episode_steps=10,
+        max_episodes=2,
+        env={"seed": 0, "verbose": False, "dataset": dataset},
+    )
     SAVED.clear()
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 0
     out = capsys.readouterr().out

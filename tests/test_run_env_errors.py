@@ -70,9 +70,14 @@ def task_id() -> Iterator[str]:
 
 
 def write_config(path: Path, task: str, events: dict, dataset: dict) -> Path:
-    data = {"id": task, "num_envs": 2, "max_episode_steps": 3, "max_episodes": 6,
-            "env": {"seed": 0, "verbose": False, "events": events, "dataset": dataset},
-            "robot": {"uid": "arm", "mjcf": ARM_MJCF}}
+    data = {
+        "id": task,
+        "num_envs": 2,
+        "max_episode_steps": 3,
+        "max_episodes": 6,
+        "env": {"seed": 0, "verbose": False, "events": events, "dataset": dataset},
+        "robot": {"uid": "arm", "mjcf": ARM_MJCF},
+    }
     path.write_text(json.dumps(data))
     return path
 
@@ -82,22 +87,27 @@ def recorder(cls: str, out: Path) -> dict:
 
 
 def damping_event(mode: str, fail_on_call: int) -> dict:
-    return {"drive_damping": {"func": f"{__name__}:drive_damping", "mode": mode,
-                              "params": {"fail_on_call": fail_on_call}}}
+    return {
+        "drive_damping": {"func": f"{__name__}:drive_damping", "mode": mode, "params": {"fail_on_call": fail_on_call}}
+    }
 
 
 def test_a_functor_error_names_the_functor_prints_the_traceback_and_the_summary(
-        tmp_path: Path, task_id: str, capsys: pytest.CaptureFixture) -> None:
-    config = write_config(tmp_path / "c.json", task_id, damping_event("reset", 3),
-                          recorder("FinalizingRecorder", tmp_path / "data"))
+    tmp_path: Path, task_id: str, capsys: pytest.CaptureFixture
+) -> None:
+    config = write_config(
+        tmp_path / "c.json", task_id, damping_event("reset", 3), recorder("FinalizingRecorder", tmp_path / "data")
+    )
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 1
     captured = capsys.readouterr()
     assert "Traceback (most recent call last)" in captured.err
     assert "ValueError: damping must be finite, got nan" in captured.err
     assert "raised in functor env.events.drive_damping" in captured.err  # the traceback's note
     last = captured.err.strip().splitlines()[-1]
-    assert last.startswith("embodichain run-env: stopped by an error while running episodes: ValueError in "
-                           "functor env.events.drive_damping: damping must be finite")
+    assert last.startswith(
+        "embodichain run-env: stopped by an error while running episodes: ValueError in "
+        "functor env.events.drive_damping: damping must be finite"
+    )
     assert FINALIZED == [str(tmp_path / "data")]  # the env was closed: the recorder finalized
     out = captured.out
     assert f"run-env summary: {task_id}" in out
@@ -105,19 +115,26 @@ def test_a_functor_error_names_the_functor_prints_the_traceback_and_the_summary(
     assert "stopped      early: ValueError in functor env.events.drive_damping" in out
 
 
-def test_a_functor_error_during_the_build_is_named_too(tmp_path: Path, task_id: str,
-                                                       capsys: pytest.CaptureFixture) -> None:
+def test_a_functor_error_during_the_build_is_named_too(
+    tmp_path: Path, task_id: str, capsys: pytest.CaptureFixture
+) -> None:
     config = write_config(tmp_path / "c.json", task_id, damping_event("startup", 1), {})
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 1
     err = capsys.readouterr().err
     assert "Traceback (most recent call last)" in err
-    assert err.strip().splitlines()[-1].startswith(
-        "embodichain run-env: stopped by an error while building the env: ValueError in functor "
-        "env.events.drive_damping")
+    assert (
+        err.strip()
+        .splitlines()[-1]
+        .startswith(
+            "embodichain run-env: stopped by an error while building the env: ValueError in functor "
+            "env.events.drive_damping"
+        )
+    )
 
 
-def test_dataset_preflight_fails_before_the_env_is_built(tmp_path: Path, task_id: str,
-                                                         capsys: pytest.CaptureFixture) -> None:
+def test_dataset_preflight_fails_before_the_env_is_built(
+    tmp_path: Path, task_id: str, capsys: pytest.CaptureFixture
+) -> None:
     config = write_config(tmp_path / "c.json", task_id, {}, recorder("CheckedRecorder", tmp_path / "ro"))
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -131,8 +148,9 @@ def test_dataset_preflight_fails_before_the_env_is_built(tmp_path: Path, task_id
 
 
 @pytest.mark.parametrize("version", [(3, 10), (3, 11)])
-def test_the_functor_note_is_added_on_python_3_10_too(monkeypatch: pytest.MonkeyPatch,
-                                                      version: tuple[int, int]) -> None:
+def test_the_functor_note_is_added_on_python_3_10_too(
+    monkeypatch: pytest.MonkeyPatch, version: tuple[int, int]
+) -> None:
     from embodichain_core.managers import manager_base
 
     monkeypatch.setattr(manager_base.sys, "version_info", version)  # 3.10 has no BaseException.add_note

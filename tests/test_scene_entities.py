@@ -13,8 +13,14 @@ import torch
 from scenes import DRAWER_URDF, seven_dof_arm_mjcf
 
 from embodichain_core.sim.scene_build.builder import light_diffuse
-from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg, LightCfg, RigidObjectCfg, \
-    RobotCfg, SimulationManagerCfg
+from embodichain_core.sim.cfg import (
+    ArticulationCfg,
+    JointDrivePropertiesCfg,
+    LightCfg,
+    RigidObjectCfg,
+    RobotCfg,
+    SimulationManagerCfg,
+)
 from embodichain_core.sim.scene import Scene
 from embodichain_core.sim.shapes import CubeCfg
 
@@ -82,8 +88,9 @@ def build(num_envs: int = 3, **entities) -> Scene:
 
 
 def cube_scene(num_envs: int = 3) -> Scene:
-    return build(num_envs, objects=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.1, 0.1, 0.1]),
-                                                   init_pos=(0.0, 0.0, 0.5))])
+    return build(
+        num_envs, objects=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.1, 0.1, 0.1]), init_pos=(0.0, 0.0, 0.5))]
+    )
 
 
 # -- rigid objects ------------------------------------------------------------------------------------------
@@ -91,14 +98,16 @@ def test_rigid_pose_and_world_velocity_round_trip() -> None:
     scene = cube_scene()
     cube = scene["cube"]
     half = math.sqrt(0.5)
-    pose = torch.tensor([[0.1, 0.2, 0.6, half, 0.0, 0.0, half],  # 90 deg about z
-                         [0.3, 0.1, 0.7, half, half, 0.0, 0.0],  # 90 deg about x
-                         [0.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.0]])
+    pose = torch.tensor(
+        [
+            [0.1, 0.2, 0.6, half, 0.0, 0.0, half],  # 90 deg about z
+            [0.3, 0.1, 0.7, half, half, 0.0, 0.0],  # 90 deg about x
+            [0.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.0],
+        ]
+    )
     cube.set_local_pose(pose)
     assert torch.allclose(cube.get_local_pose(), pose, atol=1e-6)
-    vel = torch.tensor([[1.0, 2.0, 3.0, 0.5, 0.0, 0.0],
-                        [0.0, 0.0, 0.1, 0.0, 0.3, 0.4],
-                        [0.2, 0.0, 0.0, 0.0, 0.0, 1.0]])
+    vel = torch.tensor([[1.0, 2.0, 3.0, 0.5, 0.0, 0.0], [0.0, 0.0, 0.1, 0.0, 0.3, 0.4], [0.2, 0.0, 0.0, 0.0, 0.0, 1.0]])
     cube.set_velocity(vel)
     assert torch.allclose(cube.get_velocity(), vel, atol=1e-6)
     # independent check with MuJoCo: world-frame angular and linear velocity of the body
@@ -145,8 +154,9 @@ def test_set_mass_per_env_only_affects_those_envs() -> None:
 
 
 def test_kinematic_background_moves_per_env() -> None:
-    table = RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=(0.0, 0.0, 0.2),
-                           body_type="kinematic")
+    table = RigidObjectCfg(
+        uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=(0.0, 0.0, 0.2), body_type="kinematic"
+    )
     scene = build(3, backgrounds=[table])
     bg = scene["table"]
     assert "table" in scene.backgrounds
@@ -179,8 +189,11 @@ def test_bfs_joint_order_differs_from_mujoco_dfs() -> None:
     scene = build(2, articulations=[ArticulationCfg(uid="tree", mjcf=BRANCHING_MJCF)])
     tree = scene["tree"]
     model = scene.model
-    mujoco_order = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j).split("/", 1)[1]
-                    for j in range(model.njnt) if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("tree/")]
+    mujoco_order = [
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j).split("/", 1)[1]
+        for j in range(model.njnt)
+        if mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j).startswith("tree/")
+    ]
     assert mujoco_order == ["ja", "ja1", "jb", "jb1"]  # depth first
     assert tree.joint_names == ["ja", "jb", "ja1", "jb1"]  # EmbodiChain: breadth first
     assert tree.link_names == ["root", "a", "b", "a1", "b1"]
@@ -211,8 +224,14 @@ def test_mimic_joint_follows_its_parent_on_teleport() -> None:
 
 
 def test_robot_mimic_finger_and_active_joints() -> None:
-    scene = build(2, robots=[RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(),
-                                      control_parts={"arm": ["joint[1-7]"], "hand": ["finger_joint.*"]})])
+    scene = build(
+        2,
+        robots=[
+            RobotCfg(
+                uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"], "hand": ["finger_joint.*"]}
+            )
+        ],
+    )
     arm = scene["arm"]
     assert arm.dof == 9
     assert arm.mimic_ids == [8]
@@ -226,8 +245,9 @@ def test_robot_mimic_finger_and_active_joints() -> None:
 
 
 def arm_scene(num_envs: int = 2) -> Scene:
-    return build(num_envs, robots=[RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(),
-                                            control_parts={"arm": ["joint[1-7]"]})])
+    return build(
+        num_envs, robots=[RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]})]
+    )
 
 
 def test_set_qpos_teleport_versus_target() -> None:
@@ -260,8 +280,14 @@ def test_drive_tracks_its_target() -> None:
 
 
 def test_joint_drive_and_velocity_targets() -> None:
-    scene = build(2, robots=[RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(),
-                                      drive_pros=JointDrivePropertiesCfg(stiffness=0.0, damping=100.0))])
+    scene = build(
+        2,
+        robots=[
+            RobotCfg(
+                uid="arm", mjcf=seven_dof_arm_mjcf(), drive_pros=JointDrivePropertiesCfg(stiffness=0.0, damping=100.0)
+            )
+        ],
+    )
     arm = scene["arm"]
     arm.set_qvel(torch.tensor([0.4]), joint_ids=[0], env_ids=[1])
     assert arm.get_qvel(target=True)[:, 0].tolist() == pytest.approx([0.0, 0.4])

@@ -71,10 +71,17 @@ def test_only_the_backend_touches_mujoco_batch() -> None:
 
     root = Path(__file__).resolve().parents[1]
     backend = root / "embodichain_core" / "sim" / "backend"
-    pattern = re.compile(r"import mujoco\.batch|mujoco import batch|mujoco\.batch\.|\bsim\.batch\b|\._expanded\b|\.set_models\(")
+    pattern = re.compile(
+        r"import mujoco\.batch|mujoco import batch|mujoco\.batch\.|\bsim\.batch\b|\._expanded\b|\.set_models\("
+    )
     sources = list((root / "embodichain_core").rglob("*.py"))
     for plugin in (root / "plugins").iterdir():
         sources += [p for p in plugin.rglob("*.py") if "tests" not in p.relative_to(plugin).parts]
-    offenders = [f"{p.relative_to(root)}:{n}" for p in sources if backend not in p.parents
-                 for n, line in enumerate(p.read_text().splitlines(), 1) if pattern.search(line)]
+    offenders = [
+        f"{p.relative_to(root)}:{n}"
+        for p in sources
+        if backend not in p.parents
+        for n, line in enumerate(p.read_text().splitlines(), 1)
+        if pattern.search(line)
+    ]
     assert not offenders, f"outside sim/backend/: {offenders}"

@@ -111,15 +111,18 @@ def test_solver_cfg_of_a_plain_robot_builds_the_part_solver(solvers, tmp_path: P
     assert torch.allclose(robot.compute_fk(q, name="arm"), target, atol=1e-4)
 
 
-@pytest.mark.parametrize("solver_cfg, path, needle", [
-    ({"arm": {**ARM_SOLVER, "class_type": "FixtureSolvr"}}, "robot.solver_cfg.arm.class_type", "'FixtureSolver'"),
-    ({"arm": {"root_link_name": "base_link"}}, "robot.solver_cfg.arm.class_type", "FixtureSolver"),
-    ({"arms": ARM_SOLVER}, "robot.solver_cfg.arms", "Did you mean 'arm'"),
-    ({"arm": {**ARM_SOLVER, "end_link_name": "flang"}}, "robot.solver_cfg.arm.end_link_name", "'flange'"),
-    ({"arm": {**ARM_SOLVER, "tcp": [[1, 0, 0, 0]]}}, "robot.solver_cfg.arm.tcp", "no TCP"),
-    ({"arm": {**ARM_SOLVER, "joints": [0, 1, 2]}}, "robot.solver_cfg.arm", "'wrist_1'"),
-    ({"arm": "DLS"}, "robot.solver_cfg.arm", "mapping"),
-])
+@pytest.mark.parametrize(
+    "solver_cfg, path, needle",
+    [
+        ({"arm": {**ARM_SOLVER, "class_type": "FixtureSolvr"}}, "robot.solver_cfg.arm.class_type", "'FixtureSolver'"),
+        ({"arm": {"root_link_name": "base_link"}}, "robot.solver_cfg.arm.class_type", "FixtureSolver"),
+        ({"arms": ARM_SOLVER}, "robot.solver_cfg.arms", "Did you mean 'arm'"),
+        ({"arm": {**ARM_SOLVER, "end_link_name": "flang"}}, "robot.solver_cfg.arm.end_link_name", "'flange'"),
+        ({"arm": {**ARM_SOLVER, "tcp": [[1, 0, 0, 0]]}}, "robot.solver_cfg.arm.tcp", "no TCP"),
+        ({"arm": {**ARM_SOLVER, "joints": [0, 1, 2]}}, "robot.solver_cfg.arm", "'wrist_1'"),
+        ({"arm": "DLS"}, "robot.solver_cfg.arm", "mapping"),
+    ],
+)
 def test_bad_solver_cfg_is_a_config_error_at_its_key(solvers, tmp_path: Path, solver_cfg, path, needle) -> None:
     with pytest.raises(ConfigError) as err:
         robot_of(tmp_path, solver_cfg)

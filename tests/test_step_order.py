@@ -37,7 +37,6 @@ class LoggedTerm(ActionTerm):
 
 
 class LoggedRecorder(DatasetFunctor):
-
     def record_step(self, obs: Any, action: Any, reward: Any, terminated: Any, truncated: Any, info: dict) -> None:
         _log(self._env, "record")
 
@@ -80,8 +79,10 @@ def make_order_env(make_env: Any, make_cfg: Any) -> Any:
     cfg = make_cfg(
         max_episode_steps=2,
         actions={"arm": ActionTermCfg(func=LoggedTerm), "post": ActionTermCfg(func=LoggedTerm, mode="post")},
-        events={"tick": EventCfg(func=interval_event, mode="interval", interval_step=1),
-                "on_reset": EventCfg(func=reset_event, mode="reset")},
+        events={
+            "tick": EventCfg(func=interval_event, mode="interval", interval_step=1),
+            "on_reset": EventCfg(func=reset_event, mode="reset"),
+        },
         observations={"probe": ObservationCfg(func=observe, mode="add", name="probe")},
         rewards={"r": RewardCfg(func=reward_term)},
         dataset={"rec": DatasetFunctorCfg(func=LoggedRecorder, save_failed_episodes=True)},
@@ -112,8 +113,17 @@ def test_step_and_reset_phases_run_in_the_documented_order(make_env, make_cfg) -
     env.phases.clear()
     env.step(torch.zeros(2, ARM_ACTIVE))
     names = [p[0] for p in env.phases]
-    assert names == ["action_pre", "physics", "interval", "observation", "task_state", "reward", "action_post",
-                     "dones", "record"]
+    assert names == [
+        "action_pre",
+        "physics",
+        "interval",
+        "observation",
+        "task_state",
+        "reward",
+        "action_post",
+        "dones",
+        "record",
+    ]
     physics = env.phases[1]
     assert physics[2] == 0.25  # phase 2 (apply the command) ran before phase 3 (physics)
     counters = dict((p[0], p[1]) for p in env.phases)
@@ -131,32 +141,62 @@ def test_autoreset_runs_the_reset_phases_after_recording(make_env, make_cfg) -> 
     names = [p[0] for p in env.phases]
     assert truncated.all()
     assert info["elapsed_steps"].tolist() == [2, 2]  # info holds the counters including this step
-    assert names[:9] == ["action_pre", "physics", "interval", "observation", "task_state", "reward",
-                         "action_post", "dones", "record"]
+    assert names[:9] == [
+        "action_pre",
+        "physics",
+        "interval",
+        "observation",
+        "task_state",
+        "reward",
+        "action_post",
+        "dones",
+        "record",
+    ]
     assert names[9:] == RESET  # the autoreset (phase 12) is the last phase
     assert env.elapsed_steps.tolist() == [0, 0]
 
 
 def test_the_docs_list_the_phases_of_the_code() -> None:
     text = DOCS.read_text()
-    step = text[text.index("### `step(action)`"):text.index("### Actions")]
+    step = text[text.index("### `step(action)`") : text.index("### Actions")]
     titles = re.findall(r"^(\d+)\. \*\*([^*]+)\*\*", step, flags=re.M)
     assert [int(n) for n, _ in titles] == list(range(13))
-    assert [t for _, t in titles] == ["Action check", "Action terms", "Apply the command", "Physics",
-                                      "Interval events", "Counters", "Observations", "Task state and info",
-                                      "Rewards", "Post action terms", "Dones", "Recording", "Autoreset"]
+    assert [t for _, t in titles] == [
+        "Action check",
+        "Action terms",
+        "Apply the command",
+        "Physics",
+        "Interval events",
+        "Counters",
+        "Observations",
+        "Task state and info",
+        "Rewards",
+        "Post action terms",
+        "Dones",
+        "Recording",
+        "Autoreset",
+    ]
     source = (Path(__file__).resolve().parents[1] / "embodichain_core" / "envs" / "embodied_env.py").read_text()
-    body = source[source.index("    def step("):source.index("    def reset(")]
+    body = source[source.index("    def step(") : source.index("    def reset(")]
     assert [int(n) for n in re.findall(r"# (\d+)\. ", body)] == list(range(13))
 
 
 def test_the_docs_list_the_reset_phases_of_the_code() -> None:
     text = DOCS.read_text()
-    reset = text[text.index("### `reset(seed=None, options=None)`"):text.index("### Partial resets")]
+    reset = text[text.index("### `reset(seed=None, options=None)`") : text.index("### Partial resets")]
     titles = re.findall(r"^(\d+)\. \*\*([^*]+)\*\*", reset, flags=re.M)
-    assert [t for _, t in titles] == ["Seed", "Envs to reset", "Dataset", "Episode streams", "Scene reset",
-                                      "Reset events", "Manager resets", "Counters", "Observation"]
+    assert [t for _, t in titles] == [
+        "Seed",
+        "Envs to reset",
+        "Dataset",
+        "Episode streams",
+        "Scene reset",
+        "Reset events",
+        "Manager resets",
+        "Counters",
+        "Observation",
+    ]
     source = (Path(__file__).resolve().parents[1] / "embodichain_core" / "envs" / "embodied_env.py").read_text()
-    body = source[source.index("    def reset("):source.index("    # -- phases with more than a line")]
+    body = source[source.index("    def reset(") : source.index("    # -- phases with more than a line")]
     assert [int(n) for n, _ in titles] == list(range(1, 10))
     assert [int(n) for n in re.findall(r"# (\d+)\. ", body)] == list(range(1, 10))

@@ -28,8 +28,7 @@ TASK_NAME, TASK_ID, TASK_DIST = "tmpl_reach", "TmplReach-v0", "embodichain-tmpl-
 FUNCTOR_KINDS = ("observation", "reward", "event", "randomization")
 
 
-def run(args: list[str], cwd: Path | None = None, timeout: float = 300,
-        **env_vars: str) -> subprocess.CompletedProcess:
+def run(args: list[str], cwd: Path | None = None, timeout: float = 300, **env_vars: str) -> subprocess.CompletedProcess:
     """Run ``args`` (with ``env_vars`` set); fail the test with the output when it exits non-zero."""
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", **env_vars}
     out = subprocess.run(args, cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env)
@@ -63,19 +62,22 @@ def new(*argv: str) -> int:
 
 # -- names ---------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("name, expected", [
-    ("push_cube", ("embodichain-push-cube", "embodichain_push_cube", "PushCube", "PushCube-v0")),
-    ("push-cube", ("embodichain-push-cube", "embodichain_push_cube", "PushCube", "PushCube-v0")),
-    ("PushCube2", ("embodichain-pushcube2", "embodichain_pushcube2", "PushCube2", "PushCube2-v0")),
-])
+
+@pytest.mark.parametrize(
+    "name, expected",
+    [
+        ("push_cube", ("embodichain-push-cube", "embodichain_push_cube", "PushCube", "PushCube-v0")),
+        ("push-cube", ("embodichain-push-cube", "embodichain_push_cube", "PushCube", "PushCube-v0")),
+        ("PushCube2", ("embodichain-pushcube2", "embodichain_pushcube2", "PushCube2", "PushCube2-v0")),
+    ],
+)
 def test_task_names_derive_from_one_name(name: str, expected: tuple[str, ...]) -> None:
     ctx = names.task_context(name)
     assert (ctx["distribution_name"], ctx["package_name"], ctx["class_name"], ctx["task_id"]) == expected
     assert names.validate_task_context(ctx) == []
 
 
-@pytest.mark.parametrize("template, name", [("task", "push_cube"), ("task", "Push-Cube3"),
-                                            ("functor", "cube_height")])
+@pytest.mark.parametrize("template, name", [("task", "push_cube"), ("task", "Push-Cube3"), ("functor", "cube_height")])
 def test_cookiecutter_defaults_match_the_python_derivation(template: str, name: str) -> None:
     from cookiecutter.generate import generate_context
     from cookiecutter.prompt import prompt_for_config
@@ -95,8 +97,9 @@ def test_functor_template_describes_each_kind_by_what_it_bakes(kind: str) -> Non
     from cookiecutter.prompt import prompt_for_config
 
     name = "randomize_cube" if kind == "randomization" else "cube_thing"
-    context = generate_context(str(template_dir("functor") / "cookiecutter.json"),
-                               extra_context={"functor_name": name, "kind": kind})
+    context = generate_context(
+        str(template_dir("functor") / "cookiecutter.json"), extra_context={"functor_name": name, "kind": kind}
+    )
     rendered = prompt_for_config(context, no_input=True)
     assert rendered["kind"] == kind
     assert rendered["description"] == names.FUNCTOR_DESCRIPTIONS[kind]
@@ -109,17 +112,21 @@ def test_functor_descriptions_are_one_per_kind() -> None:
     assert len(set(names.FUNCTOR_DESCRIPTIONS.values())) == len(FUNCTOR_KINDS)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["task", "my-task!"], "invalid task name 'my-task!'"),
-    (["task", "9lives"], "invalid task name '9lives'"),
-    (["task", "my_task", "--task-id", "MyTask"], "invalid task id 'MyTask'"),
-    (["task", "my_task", "--task-id", "My Task-v0"], "invalid task id 'My Task-v0'"),
-    (["task", "my_task", "--max-episode-steps", "0"], "invalid max_episode_steps 0"),
-    (["functor", "Cube-Height", "--kind", "reward"], "invalid functor name 'Cube-Height'"),
-    (["functor", "class", "--kind", "event"], "invalid functor name 'class'"),
-])
-def test_cli_rejects_bad_names_before_writing(argv: list[str], message: str, tmp_path: Path,
-                                             capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["task", "my-task!"], "invalid task name 'my-task!'"),
+        (["task", "9lives"], "invalid task name '9lives'"),
+        (["task", "my_task", "--task-id", "MyTask"], "invalid task id 'MyTask'"),
+        (["task", "my_task", "--task-id", "My Task-v0"], "invalid task id 'My Task-v0'"),
+        (["task", "my_task", "--max-episode-steps", "0"], "invalid max_episode_steps 0"),
+        (["functor", "Cube-Height", "--kind", "reward"], "invalid functor name 'Cube-Height'"),
+        (["functor", "class", "--kind", "event"], "invalid functor name 'class'"),
+    ],
+)
+def test_cli_rejects_bad_names_before_writing(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert new(*argv, "--no-input", "-o", str(tmp_path)) == 2
     err = capsys.readouterr().err
     assert f"embodichain new: error: {message}" in err
@@ -129,8 +136,10 @@ def test_cli_rejects_bad_names_before_writing(argv: list[str], message: str, tmp
 def test_template_hook_rejects_bad_names_typed_at_the_prompts(tmp_path: Path) -> None:
     from cookiecutter.exceptions import FailedHookException
 
-    for template, context in (("task", {"task_name": "ok_name", "task_id": "NoVersion"}),
-                              ("functor", {"functor_name": "cube_mass", "kind": "randomization"})):
+    for template, context in (
+        ("task", {"task_name": "ok_name", "task_id": "NoVersion"}),
+        ("functor", {"functor_name": "cube_mass", "kind": "randomization"}),
+    ):
         with pytest.raises(FailedHookException):
             new_cmd.bake(template, context, tmp_path)
         assert list(tmp_path.iterdir()) == []
@@ -155,6 +164,7 @@ def test_existing_package_dir_needs_overwrite(tmp_path: Path, capsys: pytest.Cap
 
 # -- packaging -----------------------------------------------------------------------------
 
+
 def test_templates_ship_in_the_core_package() -> None:
     tomllib = pytest.importorskip("tomllib")
     for name in TEMPLATES:
@@ -168,8 +178,9 @@ def test_templates_ship_in_the_core_package() -> None:
     assert any(dep.startswith("cookiecutter") for dep in project["optional-dependencies"]["new"])
 
 
-def test_new_without_cookiecutter_names_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                                  capsys: pytest.CaptureFixture[str]) -> None:
+def test_new_without_cookiecutter_names_the_extra(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Without cookiecutter (the `new` extra), `embodichain new` exits 1 naming the install command."""
     for module in [m for m in sys.modules if m == "cookiecutter" or m.startswith("cookiecutter.")]:
         monkeypatch.delitem(sys.modules, module)
@@ -189,8 +200,11 @@ def test_pyproject_lists_every_core_package() -> None:
     """``packages`` is an explicit list (for the templates mapping): new packages must be added."""
     tomllib = pytest.importorskip("tomllib")
     listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = {".".join(p.relative_to(REPO).parts) for p in (REPO / "embodichain_core").rglob("*")
-             if p.is_dir() and p.name != "__pycache__" and any(p.glob("*.py"))}
+    found = {
+        ".".join(p.relative_to(REPO).parts)
+        for p in (REPO / "embodichain_core").rglob("*")
+        if p.is_dir() and p.name != "__pycache__" and any(p.glob("*.py"))
+    }
     found.add("embodichain_core")
     missing = sorted(found - listed)
     assert not missing, f"add {missing} to [tool.setuptools] packages in pyproject.toml"
@@ -203,35 +217,51 @@ def test_wheel_carries_every_template_file(tmp_path: Path) -> None:
         shutil.copytree(REPO / item, build / item, ignore=skip)
     for item in ("pyproject.toml", "README.md"):
         shutil.copy(REPO / item, build / item)
-    run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
-         "-w", str(tmp_path / "dist"), str(build)])
+    run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "-w",
+            str(tmp_path / "dist"),
+            str(build),
+        ]
+    )
     import zipfile
 
     wheel = next((tmp_path / "dist").glob("embodichain_core-*.whl"))
     shipped = {n for n in zipfile.ZipFile(wheel).namelist() if n.startswith("embodichain_core/templates/")}
-    expected = {"embodichain_core/templates/" + p.relative_to(REPO / "templates").as_posix()
-                for p in (REPO / "templates").rglob("*")
-                if p.is_file() and "__pycache__" not in p.parts}
+    expected = {
+        "embodichain_core/templates/" + p.relative_to(REPO / "templates").as_posix()
+        for p in (REPO / "templates").rglob("*")
+        if p.is_file() and "__pycache__" not in p.parts
+    }
     assert expected <= shipped, sorted(expected - shipped)
     # installed from the wheel (ahead of the editable checkout on sys.path), `new` bakes from it
     target = tmp_path / "site"
     run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target), str(wheel)])
-    code = ("import sys, embodichain_core.templates as t\n"
-            f"assert t.__file__.startswith({str(target)!r}), t.__file__\n"
-            "from embodichain_core.cli.new_cmd import main\n"
-            "sys.exit(main(['functor', 'from_wheel', '--no-input', '-o', 'out']))\n")
+    code = (
+        "import sys, embodichain_core.templates as t\n"
+        f"assert t.__file__.startswith({str(target)!r}), t.__file__\n"
+        "from embodichain_core.cli.new_cmd import main\n"
+        "sys.exit(main(['functor', 'from_wheel', '--no-input', '-o', 'out']))\n"
+    )
     run([sys.executable, "-c", code], cwd=tmp_path, PYTHONPATH=str(target))
     assert (tmp_path / "out" / "embodichain-from-wheel" / "embodichain_from_wheel" / "functors.py").is_file()
 
 
 # -- bake, install, test, discover -----------------------------------------------------------
 
+
 def test_task_template_bakes_installs_tests_and_gym_makes(tmp_path: Path) -> None:
     assert new("task", TASK_NAME, "--no-input", "-o", str(tmp_path), "--max-episode-steps", "40") == 0
     package = tmp_path / TASK_DIST
     with installed(package):
-        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")],
-            cwd=package)
+        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package)
         code = (
             "import sys, gymnasium as gym, torch\n"
             "import embodichain_core\n"
@@ -247,9 +277,11 @@ def test_task_template_bakes_installs_tests_and_gym_makes(tmp_path: Path) -> Non
         )
         out = run([sys.executable, "-c", code], cwd=tmp_path)
         assert out.stdout.split() == [TASK_DIST, "TmplReachEnv", "40", "(2,)", "(2,", "3)"]
-        cheap = ("import sys, embodichain_tmpl_reach.plugin\n"
-                 "heavy = {'torch', 'mujoco', 'embodichain_tmpl_reach.task'} & set(sys.modules)\n"
-                 "assert not heavy, f'the plugin module imports {heavy}'\n")
+        cheap = (
+            "import sys, embodichain_tmpl_reach.plugin\n"
+            "heavy = {'torch', 'mujoco', 'embodichain_tmpl_reach.task'} & set(sys.modules)\n"
+            "assert not heavy, f'the plugin module imports {heavy}'\n"
+        )
         run([sys.executable, "-c", cheap], cwd=tmp_path, EMBODICHAIN_BLOCK_PLUGINS="*")
 
 
@@ -263,8 +295,7 @@ def test_functor_template_bakes_installs_tests_and_registers(tmp_path: Path) -> 
     package = bake_functor("randomization", tmp_path)
     assert package.name == "embodichain-randomize-tmpl-randomization"
     with installed(package):
-        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")],
-            cwd=package)
+        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package)
         code = (
             "import sys\n"
             "from embodichain_core.plugins import functor_registry\n"
@@ -280,6 +311,17 @@ def test_functor_template_bakes_installs_tests_and_registers(tmp_path: Path) -> 
 def test_functor_template_every_kind_passes_its_tests(tmp_path: Path) -> None:
     """The other kinds' baked tests, importing the packages from their directories."""
     packages = [bake_functor(kind, tmp_path) for kind in FUNCTOR_KINDS if kind != "randomization"]
-    run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--import-mode=importlib",
-         *[str(p / "tests") for p in packages]], cwd=tmp_path,
-        PYTHONPATH=os.pathsep.join(map(str, packages)))
+    run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "--import-mode=importlib",
+            *[str(p / "tests") for p in packages],
+        ],
+        cwd=tmp_path,
+        PYTHONPATH=os.pathsep.join(map(str, packages)),
+    )

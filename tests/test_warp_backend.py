@@ -93,8 +93,9 @@ def test_a_failed_graph_capture_falls_back_to_direct_launches(monkeypatch: Any) 
     assert not torch.equal(sim.qpos, before), "the fallback did not step"
 
 
-@pytest.mark.parametrize("name, why", [("geom_contype", "colliding geom pairs"), ("opt.solver", "one value"),
-                                       ("mesh_vert", "mesh geometry")])
+@pytest.mark.parametrize(
+    "name, why", [("geom_contype", "colliding geom pairs"), ("opt.solver", "one value"), ("mesh_vert", "mesh geometry")]
+)
 def test_unsupported_per_env_fields_name_field_and_backend(name: str, why: str) -> None:
     sim = make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
     with pytest.raises(ConfigError, match=rf"model field '{name}' cannot take per-env values on backend 'warp'.*{why}"):
@@ -135,11 +136,14 @@ def test_without_mujoco_warp_the_error_says_how_to_install_it(monkeypatch: Any) 
         make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
 
 
-@pytest.mark.parametrize("changes, path, message", [
-    ({"backend": "wrap"}, "sim_cfg.backend", "Did you mean 'warp'"),
-    ({"backend": "warp", "sim_device": "gpu"}, "sim_cfg.sim_device", "'cpu', 'cuda' or 'cuda:N'"),
-    ({"backend": "warp", "solver": "PGS"}, "sim_cfg.physics_config.solver", "'Newton' or 'CG'"),
-])
+@pytest.mark.parametrize(
+    "changes, path, message",
+    [
+        ({"backend": "wrap"}, "sim_cfg.backend", "Did you mean 'warp'"),
+        ({"backend": "warp", "sim_device": "gpu"}, "sim_cfg.sim_device", "'cpu', 'cuda' or 'cuda:N'"),
+        ({"backend": "warp", "solver": "PGS"}, "sim_cfg.physics_config.solver", "'Newton' or 'CG'"),
+    ],
+)
 def test_backend_settings_are_validated(changes: dict, path: str, message: str) -> None:
     sim = SimulationManagerCfg()
     sim.physics_config.solver = changes.pop("solver", sim.physics_config.solver)
@@ -265,8 +269,9 @@ def test_mass_friction_damping_take_per_env_values(warp_env: Any) -> None:
     sim.set_model_field("dof_damping", [1, 3], dof, np.array([3.0, 7.0]))
     assert torch.allclose(cube.get_mass().double(), torch.tensor([0.5, 1.0, 2.0, 4.0], dtype=torch.float64))
     assert torch.allclose(cube.get_friction().double(), torch.tensor([0.2, 0.4, 0.6, 0.8], dtype=torch.float64))
-    assert np.allclose(sim.model_field("dof_damping")[:, dof], [arm_damping := env.scene.model.dof_damping[dof],
-                                                                3.0, arm_damping, 7.0])
+    assert np.allclose(
+        sim.model_field("dof_damping")[:, dof], [arm_damping := env.scene.model.dof_damping[dof], 3.0, arm_damping, 7.0]
+    )
     env.step(torch.zeros(env.action_space.shape))  # the constants are recomputed once, before the step
     for i, mass in enumerate([0.5, 1.0, 2.0, 4.0]):
         host = sim.get_model(i)  # what MuJoCo Warp simulates in world i (as a host MjModel)

@@ -38,7 +38,9 @@ def find_benchmarks() -> Optional[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="embodichain bench", description=__doc__.splitlines()[0])
-    parser.add_argument("which", choices=sorted(BENCHMARKS), help="; ".join(f"{k}: {v[1]}" for k, v in BENCHMARKS.items()))
+    parser.add_argument(
+        "which", choices=sorted(BENCHMARKS), help="; ".join(f"{k}: {v[1]}" for k, v in BENCHMARKS.items())
+    )
     parser.add_argument("args", nargs=argparse.REMAINDER, help="arguments of the benchmark script (see its --help)")
     return parser
 

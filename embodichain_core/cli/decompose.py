@@ -20,10 +20,16 @@ DESCRIPTION = "Convex decomposition (coacd, cached) of a mesh file or of every m
 def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add this command's arguments to ``parser`` (used by the top-level CLI too)."""
     parser.add_argument("path", help="mesh file (.ply/.obj/.stl/.glb/...) or .urdf; data names are resolved")
-    parser.add_argument("--max-hulls", type=int, default=8, dest="max_hulls",
-                        help="most convex hulls per non-convex component (default: 8)")
-    parser.add_argument("--cache-dir", default=None, dest="cache_dir",
-                        help="coacd cache folder (default: $EMBODICHAIN_CACHE_DIR/coacd)")
+    parser.add_argument(
+        "--max-hulls",
+        type=int,
+        default=8,
+        dest="max_hulls",
+        help="most convex hulls per non-convex component (default: 8)",
+    )
+    parser.add_argument(
+        "--cache-dir", default=None, dest="cache_dir", help="coacd cache folder (default: $EMBODICHAIN_CACHE_DIR/coacd)"
+    )
     return parser
 
 

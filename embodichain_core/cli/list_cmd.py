@@ -27,16 +27,35 @@ WHAT = ("plugins", "tasks", "functors", "robots", "solvers", "sensors", "assets"
 
 #: (header, key) of the table columns of every listing.
 COLUMNS: dict[str, list[tuple[str, str]]] = {
-    "plugins": [("NAME", "name"), ("VERSION", "version"), ("STATUS", "status"), ("REGISTERED", "summary"),
-                ("CLASHES", "clash_count")],
-    "tasks": [("ID", "name"), ("ENTRY POINT", "entry_point"), ("MAX STEPS", "max_episode_steps"),
-              ("PROVIDER", "provider"), ("DESCRIPTION", "description")],
-    "functors": [("NAME", "name"), ("KIND", "kind"), ("CATEGORY", "category"), ("PROVIDER", "provider"),
-                 ("DESCRIPTION", "description")],
+    "plugins": [
+        ("NAME", "name"),
+        ("VERSION", "version"),
+        ("STATUS", "status"),
+        ("REGISTERED", "summary"),
+        ("CLASHES", "clash_count"),
+    ],
+    "tasks": [
+        ("ID", "name"),
+        ("ENTRY POINT", "entry_point"),
+        ("MAX STEPS", "max_episode_steps"),
+        ("PROVIDER", "provider"),
+        ("DESCRIPTION", "description"),
+    ],
+    "functors": [
+        ("NAME", "name"),
+        ("KIND", "kind"),
+        ("CATEGORY", "category"),
+        ("PROVIDER", "provider"),
+        ("DESCRIPTION", "description"),
+    ],
     "robots": [("NAME", "name"), ("CONFIG CLASS", "cfg_class"), ("PROVIDER", "provider")],
     "solvers": [("NAME", "name"), ("SOLVER CLASS", "solver_class"), ("PROVIDER", "provider")],
-    "sensors": [("SENSOR TYPE", "name"), ("CONFIG CLASS", "cfg_class"), ("SENSOR CLASS", "sensor_class"),
-                ("PROVIDER", "provider")],
+    "sensors": [
+        ("SENSOR TYPE", "name"),
+        ("CONFIG CLASS", "cfg_class"),
+        ("SENSOR CLASS", "sensor_class"),
+        ("PROVIDER", "provider"),
+    ],
     "assets": [("NAME", "name"), ("ROOT", "root"), ("PROVIDER", "provider")],
     "commands": [("COMMAND", "name"), ("TARGET", "target"), ("PROVIDER", "provider"), ("HELP", "help")],
 }
@@ -67,13 +86,18 @@ the entry point names declared by several distributions. With `--json`, entry ro
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``embodichain list`` parser."""
-    parser = argparse.ArgumentParser(prog="embodichain list", description="List what the installed plugins provide.",
-                                     epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="embodichain list",
+        description="List what the installed plugins provide.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("what", nargs="?", default="plugins", choices=WHAT, help="what to list (default: plugins)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--provider", metavar="NAME", help="only entries registered by this plugin")
-    parser.add_argument("--resolve", action="store_true",
-                        help="import the targets to fill in missing descriptions (slower)")
+    parser.add_argument(
+        "--resolve", action="store_true", help="import the targets to fill in missing descriptions (slower)"
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="show the tracebacks of failed plugins")
     return parser
 
@@ -137,8 +161,10 @@ def collect(what: str, *, provider: str | None = None, resolve: bool = False) ->
     registry = get_registry(what)
     clashes = registry.clashes()
     entries = [e for e in registry.entries() if provider in (None, e.provider)]
-    return [{**_ROWS[what](e, resolve), "qualified_name": registry.qualified_name(e),
-             "ambiguous": e.name in clashes} for e in entries]
+    return [
+        {**_ROWS[what](e, resolve), "qualified_name": registry.qualified_name(e), "ambiguous": e.name in clashes}
+        for e in entries
+    ]
 
 
 def format_table(columns: list[tuple[str, str]], rows: list[dict[str, Any]]) -> str:
@@ -157,12 +183,23 @@ def _plugin_row(info: Any) -> dict[str, Any]:
     from embodichain_core.plugins import name_clashes
 
     summary = " ".join(f"{k}={len(v)}" for k, v in sorted(info.registered.items()))
-    clashes = [{"kind": c.kind, "name": c.name, "providers": list(c.providers), "qualified": list(c.qualified)}
-               for c in name_clashes(info.name)]
-    return {"name": info.name, "version": info.version, "status": info.status, "module": info.module,
-            "entry_point": info.entry_point, "registered": info.registered, "summary": summary,
-            "clashes": clashes, "clash_count": len(clashes) or None, "error": info.error_summary,
-            "traceback": info.error}
+    clashes = [
+        {"kind": c.kind, "name": c.name, "providers": list(c.providers), "qualified": list(c.qualified)}
+        for c in name_clashes(info.name)
+    ]
+    return {
+        "name": info.name,
+        "version": info.version,
+        "status": info.status,
+        "module": info.module,
+        "entry_point": info.entry_point,
+        "registered": info.registered,
+        "summary": summary,
+        "clashes": clashes,
+        "clash_count": len(clashes) or None,
+        "error": info.error_summary,
+        "traceback": info.error,
+    }
 
 
 def _print_failures(rows: list[dict[str, Any]], *, verbose: bool) -> None:
@@ -192,14 +229,24 @@ def _base(entry: Entry) -> dict[str, Any]:
 
 
 def _task_row(entry: Entry, resolve: bool) -> dict[str, Any]:
-    return {**_base(entry), "entry_point": entry.target_repr, "max_episode_steps": entry.meta.get("max_episode_steps"),
-            "kwargs": entry.meta.get("kwargs"), "config": entry.meta.get("config"),
-            "description": _description(entry, resolve)}
+    return {
+        **_base(entry),
+        "entry_point": entry.target_repr,
+        "max_episode_steps": entry.meta.get("max_episode_steps"),
+        "kwargs": entry.meta.get("kwargs"),
+        "config": entry.meta.get("config"),
+        "description": _description(entry, resolve),
+    }
 
 
 def _functor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
-    return {**_base(entry), "kind": entry.meta.get("kind"), "category": entry.meta.get("category"),
-            "target": entry.target_repr, "description": _description(entry, resolve)}
+    return {
+        **_base(entry),
+        "kind": entry.meta.get("kind"),
+        "category": entry.meta.get("category"),
+        "target": entry.target_repr,
+        "description": _description(entry, resolve),
+    }
 
 
 def _robot_row(entry: Entry, resolve: bool) -> dict[str, Any]:
@@ -211,8 +258,11 @@ def _solver_row(entry: Entry, resolve: bool) -> dict[str, Any]:
 
 
 def _sensor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
-    return {**_base(entry), "cfg_class": entry.target_repr,
-            "sensor_class": describe_target(entry.meta.get("sensor_class"))}
+    return {
+        **_base(entry),
+        "cfg_class": entry.target_repr,
+        "sensor_class": describe_target(entry.meta.get("sensor_class")),
+    }
 
 
 def _asset_row(entry: Entry, resolve: bool) -> dict[str, Any]:

@@ -40,8 +40,10 @@ def build_parser(commands: Registry) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"embodichain-core {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="<command>", title="commands")
     clashes = commands.clashes()
-    listed = {name: f"(ambiguous: provided by {', '.join(providers)}; use a qualified name)"
-              for name, providers in clashes.items()}
+    listed = {
+        name: f"(ambiguous: provided by {', '.join(providers)}; use a qualified name)"
+        for name, providers in clashes.items()
+    }
     for entry in commands.entries():
         name = commands.qualified_name(entry) if entry.name in clashes else entry.name
         listed[name] = entry.meta.get("help") or entry.description

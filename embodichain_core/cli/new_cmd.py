@@ -56,30 +56,44 @@ def require_cookiecutter() -> Callable[..., str]:
     except ImportError as err:
         raise MissingTemplateEngineError(
             f"cookiecutter is not installed; embodichain new renders its templates with it. "
-            f"Install it with: {INSTALL_HINT}", name="cookiecutter") from err
+            f"Install it with: {INSTALL_HINT}",
+            name="cookiecutter",
+        ) from err
     return cookiecutter
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``embodichain new`` parser, with one subcommand per template."""
     parser = argparse.ArgumentParser(
-        prog=PROG, description="Create a plugin package (installable, with tests) from a template.",
-        epilog=EPILOG)
+        prog=PROG, description="Create a plugin package (installable, with tests) from a template.", epilog=EPILOG
+    )
     sub = parser.add_subparsers(dest="template", metavar="<template>", title="templates", required=True)
     task = sub.add_parser(
-        "task", help="a task: an EmbodiedEnv subclass registered as a gym id",
+        "task",
+        help="a task: an EmbodiedEnv subclass registered as a gym id",
         description="Create a task plugin: an EmbodiedEnv subclass with its config (Python and JSON), "
-                    "registered through the 'embodichain' entry point, and its tests.")
-    task.add_argument("name", metavar="NAME", help="task name: words of letters and digits joined by '-' or '_' "
-                                   "(push_cube gives PushCube-v0 in embodichain-push-cube)")
+        "registered through the 'embodichain' entry point, and its tests.",
+    )
+    task.add_argument(
+        "name",
+        metavar="NAME",
+        help="task name: words of letters and digits joined by '-' or '_' "
+        "(push_cube gives PushCube-v0 in embodichain-push-cube)",
+    )
     task.add_argument("--task-id", help="gymnasium id, Name-vN (default: <ClassName>-v0)")
     task.add_argument("--max-episode-steps", type=int, metavar="N", help="episode length (default: 100)")
     functor = sub.add_parser(
-        "functor", help="an observation, reward, event or randomization functor",
+        "functor",
+        help="an observation, reward, event or randomization functor",
         description="Create a functor plugin: one functor registered through the 'embodichain' "
-                    "entry point, and its tests.")
-    functor.add_argument("name", metavar="NAME", help="functor name: a lowercase identifier such as cube_height "
-                                      "(randomization functors get the prefix randomize_)")
+        "entry point, and its tests.",
+    )
+    functor.add_argument(
+        "name",
+        metavar="NAME",
+        help="functor name: a lowercase identifier such as cube_height "
+        "(randomization functors get the prefix randomize_)",
+    )
     functor.add_argument("--kind", choices=FUNCTOR_KINDS, help="functor kind (default: observation)")
     for p in (task, functor):
         _add_common(p)
@@ -90,12 +104,15 @@ def _add_common(parser: argparse.ArgumentParser) -> None:
     """The options every template takes."""
     parser.add_argument("--description", help="one-line description")
     parser.add_argument("--author", help="author written into pyproject.toml")
-    parser.add_argument("-o", "--output-dir", default=".", metavar="DIR",
-                        help="where the package directory is created (default: .)")
-    parser.add_argument("--no-input", action="store_true",
-                        help="do not prompt; use the options and the defaults derived from NAME")
-    parser.add_argument("--overwrite", action="store_true",
-                        help="write into an existing package directory, replacing its files")
+    parser.add_argument(
+        "-o", "--output-dir", default=".", metavar="DIR", help="where the package directory is created (default: .)"
+    )
+    parser.add_argument(
+        "--no-input", action="store_true", help="do not prompt; use the options and the defaults derived from NAME"
+    )
+    parser.add_argument(
+        "--overwrite", action="store_true", help="write into an existing package directory, replacing its files"
+    )
 
 
 def context_from_args(args: argparse.Namespace) -> tuple[dict[str, Any], list[str]]:
@@ -105,8 +122,7 @@ def context_from_args(args: argparse.Namespace) -> tuple[dict[str, Any], list[st
 
     common = {"description": args.description, "author": args.author}
     if args.template == "task":
-        given = {"task_name": args.name, "task_id": args.task_id,
-                 "max_episode_steps": args.max_episode_steps, **common}
+        given = {"task_name": args.name, "task_id": args.task_id, "max_episode_steps": args.max_episode_steps, **common}
         full = names.task_context(args.name, **given)
         errors = names.validate_task_context(full)
     else:
@@ -117,8 +133,14 @@ def context_from_args(args: argparse.Namespace) -> tuple[dict[str, Any], list[st
     return {k: v for k, v in given.items() if v is not None}, errors
 
 
-def bake(template: str, extra_context: dict[str, Any], output_dir: str | Path = ".", *,
-         no_input: bool = True, overwrite: bool = False) -> Path:
+def bake(
+    template: str,
+    extra_context: dict[str, Any],
+    output_dir: str | Path = ".",
+    *,
+    no_input: bool = True,
+    overwrite: bool = False,
+) -> Path:
     """Render the shipped template ``template`` (``"task"``/``"functor"``) into ``output_dir``.
 
     The user's cookiecutter config is not read and no replay file is left behind.
@@ -139,8 +161,11 @@ def bake(template: str, extra_context: dict[str, Any], output_dir: str | Path = 
     Path(output_dir).mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="embodichain-new-") as replay_dir:
         created = cookiecutter(
-            str(template_dir(template)), no_input=no_input, extra_context=extra_context,
-            output_dir=str(output_dir), overwrite_if_exists=overwrite,
+            str(template_dir(template)),
+            no_input=no_input,
+            extra_context=extra_context,
+            output_dir=str(output_dir),
+            overwrite_if_exists=overwrite,
             default_config={"replay_dir": replay_dir},  # type: ignore[arg-type]
         )
     return Path(created)
@@ -161,8 +186,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {err}", file=sys.stderr)
         return 1
     try:
-        created = bake(args.template, extra_context, args.output_dir, no_input=no_input,
-                       overwrite=args.overwrite)
+        created = bake(args.template, extra_context, args.output_dir, no_input=no_input, overwrite=args.overwrite)
     except Exception as err:  # cookiecutter's errors, reported without a traceback
         return _report_failure(err)
     print(_next_steps(args.template, created))
@@ -187,11 +211,13 @@ def _report_failure(err: Exception) -> int:
 def _next_steps(template: str, created: Path) -> str:
     """What to do with the new package."""
     listing = "tasks" if template == "task" else "functors"
-    return "\n".join([
-        f"created {template} plugin {created}",
-        "next:",
-        f"  cd {created}",
-        "  pip install -e '.[test]'    # the entry point makes it discoverable",
-        "  pytest",
-        f"  embodichain list {listing}",
-    ])
+    return "\n".join(
+        [
+            f"created {template} plugin {created}",
+            "next:",
+            f"  cd {created}",
+            "  pip install -e '.[test]'    # the entry point makes it discoverable",
+            "  pytest",
+            f"  embodichain list {listing}",
+        ]
+    )

@@ -76,12 +76,17 @@ def build_parser() -> argparse.ArgumentParser:
     Returns:
         The parser.
     """
-    p = argparse.ArgumentParser(prog=PROG, description="Run a task or a gym config with random or demo actions.",
-                                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog=PROG,
+        description="Run a task or a gym config with random or demo actions.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("task", nargs="?", metavar="TASK_ID", help="gym task id (or a .json/.yaml config file)")
     add_env_launcher_args_to_parser(p)
-    p.add_argument("--max_steps", type=int, metavar="N",
-                   help="episode step limit, max_episode_steps (default: the config's)")
+    p.add_argument(
+        "--max_steps", type=int, metavar="N", help="episode step limit, max_episode_steps (default: the config's)"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar and no construction summary")
     return p
 
@@ -243,9 +248,12 @@ def _bare_task_plan(task_id: str, overrides: dict) -> RunPlan:
     cls = _task_cfg_class(task_id)
     missing = cls().validate("cfg") if cls is not None else ["(no config class)"]
     if cls is None or missing:
-        raise ConfigError("", f"task {task_id!r} has no complete default config (unset: "
-                              f"{', '.join(m.removeprefix('cfg.') for m in missing)}); "
-                              f"pass --gym_config to use --{' --'.join(sim)}")
+        raise ConfigError(
+            "",
+            f"task {task_id!r} has no complete default config (unset: "
+            f"{', '.join(m.removeprefix('cfg.') for m in missing)}); "
+            f"pass --gym_config to use --{' --'.join(sim)}",
+        )
     cfg = cls()
     apply_overrides(cfg, extras, given)
     return RunPlan(task_id, cfg, extras)
@@ -298,5 +306,3 @@ def _task_cfg_class(task_id: Any) -> Optional[type]:
         return None
     cls = getattr(creator, "cfg_cls", None)
     return cls if isinstance(cls, type) and issubclass(cls, EmbodiedEnvCfg) else None
-
-

@@ -9,6 +9,7 @@ from typing import Any, Optional
 
 from embodichain_core.cli.run_errors import RunError
 
+
 @dataclass
 class RunPlan:
     """What to build: the task id, its cfg (``None``: the task's own default), the
@@ -233,7 +234,9 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
     if paths:
         lines += ["  data         " + paths[0], *("               " + p for p in paths[1:])]
     else:
-        lines.append("  data         " + ("none (no dataset recorder)" if stats.data_paths is None else "nothing saved"))
+        lines.append(
+            "  data         " + ("none (no dataset recorder)" if stats.data_paths is None else "nothing saved")
+        )
     if stats.error:
         lines.append(f"  stopped      early: {stats.error}")
     print("\n".join(lines))

@@ -47,8 +47,15 @@ def _bounds_text(low: Optional[float], high: Optional[float], low_open: bool) ->
     return f"<= {_num(high)}" if high is not None else ""
 
 
-def check_number(value: Any, path: str, *, low: Optional[float] = None, high: Optional[float] = None,
-                 low_open: bool = False, what: str = "") -> float:
+def check_number(
+    value: Any,
+    path: str,
+    *,
+    low: Optional[float] = None,
+    high: Optional[float] = None,
+    low_open: bool = False,
+    what: str = "",
+) -> float:
     """A finite number within the bounds; returns it as ``float``.
 
     Args:
@@ -78,15 +85,24 @@ def check_int(value: Any, path: str, *, low: int = 1, high: Optional[int] = None
     return number
 
 
-def check_vector(value: Any, n: int, path: str, *, low: Optional[float] = None, high: Optional[float] = None,
-                 low_open: bool = False, what: str = "") -> list[float]:
+def check_vector(
+    value: Any,
+    n: int,
+    path: str,
+    *,
+    low: Optional[float] = None,
+    high: Optional[float] = None,
+    low_open: bool = False,
+    what: str = "",
+) -> list[float]:
     """``n`` finite numbers within the bounds (a list or tuple); returns them as floats."""
     rule = "" if low is None and high is None else f", each {_bounds_text(low, high, low_open)}"
     unit = f" ({what})" if what else ""
     if isinstance(value, (str, bytes, dict)) or not isinstance(value, (list, tuple, np.ndarray)) or len(value) != n:
         raise ConfigError(path, f"expected {n} finite numbers{rule}{unit}, got {describe(value)}")
-    return [check_number(v, f"{path}[{i}]", low=low, high=high, low_open=low_open, what=what)
-            for i, v in enumerate(value)]
+    return [
+        check_number(v, f"{path}[{i}]", low=low, high=high, low_open=low_open, what=what) for i, v in enumerate(value)
+    ]
 
 
 def _bound(value: Any, path: str, width: Optional[int]) -> np.ndarray:
@@ -100,8 +116,15 @@ def _bound(value: Any, path: str, width: Optional[int]) -> np.ndarray:
     raise ConfigError(path, f"expected a number or a list of numbers, got {describe(value)}")
 
 
-def check_range(value: Any, path: str, *, width: Optional[int] = None, low: Optional[float] = None,
-                high: Optional[float] = None, low_open: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def check_range(
+    value: Any,
+    path: str,
+    *,
+    width: Optional[int] = None,
+    low: Optional[float] = None,
+    high: Optional[float] = None,
+    low_open: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """A ``[low, high]`` pair: finite, same length (or a scalar bound), ``low <= high``,
     and every value within ``[low, high]`` of the allowed bounds when given.
 

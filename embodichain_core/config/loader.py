@@ -35,20 +35,42 @@ from embodichain_core.envs.cfg import EmbodiedEnvCfg
 from embodichain_core.managers.cfg import FUNCTOR_CFG_TYPES, DatasetFunctorCfg, FunctorCfg
 from embodichain_core.utils.configclass import _type_hints, is_configclass
 
-__all__ = ["load_config_file", "gym_config_to_cfg", "load_gym_config", "apply_overrides",
-           "resolve_relative_paths", "RUN_DEFAULTS", "SCENE_SECTIONS", "SIM_KEYS"]
+__all__ = [
+    "load_config_file",
+    "gym_config_to_cfg",
+    "load_gym_config",
+    "apply_overrides",
+    "resolve_relative_paths",
+    "RUN_DEFAULTS",
+    "SCENE_SECTIONS",
+    "SIM_KEYS",
+]
 
 #: Run-level keys read by ``run-env`` (not stored in the cfg), with their defaults.
 RUN_DEFAULTS: dict[str, Any] = {"id": None, "max_episodes": 1, "demo_max_attempts": 3}
 #: Top-level scene sections (cfg fields of the same name).
-SCENE_SECTIONS = ("robot", "sensor", "light", "background", "rigid_object", "rigid_object_group",
-                  "articulation", "articulation_cfg")
+SCENE_SECTIONS = (
+    "robot",
+    "sensor",
+    "light",
+    "background",
+    "rigid_object",
+    "rigid_object_group",
+    "articulation",
+    "articulation_cfg",
+)
 #: Flat top-level simulation keys -> ``sim_cfg`` field (``renderer`` -> ``render_cfg.renderer``).
-SIM_KEYS: dict[str, str] = {"headless": "headless", "device": "sim_device", "gpu_id": "gpu_id",
-                            "backend": "backend",
-                            "arena_space": "arena_space", "physics_dt": "physics_dt",
-                            "physics_substeps": "physics_substeps", "physics_config": "physics_config",
-                            "render_cfg": "render_cfg"}
+SIM_KEYS: dict[str, str] = {
+    "headless": "headless",
+    "device": "sim_device",
+    "gpu_id": "gpu_id",
+    "backend": "backend",
+    "arena_space": "arena_space",
+    "physics_dt": "physics_dt",
+    "physics_substeps": "physics_substeps",
+    "physics_config": "physics_config",
+    "render_cfg": "render_cfg",
+}
 #: Cfg fields that may be given at the top level as well as inside ``env`` (not both).
 TOP_CFG_FIELDS = ("num_envs", "max_episode_steps", "sim_cfg")
 _RELATIVE_PATH_KEYS = ("fpath", "folder_path", "mesh_path")
@@ -240,8 +262,9 @@ def _functor_section(value: Any, cfg_type: type[FunctorCfg], path: str) -> Optio
     if value is None:
         return None
     if not isinstance(value, Mapping):
-        raise ConfigError(path, f"expected a mapping of functor name -> {cfg_type.__name__}, "
-                                f"got {type(value).__name__}")
+        raise ConfigError(
+            path, f"expected a mapping of functor name -> {cfg_type.__name__}, got {type(value).__name__}"
+        )
     out: dict[str, Any] = {}
     for name, item in value.items():
         where = join_path(path, str(name))
@@ -295,9 +318,12 @@ def apply_overrides(cfg: Any, extras: dict, overrides: Optional[Mapping[str, Any
             raise unknown_key("", str(key), valid, what="override")
 
 
-def load_gym_config(path_or_dict: Union[str, os.PathLike, Mapping[str, Any]],
-                    overrides: Optional[Mapping[str, Any]] = None, *,
-                    cfg_cls: type = EmbodiedEnvCfg) -> tuple[str, Any, dict]:
+def load_gym_config(
+    path_or_dict: Union[str, os.PathLike, Mapping[str, Any]],
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    cfg_cls: type = EmbodiedEnvCfg,
+) -> tuple[str, Any, dict]:
     """Load a gym config file (or mapping), apply ``overrides``, return ``(id, cfg, extras)``.
 
     An ``id`` override replaces (or supplies) the config's ``id``. Relative asset paths

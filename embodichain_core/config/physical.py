@@ -17,20 +17,41 @@ from embodichain_core.config.errors import ConfigError, join_path
 __all__ = ["check_scene", "check_pose", "check_attrs", "check_shape", "check_light", "check_drive"]
 
 #: ``JointDrivePropertiesCfg`` fields -> (lower bound, open bound).
-_DRIVE_RULES = {"stiffness": (0.0, False), "damping": (0.0, False), "max_effort": (0.0, False),
-                "max_velocity": (0.0, True), "friction": (0.0, False), "armature": (0.0, False)}
+_DRIVE_RULES = {
+    "stiffness": (0.0, False),
+    "damping": (0.0, False),
+    "max_effort": (0.0, False),
+    "max_velocity": (0.0, True),
+    "friction": (0.0, False),
+    "armature": (0.0, False),
+}
 #: ``RigidBodyAttributesCfg`` number fields -> (low, high, low_open).
-_ATTR_RULES = {"density": (0.0, None, True), "angular_damping": (0.0, None, False),
-               "linear_damping": (0.0, None, False), "max_depenetration_velocity": (0.0, None, True),
-               "sleep_threshold": (0.0, None, False), "max_linear_velocity": (0.0, None, True),
-               "max_angular_velocity": (0.0, None, True), "contact_offset": (0.0, None, False),
-               "rest_offset": (None, None, False), "restitution": (0.0, 1.0, False),
-               "dynamic_friction": (0.0, None, False), "static_friction": (0.0, None, False)}
+_ATTR_RULES = {
+    "density": (0.0, None, True),
+    "angular_damping": (0.0, None, False),
+    "linear_damping": (0.0, None, False),
+    "max_depenetration_velocity": (0.0, None, True),
+    "sleep_threshold": (0.0, None, False),
+    "max_linear_velocity": (0.0, None, True),
+    "max_angular_velocity": (0.0, None, True),
+    "contact_offset": (0.0, None, False),
+    "rest_offset": (None, None, False),
+    "restitution": (0.0, 1.0, False),
+    "dynamic_friction": (0.0, None, False),
+    "static_friction": (0.0, None, False),
+}
 #: ``LightCfg`` number fields -> (low, high, low_open).
-_LIGHT_RULES = {"intensity": (0.0, None, False), "radius": (0.0, None, False), "angular_radius": (0.0, None, False),
-                "halo_size": (0.0, None, False), "halo_falloff": (0.0, None, False),
-                "spot_angle_inner": (0.0, 180.0, False), "spot_angle_outer": (0.0, 180.0, False),
-                "rect_width": (0.0, None, True), "rect_height": (0.0, None, True)}
+_LIGHT_RULES = {
+    "intensity": (0.0, None, False),
+    "radius": (0.0, None, False),
+    "angular_radius": (0.0, None, False),
+    "halo_size": (0.0, None, False),
+    "halo_falloff": (0.0, None, False),
+    "spot_angle_inner": (0.0, 180.0, False),
+    "spot_angle_outer": (0.0, 180.0, False),
+    "rect_width": (0.0, None, True),
+    "rect_height": (0.0, None, True),
+}
 MAX_SOLVER_ITERATIONS = 10_000
 
 
@@ -177,8 +198,10 @@ def check_light(cfg: Any, path: str) -> None:
     for name, (low, high, low_open) in _LIGHT_RULES.items():
         check_number(getattr(cfg, name), join_path(path, name), low=low, high=high, low_open=low_open)
     if cfg.spot_angle_inner > cfg.spot_angle_outer:
-        raise ConfigError(join_path(path, "spot_angle_inner"),
-                          f"must be <= spot_angle_outer ({cfg.spot_angle_outer!r}), got {cfg.spot_angle_inner!r}")
+        raise ConfigError(
+            join_path(path, "spot_angle_inner"),
+            f"must be <= spot_angle_outer ({cfg.spot_angle_outer!r}), got {cfg.spot_angle_inner!r}",
+        )
 
 
 def check_indirect_light(indirect: Any, path: str) -> None:

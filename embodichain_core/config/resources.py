@@ -28,15 +28,23 @@ from typing import Any, Optional
 from embodichain_core.config.checks import check_int
 from embodichain_core.config.errors import ConfigError
 
-__all__ = ["MemoryEstimate", "estimate_memory", "available_memory", "check_memory", "MEMORY_LIMIT_ENV",
-           "MAX_NUM_ENVS", "SIM_BYTES_PER_ENV", "SIM_BYTES_PER_ENTITY"]
+__all__ = [
+    "MemoryEstimate",
+    "estimate_memory",
+    "available_memory",
+    "check_memory",
+    "MEMORY_LIMIT_ENV",
+    "MAX_NUM_ENVS",
+    "SIM_BYTES_PER_ENV",
+    "SIM_BYTES_PER_ENTITY",
+]
 
 MEMORY_LIMIT_ENV = "EMBODICHAIN_MEMORY_LIMIT_GB"
 #: Largest ``num_envs`` accepted whatever the memory (each env is a MuJoCo simulation).
 MAX_NUM_ENVS = 1_000_000
 SIM_BYTES_PER_ENV = 256 * 1024
 SIM_BYTES_PER_ENTITY = 48 * 1024
-_GB = 1024 ** 3
+_GB = 1024**3
 
 
 @dataclass
@@ -61,13 +69,20 @@ class MemoryEstimate:
 
 
 def _gb(size: float) -> str:
-    return f"{size / _GB:.3g} GB" if size >= 0.01 * _GB else f"{size / 1024 ** 2:.3g} MB"
+    return f"{size / _GB:.3g} GB" if size >= 0.01 * _GB else f"{size / 1024**2:.3g} MB"
 
 
 def _entity_count(cfg: Any) -> int:
     groups = sum(max(len(g.rigid_objects), int(g.max_num)) for g in cfg.rigid_object_group)
-    return (1 + len(cfg.all_articulations()) + len(cfg.rigid_object) + len(cfg.background) + groups
-            + len(cfg.light.direct) + len(cfg.sensor))
+    return (
+        1
+        + len(cfg.all_articulations())
+        + len(cfg.rigid_object)
+        + len(cfg.background)
+        + groups
+        + len(cfg.light.direct)
+        + len(cfg.sensor)
+    )
 
 
 def estimate_memory(cfg: Any, num_envs: Optional[int] = None) -> MemoryEstimate:
@@ -123,17 +138,24 @@ def check_memory(cfg: Any, num_envs: Optional[int] = None) -> MemoryEstimate:
         ConfigError: at the field that scales the largest part, with the estimate,
             the limit and the fields to change.
     """
-    n = check_int(cfg.num_envs if num_envs is None else num_envs, "num_envs", low=1, high=MAX_NUM_ENVS,
-                  hint=" (each env is a separate MuJoCo simulation)")
+    n = check_int(
+        cfg.num_envs if num_envs is None else num_envs,
+        "num_envs",
+        low=1,
+        high=MAX_NUM_ENVS,
+        hint=" (each env is a separate MuJoCo simulation)",
+    )
     est = estimate_memory(cfg, n)
     limit, source = available_memory()
     if limit is None or est.total <= limit:
         return est
     largest = est.largest()
     fields = ", ".join(est.fields[largest])
-    raise ConfigError(est.fields[largest][0] if largest == "simulation" else _path_of(largest),
-                      f"num_envs={n} needs about {_gb(est.total)} of memory ({est.describe()}), more than the "
-                      f"{_gb(limit)} of {source}. Lower {fields}, or set {MEMORY_LIMIT_ENV} to allow more.")
+    raise ConfigError(
+        est.fields[largest][0] if largest == "simulation" else _path_of(largest),
+        f"num_envs={n} needs about {_gb(est.total)} of memory ({est.describe()}), more than the "
+        f"{_gb(limit)} of {source}. Lower {fields}, or set {MEMORY_LIMIT_ENV} to allow more.",
+    )
 
 
 def _path_of(part: str) -> str:

@@ -19,8 +19,12 @@ __all__ = ["EVENT_MODES", "SECTION_MODES", "check_sections", "check_event_mode",
 #: The event modes the env itself runs.
 EVENT_MODES = ("startup", "reset", "interval")
 #: Modes of the other manager sections.
-SECTION_MODES = {"observations": ("add", "modify"), "rewards": ("add", "replace"), "actions": ("pre", "post"),
-                 "dataset": ("save",)}
+SECTION_MODES = {
+    "observations": ("add", "modify"),
+    "rewards": ("add", "replace"),
+    "actions": ("pre", "post"),
+    "dataset": ("save",),
+}
 #: Largest ``interval_step`` accepted (an interval event fires every that many env steps).
 MAX_INTERVAL_STEP = 10_000_000
 
@@ -61,8 +65,10 @@ def check_event_mode(mode: Any, path: str, declared: Iterable[str] = (), warn: b
     """
     where = join_path(path, "mode")
     if not isinstance(mode, str) or not mode.strip():
-        raise ConfigError(where, f"expected an event mode ('startup', 'reset', 'interval' or a declared custom "
-                                 f"mode), got {describe(mode)}")
+        raise ConfigError(
+            where,
+            f"expected an event mode ('startup', 'reset', 'interval' or a declared custom mode), got {describe(mode)}",
+        )
     declared = [str(m) for m in declared]
     known = [*EVENT_MODES, *declared]
     if mode in known:
@@ -70,11 +76,17 @@ def check_event_mode(mode: Any, path: str, declared: Iterable[str] = (), warn: b
     near = close_modes(mode, known)
     if near:
         suggestion = " or ".join(repr(m) for m in near)
-        raise ConfigError(where, f"unknown event mode {mode!r}. Did you mean {suggestion}? (a custom mode "
-                                 f"with this name must be declared in env.custom_event_modes)")
+        raise ConfigError(
+            where,
+            f"unknown event mode {mode!r}. Did you mean {suggestion}? (a custom mode "
+            f"with this name must be declared in env.custom_event_modes)",
+        )
     if warn:
-        warnings.warn(f"{where}: custom event mode {mode!r} is not declared; it runs only when task code calls "
-                      f"env.event_manager.apply({mode!r}). Declare it in env.custom_event_modes.", stacklevel=3)
+        warnings.warn(
+            f"{where}: custom event mode {mode!r} is not declared; it runs only when task code calls "
+            f"env.event_manager.apply({mode!r}). Declare it in env.custom_event_modes.",
+            stacklevel=3,
+        )
 
 
 def check_declared_modes(modes: Any, path: str = "env.custom_event_modes") -> list[str]:
@@ -117,8 +129,13 @@ def check_sections(cfg: Any) -> None:
 
 #: Positional arguments before the params, per section (as the managers call functors).
 _MIN_ARGC = {"events": 2, "observations": 2, "rewards": 4, "dataset": 2}
-_KINDS = {"events": "event", "observations": "observation", "rewards": "reward", "actions": "action",
-          "dataset": "dataset"}
+_KINDS = {
+    "events": "event",
+    "observations": "observation",
+    "rewards": "reward",
+    "actions": "action",
+    "dataset": "dataset",
+}
 #: Params naming asset data (``get_data_path`` names or paths) that must exist.
 DATA_PATH_PARAMS = ("folder_path", "texture_path")
 
@@ -223,8 +240,11 @@ def check_interval(fcfg: Any, where: str, max_episode_steps: Optional[int], warn
     step = check_int(fcfg.interval_step, join_path(where, "interval_step"), low=1, high=MAX_INTERVAL_STEP)
     limit = max_episode_steps if isinstance(max_episode_steps, int) and max_episode_steps > 0 else None
     if warn and fcfg.mode == "interval" and limit is not None and step > limit and not fcfg.is_global:
-        warnings.warn(f"{join_path(where, 'interval_step')}: {step} is above max_episode_steps ({limit}): the "
-                      f"per-env counter restarts with each episode, so this event never fires", stacklevel=3)
+        warnings.warn(
+            f"{join_path(where, 'interval_step')}: {step} is above max_episode_steps ({limit}): the "
+            f"per-env counter restarts with each episode, so this event never fires",
+            stacklevel=3,
+        )
 
 
 def _check_section_entry(section: str, fcfg: Any, where: str) -> None:
@@ -233,15 +253,19 @@ def _check_section_entry(section: str, fcfg: Any, where: str) -> None:
     if mode not in modes:
         hint = close_modes(mode, modes) if isinstance(mode, str) else []
         extra = f" Did you mean {hint[0]!r}?" if hint else ""
-        raise ConfigError(join_path(where, "mode"), f"mode must be {' or '.join(map(repr, modes))}, "
-                                                    f"got {describe(mode)}.{extra}")
+        raise ConfigError(
+            join_path(where, "mode"), f"mode must be {' or '.join(map(repr, modes))}, got {describe(mode)}.{extra}"
+        )
     if section == "observations":
         name = fcfg.name
         if not isinstance(name, str) or not name.strip() or any(not part for part in name.split("/")):
-            raise ConfigError(join_path(where, "name"), f"an observation functor needs a 'name' such as "
-                                                        f"'object/cube_pose', got {describe(name)}")
+            raise ConfigError(
+                join_path(where, "name"),
+                f"an observation functor needs a 'name' such as 'object/cube_pose', got {describe(name)}",
+            )
     if section == "rewards":
         check_number(fcfg.weight, join_path(where, "weight"))
     if section == "dataset" and not isinstance(fcfg.save_failed_episodes, bool):
-        raise ConfigError(join_path(where, "save_failed_episodes"),
-                          f"expected true/false, got {describe(fcfg.save_failed_episodes)}")
+        raise ConfigError(
+            join_path(where, "save_failed_episodes"), f"expected true/false, got {describe(fcfg.save_failed_episodes)}"
+        )

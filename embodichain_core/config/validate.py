@@ -21,8 +21,15 @@ from embodichain_core.config.resources import MAX_NUM_ENVS, check_memory
 from embodichain_core.config.sections import check_sections
 from embodichain_core.utils.suggest import did_you_mean
 
-__all__ = ["validate_env_cfg", "check_run_settings", "check_sim", "MAX_SIM_STEPS_PER_CONTROL",
-           "MAX_PHYSICS_SUBSTEPS", "MAX_EPISODE_STEPS", "MAX_PHYSICS_DT"]
+__all__ = [
+    "validate_env_cfg",
+    "check_run_settings",
+    "check_sim",
+    "MAX_SIM_STEPS_PER_CONTROL",
+    "MAX_PHYSICS_SUBSTEPS",
+    "MAX_EPISODE_STEPS",
+    "MAX_PHYSICS_DT",
+]
 
 MAX_SIM_STEPS_PER_CONTROL = 10_000
 MAX_PHYSICS_SUBSTEPS = 1_000
@@ -57,14 +64,20 @@ def check_run_settings(cfg: Any, num_envs: Optional[int] = None) -> None:
     hint = " (each env is a separate MuJoCo simulation)"
     check_int(cfg.num_envs if num_envs is None else num_envs, "num_envs", low=1, high=MAX_NUM_ENVS, hint=hint)
     check_int(cfg.sim_steps_per_control, "env.sim_steps_per_control", low=1, high=MAX_SIM_STEPS_PER_CONTROL)
-    check_int(cfg.max_episode_steps, "max_episode_steps", low=-(2 ** 31), high=MAX_EPISODE_STEPS,
-              hint=" (0 or less: unlimited)")
+    check_int(
+        cfg.max_episode_steps, "max_episode_steps", low=-(2**31), high=MAX_EPISODE_STEPS, hint=" (0 or less: unlimited)"
+    )
     if cfg.target_control_frequency is not None:
         check_number(cfg.target_control_frequency, "env.target_control_frequency", low=0.0, low_open=True)
     if cfg.seed is not None:
-        check_int(cfg.seed, "env.seed", low=-1, high=2 ** 63 - 1)
-    for name in ("ignore_terminations", "verbose", "filter_visual_rand", "filter_dataset_saving",
-                 "init_rollout_buffer"):
+        check_int(cfg.seed, "env.seed", low=-1, high=2**63 - 1)
+    for name in (
+        "ignore_terminations",
+        "verbose",
+        "filter_visual_rand",
+        "filter_dataset_saving",
+        "init_rollout_buffer",
+    ):
         if not isinstance(getattr(cfg, name, False), bool):
             raise ConfigError(join_path("env", name), f"expected true/false, got {getattr(cfg, name)!r}")
     for i, jid in enumerate(getattr(cfg, "active_joint_ids", None) or []):
@@ -80,23 +93,29 @@ def check_backend(sim: Any, path: str) -> None:
     backends = ("mujoco_batch", "warp")
     backend = getattr(sim, "backend", "mujoco_batch")
     if backend not in backends:
-        raise ConfigError(join_path(path, "backend"),
-                          f"unknown backend {backend!r}.{did_you_mean(str(backend), backends)}")
+        raise ConfigError(
+            join_path(path, "backend"), f"unknown backend {backend!r}.{did_you_mean(str(backend), backends)}"
+        )
     if backend != "warp":
         return
     device = str(sim.sim_device)
     if not (device == "cpu" or device == "cuda" or (device.startswith("cuda:") and device[5:].isdigit())):
-        raise ConfigError(join_path(path, "sim_device"), f"{device!r} is not a device of backend 'warp'; "
-                          "use 'cpu', 'cuda' or 'cuda:N'")
+        raise ConfigError(
+            join_path(path, "sim_device"),
+            f"{device!r} is not a device of backend 'warp'; use 'cpu', 'cuda' or 'cuda:N'",
+        )
     if sim.physics_config.solver == "PGS":
-        raise ConfigError(join_path(path, "physics_config", "solver"), "'PGS' is not available on backend 'warp'; "
-                          "use 'Newton' or 'CG'")
+        raise ConfigError(
+            join_path(path, "physics_config", "solver"),
+            "'PGS' is not available on backend 'warp'; use 'Newton' or 'CG'",
+        )
 
 
 def check_sim(sim: Any, path: str) -> None:
     """``SimulationManagerCfg``: time step, substeps, solver, gravity, window and render sizes."""
-    check_number(sim.physics_dt, join_path(path, "physics_dt"), low=0.0, high=MAX_PHYSICS_DT, low_open=True,
-                 what="seconds")
+    check_number(
+        sim.physics_dt, join_path(path, "physics_dt"), low=0.0, high=MAX_PHYSICS_DT, low_open=True, what="seconds"
+    )
     check_int(sim.physics_substeps, join_path(path, "physics_substeps"), low=1, high=MAX_PHYSICS_SUBSTEPS)
     check_number(sim.arena_space, join_path(path, "arena_space"), low=0.0)
     for name in ("width", "height"):
@@ -111,5 +130,6 @@ def check_sim(sim: Any, path: str) -> None:
         check_number(getattr(phys, name), join_path(where, name), low=0.0)
     render = join_path(path, "render_cfg")
     check_int(sim.render_cfg.spp, join_path(render, "spp"), low=1, high=4096)
-    check_number(sim.render_cfg.tone_mapping_exposure, join_path(render, "tone_mapping_exposure"), low=0.0,
-                 low_open=True)
+    check_number(
+        sim.render_cfg.tone_mapping_exposure, join_path(render, "tone_mapping_exposure"), low=0.0, low_open=True
+    )

@@ -44,9 +44,11 @@ def _link(index: int, axis: str, pad: str, limit: float) -> str:
     """Opening lines of link ``index`` (1-based): body, hinge joint, capsule geom."""
     z = 0.08 if index == 1 else 0.1
     rgba = _LINK_RGBA[index % 2]
-    return (f'{pad}<body name="link{index}" pos="0 0 {z}">\n'
-            f'{pad}  <joint name="joint{index}" type="hinge" axis="{axis}" range="{-limit} {limit}"/>\n'
-            f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.04" mass="1" rgba="{rgba}"/>\n')
+    return (
+        f'{pad}<body name="link{index}" pos="0 0 {z}">\n'
+        f'{pad}  <joint name="joint{index}" type="hinge" axis="{axis}" range="{-limit} {limit}"/>\n'
+        f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.04" mass="1" rgba="{rgba}"/>\n'
+    )
 
 
 def arm7_mjcf(name: str = "arm7", joint_limit: float = 2.8) -> str:
@@ -59,9 +61,13 @@ def arm7_mjcf(name: str = "arm7", joint_limit: float = 2.8) -> str:
     Returns:
         A complete ``<mujoco>`` document (joints ``joint1..7``, ``finger_joint1/2``).
     """
-    lines = [f'<mujoco model="{name}">', '  <compiler angle="radian"/>', "  <worldbody>",
-             '    <body name="base">',
-             '      <geom type="cylinder" size="0.08 0.04" mass="5" rgba="0.3 0.3 0.32 1"/>']
+    lines = [
+        f'<mujoco model="{name}">',
+        '  <compiler angle="radian"/>',
+        "  <worldbody>",
+        '    <body name="base">',
+        '      <geom type="cylinder" size="0.08 0.04" mass="5" rgba="0.3 0.3 0.32 1"/>',
+    ]
     body = ""
     for i, axis in enumerate(JOINT_AXES):
         body += _link(i + 1, axis, "      " + "  " * i, joint_limit)
@@ -69,9 +75,15 @@ def arm7_mjcf(name: str = "arm7", joint_limit: float = 2.8) -> str:
     body += _HAND.format(pad=pad)
     for i in reversed(range(len(JOINT_AXES))):
         body += "      " + "  " * i + "</body>\n"
-    lines += [body.rstrip("\n"), "    </body>", "  </worldbody>", "  <equality>",
-              '    <joint joint1="finger_joint2" joint2="finger_joint1" polycoef="0 1 0 0 0"/>',
-              "  </equality>", "</mujoco>"]
+    lines += [
+        body.rstrip("\n"),
+        "    </body>",
+        "  </worldbody>",
+        "  <equality>",
+        '    <joint joint1="finger_joint2" joint2="finger_joint1" polycoef="0 1 0 0 0"/>',
+        "  </equality>",
+        "</mujoco>",
+    ]
     return "\n".join(lines) + "\n"
 
 

@@ -27,8 +27,17 @@ import torch
 
 __all__ = ["ActionChecker"]
 
-_REAL = (torch.float32, torch.float64, torch.float16, torch.bfloat16, torch.int8, torch.int16, torch.int32,
-         torch.int64, torch.uint8)
+_REAL = (
+    torch.float32,
+    torch.float64,
+    torch.float16,
+    torch.bfloat16,
+    torch.int8,
+    torch.int16,
+    torch.int32,
+    torch.int64,
+    torch.uint8,
+)
 
 
 class ActionChecker:
@@ -43,8 +52,15 @@ class ActionChecker:
         detail: what the values mean, appended to shape errors (e.g. the terms' split).
     """
 
-    def __init__(self, num_envs: int, widths: Sequence[int], device: torch.device, space: Any,
-                 dict_widths: Mapping[str, Sequence[int]] | None = None, detail: str = ""):
+    def __init__(
+        self,
+        num_envs: int,
+        widths: Sequence[int],
+        device: torch.device,
+        space: Any,
+        dict_widths: Mapping[str, Sequence[int]] | None = None,
+        detail: str = "",
+    ):
         self.num_envs, self.widths = int(num_envs), [int(w) for w in widths]
         self.device, self.detail = torch.device(device), detail
         shape, dtype = getattr(space, "shape", None), getattr(space, "dtype", None)
@@ -52,8 +68,13 @@ class ActionChecker:
         self.dict_widths = {k: [int(w) for w in v] for k, v in (dict_widths or {}).items()}
 
     def __call__(self, action: Any) -> torch.Tensor | dict[str, torch.Tensor]:
-        if type(action) is torch.Tensor and action.dtype is torch.float32 and action.dim() == 2 \
-                and action.shape[0] == self.num_envs and action.shape[1] in self.widths:
+        if (
+            type(action) is torch.Tensor
+            and action.dtype is torch.float32
+            and action.dim() == 2
+            and action.shape[0] == self.num_envs
+            and action.shape[1] in self.widths
+        ):
             self._check_device(action, "action")  # the common case: no conversion at all
             self._check_finite(action, "action")
             return action
@@ -63,14 +84,18 @@ class ActionChecker:
 
     def _check_dict(self, action: Mapping) -> dict[str, torch.Tensor]:
         if not self.dict_widths:
-            raise TypeError(f"this env takes an array action of shape {self._expected(self.widths)} "
-                            f"(action space {self.space}), got a dict with keys {list(action)}")
+            raise TypeError(
+                f"this env takes an array action of shape {self._expected(self.widths)} "
+                f"(action space {self.space}), got a dict with keys {list(action)}"
+            )
         unknown = [k for k in action if k not in self.dict_widths]
         if unknown or not action:
-            raise ValueError(f"action dict keys {list(action)}: expected some of {list(self.dict_widths)} "
-                             f"(unknown: {unknown})")
-        return {key: self._check_array(value, self.dict_widths[key], f"action[{key!r}]")
-                for key, value in action.items()}
+            raise ValueError(
+                f"action dict keys {list(action)}: expected some of {list(self.dict_widths)} (unknown: {unknown})"
+            )
+        return {
+            key: self._check_array(value, self.dict_widths[key], f"action[{key!r}]") for key, value in action.items()
+        }
 
     def _check_array(self, value: Any, widths: Sequence[int], what: str) -> torch.Tensor:
         tensor = self._as_tensor(value, widths, what)
@@ -106,13 +131,17 @@ class ActionChecker:
         if 1 in widths and (shape == () or shape == (n,)):
             return tensor.reshape(-1, 1).expand(n, 1)
         detail = f"; {self.detail}" if self.detail and what == "action" else ""
-        raise ValueError(f"{what} has shape {shape}; expected {self._expected(widths)} (action space "
-                         f"{self.space}; a 1-D action of {widths[0]} values is applied to every env){detail}")
+        raise ValueError(
+            f"{what} has shape {shape}; expected {self._expected(widths)} (action space "
+            f"{self.space}; a 1-D action of {widths[0]} values is applied to every env){detail}"
+        )
 
     def _check_device(self, tensor: torch.Tensor, what: str) -> None:
         if tensor.device.type != self.device.type:
-            raise ValueError(f"{what} is on device {tensor.device}; the env runs on {self.device} "
-                             f"(move it with .to({str(self.device)!r}))")
+            raise ValueError(
+                f"{what} is on device {tensor.device}; the env runs on {self.device} "
+                f"(move it with .to({str(self.device)!r}))"
+            )
 
     @staticmethod
     def _check_finite(tensor: torch.Tensor, what: str) -> None:

@@ -60,8 +60,13 @@ class EmbodiedEnv(TaskApi, gym.Env):
     _drive_targets: dict[str, tuple[torch.Tensor, torch.Tensor]]
     _robot_io: RobotIO
 
-    def __init__(self, cfg: Optional[EmbodiedEnvCfg] = None, num_envs: Optional[int] = None,
-                 render_mode: Optional[str] = None, **kwargs: Any):
+    def __init__(
+        self,
+        cfg: Optional[EmbodiedEnvCfg] = None,
+        num_envs: Optional[int] = None,
+        render_mode: Optional[str] = None,
+        **kwargs: Any,
+    ):
         self.event_manager = self.observation_manager = self.reward_manager = None
         self.action_manager = self.dataset_manager = None
         self.affordance_datas: dict[str, Any] = {}
@@ -93,8 +98,9 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._check_action = env_build.action_checker(self)
         if self.cfg.init_rollout_buffer or env_build.recorders_need_buffer(self.dataset_manager):
             self.cfg.init_rollout_buffer = True
-            self.rollout_buffer = RolloutBuffer(obs, self.single_action_space.shape, self.num_envs,
-                                                self.max_episode_steps)
+            self.rollout_buffer = RolloutBuffer(
+                obs, self.single_action_space.shape, self.num_envs, self.max_episode_steps
+            )
         if self.cfg.verbose:
             print_summary(self)
 
@@ -160,8 +166,13 @@ class EmbodiedEnv(TaskApi, gym.Env):
         # 6. reset events
         self.event_manager.apply("reset", ids)
         # 7. manager resets (interval counters, class functors)
-        for manager in (self.event_manager, self.observation_manager, self.reward_manager, self.action_manager,
-                        self.dataset_manager):
+        for manager in (
+            self.event_manager,
+            self.observation_manager,
+            self.reward_manager,
+            self.action_manager,
+            self.dataset_manager,
+        ):
             if manager is not None:
                 manager.reset(ids)
         # 8. counters
@@ -208,8 +219,9 @@ class EmbodiedEnv(TaskApi, gym.Env):
             info["rewards"] = terms
         return reward
 
-    def _dones(self, obs: Any, info: dict,
-               diverged: list[int]) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
+    def _dones(
+        self, obs: Any, info: dict, diverged: list[int]
+    ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
         ``truncated = check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
         success = info["success"]

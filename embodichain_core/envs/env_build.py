@@ -58,8 +58,9 @@ def bind_extensions(env: Any) -> None:
     """Set ``cfg.extensions`` as env attributes (one that would hide a class attribute is an error)."""
     for key, value in (env.cfg.extensions or {}).items():
         if hasattr(type(env), key):
-            raise ConfigError(f"env.extensions.{key}", f"{key!r} would shadow the env attribute of the same name; "
-                                                       "rename it")
+            raise ConfigError(
+                f"env.extensions.{key}", f"{key!r} would shadow the env attribute of the same name; rename it"
+            )
         setattr(env, key, value)
 
 
@@ -112,8 +113,7 @@ def build_managers(env: Any, events: Any) -> None:
 
 def recorders_need_buffer(manager: Optional[DatasetManager]) -> bool:
     """A recorder that reads ``env.rollout_buffer`` sets ``uses_rollout_buffer = True``."""
-    return manager is not None and any(getattr(e.func, "uses_rollout_buffer", False)
-                                       for e in manager.entries.values())
+    return manager is not None and any(getattr(e.func, "uses_rollout_buffer", False) for e in manager.entries.values())
 
 
 def action_checker(env: Any) -> ActionChecker:
@@ -134,5 +134,6 @@ def action_checker(env: Any) -> ActionChecker:
         return ActionChecker(env.num_envs, [sum(dims)], env.device, env.action_space, keys, detail)
     n_active = len(env.active_joint_ids)
     widths = sorted({n_active, env.robot.dof}, key=lambda w: w != n_active)
-    return ActionChecker(env.num_envs, widths, env.device, env.action_space,
-                         {key: widths for key in ("qpos", "qvel", "qf")})
+    return ActionChecker(
+        env.num_envs, widths, env.device, env.action_space, {key: widths for key in ("qpos", "qvel", "qf")}
+    )

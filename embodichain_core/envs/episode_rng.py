@@ -224,6 +224,8 @@ def episode_seeds_option(options: dict, n_reset: int) -> Optional[np.ndarray]:
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"reset option 'episode_seeds' must hold ints in [0, 2**64), got {seeds!r}") from None
     if values.size != n_reset:
-        raise ValueError(f"reset option 'episode_seeds' has {values.size} value(s) for {n_reset} reset env(s) "
-                         f"(one per id of 'reset_ids', in the same order)")
+        raise ValueError(
+            f"reset option 'episode_seeds' has {values.size} value(s) for {n_reset} reset env(s) "
+            f"(one per id of 'reset_ids', in the same order)"
+        )
     return values

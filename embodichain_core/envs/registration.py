@@ -56,13 +56,17 @@ def _provided_by_plugins(uid: str, cls: type, kwargs: dict, max_episode_steps: O
     if _entry(cls) in providers:
         REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
     else:
-        warnings.warn(f"env id {uid!r} is provided by installed plugins ({', '.join(providers)}); "
-                      f"register_env keeps theirs and ignores {_entry(cls)}", stacklevel=3)
+        warnings.warn(
+            f"env id {uid!r} is provided by installed plugins ({', '.join(providers)}); "
+            f"register_env keeps theirs and ignores {_entry(cls)}",
+            stacklevel=3,
+        )
     return True
 
 
-def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bool = False,
-                 **kwargs: Any) -> Callable[[type], type]:
+def register_env(
+    uid: str, max_episode_steps: Optional[int] = None, override: bool = False, **kwargs: Any
+) -> Callable[[type], type]:
     """Class decorator registering ``uid`` with gymnasium.
 
     Re-registering the same class (its module being imported again by gymnasium)
@@ -93,15 +97,24 @@ def register_env(uid: str, max_episode_steps: Optional[int] = None, override: bo
                 existing.vector_entry_point = functools.partial(make_vec_env, _entry(cls))
             return cls
         if existing is not None and not override:
-            warnings.warn(f"env id {uid!r} is already registered by {existing.entry_point}; keeping it "
-                          f"(pass override=True to replace it)", stacklevel=2)
+            warnings.warn(
+                f"env id {uid!r} is already registered by {existing.entry_point}; keeping it "
+                f"(pass override=True to replace it)",
+                stacklevel=2,
+            )
             return cls
         gym.envs.registry.pop(uid, None)
         defaults = dict(kwargs)
         if max_episode_steps is not None:
             defaults["_registered_max_episode_steps"] = int(max_episode_steps)
-        gym.register(uid, entry_point=_entry(cls), disable_env_checker=True, order_enforce=False,
-                     vector_entry_point=functools.partial(make_vec_env, _entry(cls)), kwargs=defaults)
+        gym.register(
+            uid,
+            entry_point=_entry(cls),
+            disable_env_checker=True,
+            order_enforce=False,
+            vector_entry_point=functools.partial(make_vec_env, _entry(cls)),
+            kwargs=defaults,
+        )
         gym.envs.registry[uid] = batched_spec(gym.envs.registry[uid])  # unbatched sync/async sub-envs
         REGISTERED_ENVS[uid] = EnvSpec(uid, cls, max_episode_steps, dict(kwargs))
         return cls

@@ -44,14 +44,20 @@ class RobotIO:
         self.active_joint_ids = list(active_joint_ids)
         self.n_active, self.dof = len(aid), int(robot.dof)
         self.qpos_adr, self.dof_adr = robot.qpos_adr[aid], robot.dof_adr[aid]
-        self.host = bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False)) \
+        self.host = (
+            bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False))
             and getattr(sim, "device", torch.device("cpu")).type == "cpu"
+        )
         self._qpos_sel, self._dof_sel = _selector(self.qpos_adr.numpy()), _selector(self.dof_adr.numpy())
         # per command kind: (driven columns of the action, their actuator ids)
-        self.drive_targets = {key: ((acts >= 0), acts[acts >= 0])
-                              for key, acts in (("qpos", robot.pos_act[aid]), ("qvel", robot.vel_act[aid]))}
-        self._drive_np = {key: (None if bool(cols.all()) else cols.numpy(), acts.numpy())
-                          for key, (cols, acts) in self.drive_targets.items()}
+        self.drive_targets = {
+            key: ((acts >= 0), acts[acts >= 0])
+            for key, acts in (("qpos", robot.pos_act[aid]), ("qvel", robot.vel_act[aid]))
+        }
+        self._drive_np = {
+            key: (None if bool(cols.all()) else cols.numpy(), acts.numpy())
+            for key, (cols, acts) in self.drive_targets.items()
+        }
 
     # -- phase 2: commands ------------------------------------------------------------------------
     def write(self, key: str, value: Any) -> None:
@@ -69,8 +75,10 @@ class RobotIO:
         if value.shape[-1] == self.dof and self.dof != self.n_active:
             value = value[:, self.active_joint_ids]
         elif value.shape[-1] != self.n_active:
-            raise ValueError(f"{key} command has {value.shape[-1]} values per env; expected {self.n_active} "
-                             f"(active joints) or {self.dof} (all joints)")
+            raise ValueError(
+                f"{key} command has {value.shape[-1]} values per env; expected {self.n_active} "
+                f"(active joints) or {self.dof} (all joints)"
+            )
         if self.host and value.device.type == "cpu" and value.dtype in (torch.float32, torch.float64):
             self._write_host(key, value.detach().numpy())
             return
@@ -97,9 +105,14 @@ class RobotIO:
         if self.host:
             qfrc = sim.qfrc_actuator.numpy()  # the attribute read runs the lazy forward first
             arrays, dof = sim.arrays, self._dof_sel
-            return {"qpos": torch.from_numpy(arrays["qpos"][:, self._qpos_sel].astype(np.float32)),
-                    "qvel": torch.from_numpy(arrays["qvel"][:, dof].astype(np.float32)),
-                    "qf": torch.from_numpy((qfrc[:, dof] + arrays["qfrc_applied"][:, dof]).astype(np.float32))}
+            return {
+                "qpos": torch.from_numpy(arrays["qpos"][:, self._qpos_sel].astype(np.float32)),
+                "qvel": torch.from_numpy(arrays["qvel"][:, dof].astype(np.float32)),
+                "qf": torch.from_numpy((qfrc[:, dof] + arrays["qfrc_applied"][:, dof]).astype(np.float32)),
+            }
         dof = self.dof_adr
-        return {"qpos": sim.qpos[:, self.qpos_adr].float(), "qvel": sim.qvel[:, dof].float(),
-                "qf": (sim.qfrc_actuator[:, dof] + sim.qfrc_applied[:, dof]).float()}
+        return {
+            "qpos": sim.qpos[:, self.qpos_adr].float(),
+            "qvel": sim.qvel[:, dof].float(),
+            "qf": (sim.qfrc_actuator[:, dof] + sim.qfrc_applied[:, dof]).float(),
+        }

@@ -52,14 +52,25 @@ class RolloutBuffer:
         for key, value in _flatten(obs).items():
             self._pending_obs[key][env_ids] = value[env_ids]
 
-    def add(self, obs_next: dict, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
-            truncated: torch.Tensor, success: torch.Tensor) -> None:
+    def add(
+        self,
+        obs_next: dict,
+        action: Any,
+        reward: torch.Tensor,
+        terminated: torch.Tensor,
+        truncated: torch.Tensor,
+        success: torch.Tensor,
+    ) -> None:
         """Store one frame per env (envs whose episode is full keep their last frame)."""
         rows = torch.arange(self.num_envs)
         t = self.length.clamp(max=self.max_steps - 1)
         for key, value in self._pending_obs.items():
             self.data[f"obs/{key}"][rows, t] = value
-        if isinstance(action, torch.Tensor) and action.dim() == 2 and action.shape[1:] == self.data["actions"].shape[2:]:
+        if (
+            isinstance(action, torch.Tensor)
+            and action.dim() == 2
+            and action.shape[1:] == self.data["actions"].shape[2:]
+        ):
             self.data["actions"][rows, t] = action.float()
         self.data["rewards"][rows, t] = reward.float()
         self.data["terminated"][rows, t] = terminated

@@ -10,18 +10,30 @@ def summary_text(env: Any) -> str:
     lines = [f"╭─ Environment initialized: {type(env).__name__}"]
     add = lines.append
     add(f"│ Parallel environments  {env.num_envs}   device {env.device}   seed {env.cfg.seed}")
-    add(f"│ Physics  {env.physics_dt:g} s ({env.physics_frequency:g} Hz, {env.cfg.sim_cfg.physics_substeps} MuJoCo substeps)")
+    add(
+        f"│ Physics  {env.physics_dt:g} s ({env.physics_frequency:g} Hz, {env.cfg.sim_cfg.physics_substeps} MuJoCo substeps)"
+    )
     add(f"│ Control  {env.step_dt:g} s ({env.control_frequency:g} Hz, {env.sim_steps_per_control} physics steps)")
     add(f"│ Episode limit  {env.cfg.max_episode_steps} steps")
     scene = env.scene
     add(f"│ Robot  {env.robot.uid} ({env.robot.dof} joints, {len(env.active_joint_ids)} active)")
-    for label, items in (("Sensors", scene.sensors), ("Lights", scene.lights), ("Rigid objects", scene.rigid_objects),
-                         ("Background", scene.backgrounds), ("Articulations", scene.articulations),
-                         ("Groups", scene.groups)):
+    for label, items in (
+        ("Sensors", scene.sensors),
+        ("Lights", scene.lights),
+        ("Rigid objects", scene.rigid_objects),
+        ("Background", scene.backgrounds),
+        ("Articulations", scene.articulations),
+        ("Groups", scene.groups),
+    ):
         if items:
             add(f"│ {label}  {', '.join(items)}")
-    managers = [("Event", env.event_manager), ("Observation", env.observation_manager),
-                ("Reward", env.reward_manager), ("Action", env.action_manager), ("Dataset", env.dataset_manager)]
+    managers = [
+        ("Event", env.event_manager),
+        ("Observation", env.observation_manager),
+        ("Reward", env.reward_manager),
+        ("Action", env.action_manager),
+        ("Dataset", env.dataset_manager),
+    ]
     active = [m for _, m in managers if m is not None and len(m)]
     add(f"│ Managers ({len(active)}/5 active, {sum(len(m) for m in active)} functors)")
     for label, manager in managers:

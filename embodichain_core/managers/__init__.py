@@ -17,7 +17,19 @@ from embodichain_core.managers.observation_manager import ObservationManager
 from embodichain_core.managers.reward_manager import RewardManager
 
 __all__ = [
-    "ActionManager", "ActionTerm", "ActionTermCfg", "DatasetFunctor", "DatasetFunctorCfg", "DatasetManager",
-    "EventCfg", "EventManager", "Functor", "FunctorCfg", "ObservationCfg", "ObservationManager", "RewardCfg",
-    "RewardManager", "SceneEntityCfg",
+    "ActionManager",
+    "ActionTerm",
+    "ActionTermCfg",
+    "DatasetFunctor",
+    "DatasetFunctorCfg",
+    "DatasetManager",
+    "EventCfg",
+    "EventManager",
+    "Functor",
+    "FunctorCfg",
+    "ObservationCfg",
+    "ObservationManager",
+    "RewardCfg",
+    "RewardManager",
+    "SceneEntityCfg",
 ]

@@ -79,8 +79,10 @@ class ActionManager(ManagerBase[ActionTermCfg]):
     def _process_flat(self, action: torch.Tensor, terms: dict[str, ActionTerm]) -> dict:
         dims = [t.action_dim for t in terms.values()]
         if action.shape[-1] != sum(dims):
-            raise ValueError(f"action has {action.shape[-1]} values per env; the action terms "
-                             f"{list(terms)} take {dims} (total {sum(dims)})")
+            raise ValueError(
+                f"action has {action.shape[-1]} values per env; the action terms "
+                f"{list(terms)} take {dims} (total {sum(dims)})"
+            )
         out: dict[str, Any] = {}
         for term, chunk in zip(terms.values(), torch.split(action, dims, dim=-1)):
             _merge(out, term.input_key, term.process_action(chunk))
@@ -96,8 +98,10 @@ class ActionManager(ManagerBase[ActionTermCfg]):
         return out
 
     def summary_rows(self) -> list[tuple[str, str, str]]:
-        return [(e.cfg.mode, n, f"{type(e.func).__name__} ({e.func.input_key}, dim {e.func.action_dim})")
-                for n, e in self.entries.items()]
+        return [
+            (e.cfg.mode, n, f"{type(e.func).__name__} ({e.func.input_key}, dim {e.func.action_dim})")
+            for n, e in self.entries.items()
+        ]
 
 
 def _merge(out: dict, key: str, command: Any) -> None:

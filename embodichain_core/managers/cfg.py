@@ -92,8 +92,10 @@ class SceneEntityCfg:
     def resolve(self, scene: Any, path: str = "") -> "SceneEntityCfg":
         """Check the uid and turn names into ids (in place); return ``self``."""
         if self.uid not in scene.asset_uids:
-            raise ConfigError(f"{path}.uid" if path else "uid",
-                              f"no entity {self.uid!r} in the scene.{did_you_mean(str(self.uid), scene.asset_uids)}")
+            raise ConfigError(
+                f"{path}.uid" if path else "uid",
+                f"no entity {self.uid!r} in the scene.{did_you_mean(str(self.uid), scene.asset_uids)}",
+            )
         entity = scene.get(self.uid)
         if self.joint_names is not None:
             self.joint_ids = self._names_to_ids(entity, "find_joints", self.joint_names, self.joint_ids, path, "joint")
@@ -109,7 +111,9 @@ class SceneEntityCfg:
         except KeyError as err:
             raise ConfigError(f"{path}.{what}_names" if path else f"{what}_names", str(err).strip("\"'")) from err
         if given != slice(None) and list(given) != list(ids):
-            raise ConfigError(path, f"{what}_names {names!r} resolve to {ids}, which disagrees with {what}_ids {given!r}")
+            raise ConfigError(
+                path, f"{what}_names {names!r} resolve to {ids}, which disagrees with {what}_ids {given!r}"
+            )
         return ids
 
 

@@ -33,8 +33,9 @@ class DatasetManager(ManagerBase[DatasetFunctorCfg]):
     def save_failed_episodes(self) -> bool:
         return any(e.cfg.save_failed_episodes for e in self.entries.values())
 
-    def record_step(self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
-                    truncated: torch.Tensor, info: dict) -> None:
+    def record_step(
+        self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor, truncated: torch.Tensor, info: dict
+    ) -> None:
         for e in self.entries.values():
             if hasattr(e.func, "record_step"):
                 try:

@@ -86,8 +86,9 @@ class DatasetFunctor(Functor):
 
     uses_rollout_buffer: bool = False
 
-    def record_step(self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor,
-                    truncated: torch.Tensor, info: dict) -> None:
+    def record_step(
+        self, obs: Any, action: Any, reward: torch.Tensor, terminated: torch.Tensor, truncated: torch.Tensor, info: dict
+    ) -> None:
         """Buffer one frame per env."""
 
     def record_reset(self, obs: Any, env_ids: torch.Tensor) -> None:

@@ -17,8 +17,18 @@ from embodichain_core.managers.functor import Functor
 from embodichain_core.utils.configclass import MISSING, is_configclass
 from embodichain_core.utils.suggest import did_you_mean
 
-ENTITY_PARAM_KEYS = {"entity_cfg", "source_entity_cfg", "target_entity_cfg", "object_cfg", "goal_cfg",
-                     "reference_entity_cfg", "end_effector_cfg", "robot_cfg", "obj_a_cfg", "obj_b_cfg"}
+ENTITY_PARAM_KEYS = {
+    "entity_cfg",
+    "source_entity_cfg",
+    "target_entity_cfg",
+    "object_cfg",
+    "goal_cfg",
+    "reference_entity_cfg",
+    "end_effector_cfg",
+    "robot_cfg",
+    "obj_a_cfg",
+    "obj_b_cfg",
+}
 
 
 CfgT = TypeVar("CfgT", bound=FunctorCfg)
@@ -157,14 +167,17 @@ def check_params(func: Any, params: dict, min_argc: int, path: str) -> None:
         allowed = None
     else:
         allowed = {p.name for p in args[min_argc:] if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
-    required = [p.name for p in args[min_argc:]
-                if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    required = [
+        p.name for p in args[min_argc:] if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+    ]
     name = getattr(func, "__name__", repr(func))
     if allowed is not None:
         for key in params:
             if key not in allowed:
-                raise ConfigError(join_path(path, "params", key),
-                                  f"functor {name!r} has no parameter {key!r}.{did_you_mean(key, allowed)}")
+                raise ConfigError(
+                    join_path(path, "params", key),
+                    f"functor {name!r} has no parameter {key!r}.{did_you_mean(key, allowed)}",
+                )
     missing = [r for r in required if r not in params]
     if missing:
         raise ConfigError(join_path(path, "params"), f"functor {name!r} needs parameter(s) {missing}")

@@ -49,7 +49,9 @@ class ObservationManager(ManagerBase[ObservationCfg]):
     def _check(self, func: Any, cfg: ObservationCfg, where: str) -> None:
         # not ``is MISSING``: configs are deep-copied, which copies the sentinel too
         if not isinstance(cfg.name, str) or not cfg.name:
-            raise ConfigError(join_path(where, "name"), "an observation functor needs a 'name' (e.g. 'object/cube_pose')")
+            raise ConfigError(
+                join_path(where, "name"), "an observation functor needs a 'name' (e.g. 'object/cube_pose')"
+            )
         if cfg.mode not in ("add", "modify"):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'modify', got {cfg.mode!r}")
         super()._check(func, cfg, where)
@@ -71,9 +73,10 @@ class ObservationManager(ManagerBase[ObservationCfg]):
             try:
                 data = get_nested(obs, name)
             except KeyError as err:
-                raise ConfigError(join_path(entry.path, "name"),
-                                  f"{err.args[0]}; mode 'modify' changes an existing observation "
-                                  f"(use mode 'add' to create one)") from None
+                raise ConfigError(
+                    join_path(entry.path, "name"),
+                    f"{err.args[0]}; mode 'modify' changes an existing observation (use mode 'add' to create one)",
+                ) from None
             out = entry(self._env, data)
             if out is not None and out is not data:
                 set_nested(obs, name, out)

@@ -43,8 +43,13 @@ __all__ = ["check_named_params", "check_param_types", "range_bounds"]
 _UNIT = (0.0, 1.0, False)
 _POSITIVE = (0.0, None, True)
 _NON_NEGATIVE = (0.0, None, False)
-_RELATIVE_NAMES = {"mass_range": _POSITIVE, "friction_range": _NON_NEGATIVE, "damping_range": _NON_NEGATIVE,
-                   "stiffness_range": _NON_NEGATIVE, "max_effort_range": _NON_NEGATIVE}
+_RELATIVE_NAMES = {
+    "mass_range": _POSITIVE,
+    "friction_range": _NON_NEGATIVE,
+    "damping_range": _NON_NEGATIVE,
+    "stiffness_range": _NON_NEGATIVE,
+    "max_effort_range": _NON_NEGATIVE,
+}
 
 
 def range_bounds(key: str, params: dict) -> tuple[Optional[float], Optional[float], bool]:
@@ -93,8 +98,9 @@ def _check_range_param(key: str, value: Any, params: dict, where: str) -> None:
     if "color" in key and isinstance(value, (list, tuple)):
         for i, bound in enumerate(value):
             if isinstance(bound, (list, tuple)) and len(bound) not in (1, 3, 4):
-                raise ConfigError(f"{where}[{i}]", f"a colour bound has 1, 3 (RGB) or 4 (RGBA) values, "
-                                                   f"got {len(bound)}: {bound!r}")
+                raise ConfigError(
+                    f"{where}[{i}]", f"a colour bound has 1, 3 (RGB) or 4 (RGBA) values, got {len(bound)}: {bound!r}"
+                )
     if isinstance(value, dict):
         if not value:
             raise ConfigError(where, "an empty mapping of ranges sets nothing; give [low, high]")
@@ -120,7 +126,9 @@ def _check_nan(value: Any, where: str, depth: int = 0) -> None:
 
 #: Annotations checked by :func:`check_param_types` -> (accepted types, description).
 _SIMPLE_TYPES: dict[str, tuple[tuple[type, ...], str]] = {
-    "bool": ((bool,), "true/false"), "int": ((int,), "an int"), "float": ((int, float), "a number"),
+    "bool": ((bool,), "true/false"),
+    "int": ((int,), "an int"),
+    "float": ((int, float), "a number"),
     "str": ((str,), "a string"),
 }
 
@@ -131,7 +139,7 @@ def _annotation_name(annotation: Any) -> tuple[str, bool]:
     text = text.replace("typing.", "").strip()
     for wrapper in ("Optional[", "Union[None, "):
         if text.startswith(wrapper) and text.endswith("]"):
-            return text[len(wrapper):-1].strip(), True
+            return text[len(wrapper) : -1].strip(), True
     if text.endswith("| None") or text.startswith("None |"):
         return text.replace("| None", "").replace("None |", "").strip(), True
     return text, False
@@ -156,6 +164,7 @@ def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None
             continue
         types, text = _SIMPLE_TYPES[kind]
         if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
-            raise ConfigError(join_path(path, "params", param.name),
-                              f"functor {name!r}: expected {text}, got {type(value).__name__} {value!r}")
-
+            raise ConfigError(
+                join_path(path, "params", param.name),
+                f"functor {name!r}: expected {text}, got {type(value).__name__} {value!r}",
+            )

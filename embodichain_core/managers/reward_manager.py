@@ -52,5 +52,7 @@ class RewardManager(ManagerBase[RewardCfg]):
         return total, terms
 
     def summary_rows(self) -> list[tuple[str, str, str]]:
-        return [(e.cfg.mode, n, f"{getattr(e.cfg.func, '__name__', e.cfg.func)} (weight {e.cfg.weight:g})")
-                for n, e in self.entries.items()]
+        return [
+            (e.cfg.mode, n, f"{getattr(e.cfg.func, '__name__', e.cfg.func)} (weight {e.cfg.weight:g})")
+            for n, e in self.entries.items()
+        ]

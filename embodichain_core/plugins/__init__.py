@@ -60,17 +60,57 @@ from embodichain_core.plugins.registry import (
 )
 
 __all__ = [
-    "hookimpl", "hookspec", "FUNCTOR_KINDS", "VISUAL_RANDOMIZATION", "KINDS",
-    "FunctorRegister", "RobotRegister", "SolverRegister", "SensorRegister", "AssetRegister", "TaskRegister",
-    "CommandRegister", "Entry", "Registry", "RegistryError", "DuplicateRegistrationError",
-    "UnknownNameError", "TargetImportError", "AmbiguousNameError", "NameClash", "NameClashWarning",
-    "PRIORITY_ENV", "plugin_priority", "known_providers", "name_clashes", "EmbodichainPluginManager", "PluginInfo",
-    "PluginLoadWarning", "CORE_PLUGIN_NAME", "get_plugin_manager", "load_plugins",
-    "register_plugin", "unregister_plugin", "isolated_plugins", "list_plugins",
-    "failed_plugins", "get_registry", "functor_registry", "robot_registry", "sensor_registry",
-    "asset_registry", "task_registry", "command_registry", "get_functor", "get_robot_cfg_class",
-    "solver_registry", "get_solver_class",
-    "get_sensor_classes", "get_asset_root", "asset_roots", "is_visual_randomization",
+    "hookimpl",
+    "hookspec",
+    "FUNCTOR_KINDS",
+    "VISUAL_RANDOMIZATION",
+    "KINDS",
+    "FunctorRegister",
+    "RobotRegister",
+    "SolverRegister",
+    "SensorRegister",
+    "AssetRegister",
+    "TaskRegister",
+    "CommandRegister",
+    "Entry",
+    "Registry",
+    "RegistryError",
+    "DuplicateRegistrationError",
+    "UnknownNameError",
+    "TargetImportError",
+    "AmbiguousNameError",
+    "NameClash",
+    "NameClashWarning",
+    "PRIORITY_ENV",
+    "plugin_priority",
+    "known_providers",
+    "name_clashes",
+    "EmbodichainPluginManager",
+    "PluginInfo",
+    "PluginLoadWarning",
+    "CORE_PLUGIN_NAME",
+    "get_plugin_manager",
+    "load_plugins",
+    "register_plugin",
+    "unregister_plugin",
+    "isolated_plugins",
+    "list_plugins",
+    "failed_plugins",
+    "get_registry",
+    "functor_registry",
+    "robot_registry",
+    "sensor_registry",
+    "asset_registry",
+    "task_registry",
+    "command_registry",
+    "get_functor",
+    "get_robot_cfg_class",
+    "solver_registry",
+    "get_solver_class",
+    "get_sensor_classes",
+    "get_asset_root",
+    "asset_roots",
+    "is_visual_randomization",
 ]
 
 
@@ -159,8 +199,9 @@ def is_visual_randomization(name: str) -> bool:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
         return False
-    return (entry is not None and entry.name.startswith("randomize_")
-            and entry.meta.get("category") == VISUAL_RANDOMIZATION)
+    return (
+        entry is not None and entry.name.startswith("randomize_") and entry.meta.get("category") == VISUAL_RANDOMIZATION
+    )
 
 
 def name_clashes(provider: str | None = None) -> list[NameClash]:

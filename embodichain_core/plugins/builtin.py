@@ -11,12 +11,15 @@ from embodichain_core.plugins.hookspecs import CommandRegister, hookimpl
 
 #: name -> (target, help) of the built-in CLI commands.
 BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
-    "list": ("embodichain_core.cli.list_cmd:main",
-             "List installed plugins, tasks, functors, robots, sensors, assets or commands"),
-    "run-env": ("embodichain_core.cli.run_env:main",
-                "Run a task id or a JSON/YAML gym config (data generation, preview)"),
-    "decompose": ("embodichain_core.cli.decompose:main",
-                  "Convex-decompose a mesh or the meshes of a URDF with CoACD"),
+    "list": (
+        "embodichain_core.cli.list_cmd:main",
+        "List installed plugins, tasks, functors, robots, sensors, assets or commands",
+    ),
+    "run-env": (
+        "embodichain_core.cli.run_env:main",
+        "Run a task id or a JSON/YAML gym config (data generation, preview)",
+    ),
+    "decompose": ("embodichain_core.cli.decompose:main", "Convex-decompose a mesh or the meshes of a URDF with CoACD"),
     "new": ("embodichain_core.cli.new_cmd:main", "Create a new task or functor plugin from a template"),
     "bench": ("embodichain_core.cli.bench:main", "Measure env throughput and overhead"),
 }

@@ -136,8 +136,16 @@ class Entry:
 
     __slots__ = ("name", "target", "provider", "meta", "lazy", "noun", "_value", "_signature")
 
-    def __init__(self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None,
-                 *, lazy: bool | None = None, noun: str = "entry"):
+    def __init__(
+        self,
+        name: str,
+        target: Any,
+        provider: str,
+        meta: dict[str, Any] | None = None,
+        *,
+        lazy: bool | None = None,
+        noun: str = "entry",
+    ):
         self.name, self.target, self.provider = name, target, provider
         self.meta: dict[str, Any] = dict(meta or {})
         self.lazy = is_lazy_target(target) if lazy is None else lazy

@@ -98,8 +98,10 @@ class TaskRegistry(Registry):
     def _check_name(self, name: Any, provider: str) -> None:
         super()._check_name(name, provider)
         if "/" in name:
-            raise ValueError(f"task {name!r} from {provider!r}: register the bare id; the gymnasium "
-                             f"namespace is the provider's ({gym_namespace(provider)}/...)")
+            raise ValueError(
+                f"task {name!r} from {provider!r}: register the bare id; the gymnasium "
+                f"namespace is the provider's ({gym_namespace(provider)}/...)"
+            )
 
     def qualified_name(self, entry: Entry) -> str:
         """The namespaced gym id ``<namespace>/<id>``."""
@@ -146,8 +148,15 @@ class TaskRegistry(Registry):
         else:
             target, kwargs = BareTaskEntryPoint(self, gym_id), {}
             vector = target.make_vec
-        spec = BatchedEnvSpec(gym_id, entry_point=target, disable_env_checker=True, order_enforce=False,
-                       max_episode_steps=None, kwargs=dict(kwargs), vector_entry_point=vector)
+        spec = BatchedEnvSpec(
+            gym_id,
+            entry_point=target,
+            disable_env_checker=True,
+            order_enforce=False,
+            max_episode_steps=None,
+            kwargs=dict(kwargs),
+            vector_entry_point=vector,
+        )
         self._owned[gym_id] = (spec, tuple(e.target for e in entries))
         gymnasium.registry[gym_id] = spec
         _MANAGED[gym_id] = self._owned[gym_id][1]
@@ -169,9 +178,13 @@ class TaskRegistry(Registry):
         if len(entries) == 1 and theirs == entries[0].target_repr:
             return  # the same class, registered by its own module: keep gymnasium's spec
         ids = ", ".join(repr(self.qualified_name(e)) for e in entries)
-        warnings.warn(f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins "
-                      f"(entry point {theirs!r}); it is left as it is. Use {ids} for the plugin "
-                      f"task{'s' if len(entries) > 1 else ''}.", NameClashWarning, stacklevel=2)
+        warnings.warn(
+            f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins "
+            f"(entry point {theirs!r}); it is left as it is. Use {ids} for the plugin "
+            f"task{'s' if len(entries) > 1 else ''}.",
+            NameClashWarning,
+            stacklevel=2,
+        )
 
     def release_gym(self) -> None:
         """Take this registry's ids out of gymnasium, restoring the ids they shadowed.

@@ -62,8 +62,7 @@ class BaseRegister:
         self.provider = provider
         self._on_add = on_add
 
-    def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None,
-             *, lazy: bool | None = None) -> Entry:
+    def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None) -> Entry:
         before = self.registry.find_own(self.provider, name)
         entry = self.registry.add(name, target, self.provider, meta, lazy=lazy)
         if entry is not before and self._on_add is not None:
@@ -77,8 +76,7 @@ class BaseRegister:
 class FunctorRegister(BaseRegister):
     """``register(name, target, *, kind, category="", description="")``."""
 
-    def __call__(self, name: str, target: Any, *, kind: str, category: str = "",
-                 description: str = "") -> Entry:
+    def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
         """Register a functor.
 
         Args:
@@ -89,8 +87,9 @@ class FunctorRegister(BaseRegister):
             description: one line; defaults to the target's first docstring line.
         """
         if kind not in FUNCTOR_KINDS:
-            raise ValueError(f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}."
-                             + did_you_mean(kind, FUNCTOR_KINDS))
+            raise ValueError(
+                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}." + did_you_mean(kind, FUNCTOR_KINDS)
+            )
         meta = {"kind": kind, "category": category, "description": description}
         return self._add(name, target, meta)
 
@@ -136,17 +135,25 @@ class AssetRegister(BaseRegister):
         import os
 
         if not (isinstance(root, (str, os.PathLike)) or callable(root)):
-            raise TypeError(f"asset root {name!r} from {self.provider!r} must be a path or a "
-                            f"callable, got {type(root).__name__}")
+            raise TypeError(
+                f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
+            )
         return self._add(name, root, lazy=False)
 
 
 class TaskRegister(BaseRegister):
     """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, ...)``."""
 
-    def __call__(self, task_id: str, entry_point: str, *, max_episode_steps: int | None = None,
-                 kwargs: dict[str, Any] | None = None, config: Any = None,
-                 description: str = "") -> Entry:
+    def __call__(
+        self,
+        task_id: str,
+        entry_point: str,
+        *,
+        max_episode_steps: int | None = None,
+        kwargs: dict[str, Any] | None = None,
+        config: Any = None,
+        description: str = "",
+    ) -> Entry:
         """Register a task and its gymnasium id.
 
         Args:
@@ -158,13 +165,19 @@ class TaskRegister(BaseRegister):
             description: one line shown by ``embodichain list tasks``.
         """
         if not is_lazy_target(entry_point):
-            raise ValueError(f"task {task_id!r} from {self.provider!r}: entry_point must be a "
-                             f"'module:Class' string, got {entry_point!r}")
+            raise ValueError(
+                f"task {task_id!r} from {self.provider!r}: entry_point must be a "
+                f"'module:Class' string, got {entry_point!r}"
+            )
         gym_kwargs = dict(kwargs or {})
         if max_episode_steps is not None:
             gym_kwargs["_registered_max_episode_steps"] = max_episode_steps
-        meta = {"max_episode_steps": max_episode_steps, "kwargs": gym_kwargs,
-                "config": config, "description": description}
+        meta = {
+            "max_episode_steps": max_episode_steps,
+            "kwargs": gym_kwargs,
+            "config": config,
+            "description": description,
+        }
         return self._add(task_id, entry_point, meta)
 
 
@@ -187,8 +200,8 @@ REGISTER_CLASSES: dict[str, type[BaseRegister]] = {
 }
 
 
-
 # --- hook specifications ----------------------------------------------------------------
+
 
 @hookspec
 def embodichain_register_functors(register: FunctorRegister) -> None:

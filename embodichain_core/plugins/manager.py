@@ -196,8 +196,9 @@ def _load_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str] = f
         if name in pm.infos:
             continue
         dist = getattr(ep, "dist", None)
-        info = pm.infos[name] = PluginInfo(name, getattr(dist, "version", "") or "", module=ep.value,
-                                           entry_point=ep.name)
+        info = pm.infos[name] = PluginInfo(
+            name, getattr(dist, "version", "") or "", module=ep.value, entry_point=ep.name
+        )
         if blocked & {name, ep.name, "*"}:
             info.status = "blocked"
             pm.set_blocked(name)
@@ -219,7 +220,9 @@ def _report_entry_point_clashes(pm: EmbodichainPluginManager, clashes: dict[str,
             f"the embodichain entry point {ep_name!r} is declared by {len(plugins)} distributions: "
             f"{join_names([repr(p) for p in plugins])}. All of them are loaded, each under its "
             f"distribution name; name the entry point after its distribution to silence this.",
-            NameClashWarning, stacklevel=4)
+            NameClashWarning,
+            stacklevel=4,
+        )
 
 
 def _activate(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
@@ -235,8 +238,11 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
     info.status, info.error, info.registered = "failed", traceback.format_exc(), {}
     if pm.get_plugin(info.name) is not None:
         pm.unregister(name=info.name)
-    warnings.warn(f"embodichain plugin {info.name!r} failed to load and was skipped:\n{info.error}",
-                  PluginLoadWarning, stacklevel=3)
+    warnings.warn(
+        f"embodichain plugin {info.name!r} failed to load and was skipped:\n{info.error}",
+        PluginLoadWarning,
+        stacklevel=3,
+    )
 
 
 def _check_hooks(pm: EmbodichainPluginManager, name: str) -> None:
@@ -328,8 +334,9 @@ def _default_name(obj: Any) -> str:
 
 
 @contextmanager
-def isolated_plugins(*, load_entry_points: bool = False,
-                     exclude: Iterable[str] = ()) -> Iterator[EmbodichainPluginManager]:
+def isolated_plugins(
+    *, load_entry_points: bool = False, exclude: Iterable[str] = ()
+) -> Iterator[EmbodichainPluginManager]:
     """Swap in a fresh manager and empty registries; restore everything on exit.
 
     Only the built-ins are loaded (entry points too when ``load_entry_points``, except

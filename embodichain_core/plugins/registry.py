@@ -92,8 +92,9 @@ class Registry:
         #: (provider, key) -> entry, in registration order.
         self._entries: dict[tuple[str, str], Entry] = {}
 
-    def add(self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None,
-            *, lazy: bool | None = None) -> Entry:
+    def add(
+        self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None, *, lazy: bool | None = None
+    ) -> Entry:
         """Add an entry; re-adding an identical entry is a no-op.
 
         Raises:
@@ -109,8 +110,9 @@ class Registry:
         if old is not None:
             if old.same_as(entry):
                 return old
-            raise DuplicateRegistrationError(self.noun, name, old.provider, provider,
-                                             "one provider cannot register a name twice")
+            raise DuplicateRegistrationError(
+                self.noun, name, old.provider, provider, "one provider cannot register a name twice"
+            )
         self._store(entry)
         return entry
 
@@ -118,8 +120,10 @@ class Registry:
         if not isinstance(name, str) or not name:
             raise ValueError(f"{self.noun} names must be non-empty strings, got {name!r} from {provider!r}")
         if SEPARATOR in name:
-            raise ValueError(f"{self.noun} {name!r} from {provider!r}: names cannot contain {SEPARATOR!r} "
-                             f"(it separates the provider in qualified names)")
+            raise ValueError(
+                f"{self.noun} {name!r} from {provider!r}: names cannot contain {SEPARATOR!r} "
+                f"(it separates the provider in qualified names)"
+            )
 
     def _store(self, entry: Entry) -> None:
         self._entries[(entry.provider, self._key(entry.name))] = entry
@@ -184,8 +188,9 @@ class Registry:
     def ambiguous(self, name: str, candidates: list[Entry] | None = None) -> AmbiguousNameError:
         """The error for a bare ``name`` provided by several plugins."""
         entries = sorted(candidates or self._candidates(name), key=lambda e: e.provider)
-        return AmbiguousNameError(self.noun, name, [e.provider for e in entries],
-                                  [self.qualified_name(e) for e in entries])
+        return AmbiguousNameError(
+            self.noun, name, [e.provider for e in entries], [self.qualified_name(e) for e in entries]
+        )
 
     def qualified_name(self, entry: Entry) -> str:
         """The name that always resolves to ``entry`` (``"<provider>:<name>"``)."""
@@ -206,20 +211,26 @@ class Registry:
         """The error for an unknown ``name``, with the closest registered names."""
         names = self.names()
         if not names:
-            msg = (f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin "
-                   f"providing them (see `embodichain list plugins`)")
+            msg = (
+                f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin "
+                f"providing them (see `embodichain list plugins`)"
+            )
             return UnknownNameError(msg, name, [])
         split = self._split(name) if isinstance(name, str) else None
         if split is not None:
             own = [self.qualified_name(e) for e in self.by_provider(split[0])]
             hint = did_you_mean(name, own) or f" See `embodichain list {self.kind} --provider {split[0]}`."
-            return UnknownNameError(f"{split[0]!r} provides no {self.noun} {split[1]!r}.{hint}", name,
-                                    closest(name, own))
+            return UnknownNameError(
+                f"{split[0]!r} provides no {self.noun} {split[1]!r}.{hint}", name, closest(name, own)
+            )
         provider, sep, _ = str(name).partition(SEPARATOR)
         if sep and provider:
             hint = did_you_mean(provider, self.providers()) or f" Providers: {', '.join(self.providers())}."
-            return UnknownNameError(f"unknown {self.noun} {name!r}: no plugin named {provider!r} "
-                                    f"provides {self.kind}.{hint}", name, closest(provider, self.providers()))
+            return UnknownNameError(
+                f"unknown {self.noun} {name!r}: no plugin named {provider!r} provides {self.kind}.{hint}",
+                name,
+                closest(provider, self.providers()),
+            )
         hint = did_you_mean(name, names) or f" See `embodichain list {self.kind}`."
         return UnknownNameError(f"unknown {self.noun} {name!r}.{hint}", name, closest(name, names))
 
@@ -251,8 +262,11 @@ class Registry:
         providers: dict[str, list[Entry]] = {}
         for (_, key), entry in self._entries.items():
             providers.setdefault(key, []).append(entry)
-        return {group[0].name: sorted(e.provider for e in group)
-                for group in sorted(providers.values(), key=lambda g: g[0].name) if len(group) > 1}
+        return {
+            group[0].name: sorted(e.provider for e in group)
+            for group in sorted(providers.values(), key=lambda g: g[0].name)
+            if len(group) > 1
+        }
 
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):

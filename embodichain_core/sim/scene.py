@@ -19,7 +19,13 @@ from embodichain_core.sim.backend import BatchSim, SimBackend
 from embodichain_core.sim.scene_build.builder import GROUND_UID, SceneBuilder
 from embodichain_core.sim.scene_build.builder_articulation import add_articulation
 from embodichain_core.sim.scene_build.builder_objects import add_rigid_object, add_rigid_object_group
-from embodichain_core.sim.cfg import ArticulationCfg, LightCfg, RigidObjectCfg, RigidObjectGroupCfg, SimulationManagerCfg
+from embodichain_core.sim.cfg import (
+    ArticulationCfg,
+    LightCfg,
+    RigidObjectCfg,
+    RigidObjectGroupCfg,
+    SimulationManagerCfg,
+)
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.base import Entity
 from embodichain_core.sim.entities.group import RigidObjectGroup
@@ -143,8 +149,13 @@ class Scene:
 
             sim = WarpSim(self.model, self.num_envs, substeps=cfg.physics_substeps, device=cfg.sim_device)
         else:
-            sim = BatchSim(self.model, self.num_envs, substeps=cfg.physics_substeps,
-                           nthread=int(cfg.cpu_num or 0), persistent=cfg.persistent)
+            sim = BatchSim(
+                self.model,
+                self.num_envs,
+                substeps=cfg.physics_substeps,
+                nthread=int(cfg.cpu_num or 0),
+                persistent=cfg.persistent,
+            )
         self._sim = sim
         if any(rec.extra.get("variants") for rec in self.builder.records.values()):
             # per-env meshes switch collision filters: a backend that cannot (warp) fails here
@@ -157,7 +168,8 @@ class Scene:
 
     def _make_entity(self, uid: str, rec: Any) -> None:
         kinds: dict[str, tuple[type[Articulation], dict[str, Any]]] = {
-            "robot": (Robot, self.robots), "articulation": (Articulation, self.articulations),
+            "robot": (Robot, self.robots),
+            "articulation": (Articulation, self.articulations),
         }
         if rec.kind in kinds:
             cls, store = kinds[rec.kind]
@@ -234,7 +246,7 @@ class Scene:
         else:
             sim.reset(ids, state=row)
         self.defaults.restored, self.defaults.slow_reset = (ids, None) if row is not None else (None, ids)
-        for (name, key) in kept:
+        for name, key in kept:
             if saved and idx[key]:
                 getattr(sim, name)[ids[:, None], torch.as_tensor(idx[key])[None, :]] = saved[name]
         if saved:

@@ -34,14 +34,17 @@ class NameClashError(AssertionError):
 
     def __init__(self, plugin: str, clashes: list[NameClash]):
         self.clashes = clashes
-        lines = [f"plugin {plugin!r} registers {len(clashes)} name(s) that installed plugins register too "
-                 f"(the bare names are ambiguous for users; rename them, or ask users for the qualified names):"]
+        lines = [
+            f"plugin {plugin!r} registers {len(clashes)} name(s) that installed plugins register too "
+            f"(the bare names are ambiguous for users; rename them, or ask users for the qualified names):"
+        ]
         lines += [f"  {clash}" for clash in clashes]
         super().__init__("\n".join(lines))
 
 
-def check_name_clashes(plugin: Any, name: str | None = None, *, ignore: Iterable[str] = (),
-                       raise_on_clash: bool = True) -> list[NameClash]:
+def check_name_clashes(
+    plugin: Any, name: str | None = None, *, ignore: Iterable[str] = (), raise_on_clash: bool = True
+) -> list[NameClash]:
     """Register ``plugin`` next to every installed plugin and report the names it shares.
 
     Args:

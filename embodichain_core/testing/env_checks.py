@@ -69,7 +69,9 @@ def _sample_action(env: Any) -> Any:
     import torch
 
     sample = env.action_space.sample()
-    sample = np.nan_to_num(np.clip(sample, -1.0, 1.0)) if np.issubdtype(np.asarray(sample).dtype, np.floating) else sample
+    sample = (
+        np.nan_to_num(np.clip(sample, -1.0, 1.0)) if np.issubdtype(np.asarray(sample).dtype, np.floating) else sample
+    )
     return torch.as_tensor(sample, dtype=torch.float32) * 0.1
 
 

@@ -55,9 +55,22 @@ ArrayLike = Union[np.ndarray, torch.Tensor, Sequence[Any]]
 """What a function reads: a numpy array, a torch tensor or a (nested) sequence of numbers."""
 
 __all__ = [
-    "quat_mul", "quat_conjugate", "quat_normalize", "quat_rotate", "quat_to_matrix", "matrix_to_quat",
-    "euler_xyz_to_quat", "quat_to_euler_xyz", "pose_to_matrix", "matrix_to_pose", "as_pose7", "pose_mul",
-    "pose_inverse", "compose_frames", "init_quat_from_cfg", "init_pos_from_cfg",
+    "quat_mul",
+    "quat_conjugate",
+    "quat_normalize",
+    "quat_rotate",
+    "quat_to_matrix",
+    "matrix_to_quat",
+    "euler_xyz_to_quat",
+    "quat_to_euler_xyz",
+    "pose_to_matrix",
+    "matrix_to_pose",
+    "as_pose7",
+    "pose_mul",
+    "pose_inverse",
+    "compose_frames",
+    "init_quat_from_cfg",
+    "init_pos_from_cfg",
 ]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
@@ -120,9 +133,17 @@ _W, _X, _Y, _Z = range(4)
 
 def _quat_to_matrix_table() -> np.ndarray:
     """``(16, 9)``: the entries of ``R - I`` as a linear map of the quaternion's outer product."""
-    entries = (((_Y, _Y, -2), (_Z, _Z, -2)), ((_X, _Y, 2), (_W, _Z, -2)), ((_X, _Z, 2), (_W, _Y, 2)),
-               ((_X, _Y, 2), (_W, _Z, 2)), ((_X, _X, -2), (_Z, _Z, -2)), ((_Y, _Z, 2), (_W, _X, -2)),
-               ((_X, _Z, 2), (_W, _Y, -2)), ((_Y, _Z, 2), (_W, _X, 2)), ((_X, _X, -2), (_Y, _Y, -2)))
+    entries = (
+        ((_Y, _Y, -2), (_Z, _Z, -2)),
+        ((_X, _Y, 2), (_W, _Z, -2)),
+        ((_X, _Z, 2), (_W, _Y, 2)),
+        ((_X, _Y, 2), (_W, _Z, 2)),
+        ((_X, _X, -2), (_Z, _Z, -2)),
+        ((_Y, _Z, 2), (_W, _X, -2)),
+        ((_X, _Z, 2), (_W, _Y, -2)),
+        ((_Y, _Z, 2), (_W, _X, 2)),
+        ((_X, _X, -2), (_Y, _Y, -2)),
+    )
     out = np.zeros((16, 9))
     for entry, terms in enumerate(entries):
         for a, b, coef in terms:
@@ -133,8 +154,14 @@ def _quat_to_matrix_table() -> np.ndarray:
 def _matrix_to_quat_table() -> np.ndarray:
     """``(9, 16)``: the symmetric 4 x 4 table of sums and differences of matrix entries that
     MuJoCo divides by the largest quaternion component (row k: the others when k is largest)."""
-    pairs = {(_W, _X): ((7, 1), (5, -1)), (_W, _Y): ((2, 1), (6, -1)), (_W, _Z): ((3, 1), (1, -1)),
-             (_X, _Y): ((1, 1), (3, 1)), (_X, _Z): ((2, 1), (6, 1)), (_Y, _Z): ((5, 1), (7, 1))}
+    pairs = {
+        (_W, _X): ((7, 1), (5, -1)),
+        (_W, _Y): ((2, 1), (6, -1)),
+        (_W, _Z): ((3, 1), (1, -1)),
+        (_X, _Y): ((1, 1), (3, 1)),
+        (_X, _Z): ((2, 1), (6, 1)),
+        (_Y, _Z): ((5, 1), (7, 1)),
+    }
     out = np.zeros((9, 16))
     for (i, j), terms in pairs.items():
         for entry, coef in terms:
@@ -175,8 +202,15 @@ def quat_mul(a: Array, b: Array) -> Array:
     xp, a = _ns(a)
     b = _like(xp, b, a)
     (aw, ax, ay, az), (bw, bx, by, bz) = _split(a), _split(b)
-    return _stack(xp, (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                       aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw))
+    return _stack(
+        xp,
+        (
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ),
+    )
 
 
 @_numpy_views

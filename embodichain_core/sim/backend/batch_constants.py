@@ -19,7 +19,10 @@ from embodichain_core.sim.backend.env_rows import batch_ids as _batch_ids
 from embodichain_core.sim.backend.env_rows import index_bodies as _index_bodies
 from embodichain_core.sim.backend.env_rows import np_ids as _np_ids
 from embodichain_core.sim.backend.free_body_const import (
-    FILTER_FIELDS, INERTIAL_FIELDS, FreeBodyConstants, eligible_bodies,
+    FILTER_FIELDS,
+    INERTIAL_FIELDS,
+    FreeBodyConstants,
+    eligible_bodies,
 )
 
 
@@ -40,6 +43,7 @@ class BatchConstants:
     _free_const: Optional[FreeBodyConstants]
 
     if TYPE_CHECKING:  # defined by PerEnvModels
+
         def _set_const_models(self, ids: Iterable[int]) -> None: ...
 
     def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:

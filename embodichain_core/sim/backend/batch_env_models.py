@@ -21,6 +21,7 @@ class PerEnvModels:
     env_models: Optional[list[mujoco.MjModel]]
 
     if TYPE_CHECKING:  # defined by BatchSim (and BatchConstants)
+
         def forward(self, env_ids: Any = None) -> None: ...
 
         def flush_const(self) -> None: ...

@@ -36,8 +36,9 @@ from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS,
 
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 _SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
-CAPABILITIES = SimCapabilities(subset_step=True, per_env_models=True, host_arrays=True, float64=True,
-                               deterministic=True)
+CAPABILITIES = SimCapabilities(
+    subset_step=True, per_env_models=True, host_arrays=True, float64=True, deterministic=True
+)
 
 
 class BatchSim(BatchConstants, PerEnvModels):
@@ -56,8 +57,15 @@ class BatchSim(BatchConstants, PerEnvModels):
     restores_state_rows = True
     """:meth:`reset` takes a saved state row (``state=``)."""
 
-    def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, nthread: int = 0,
-                 persistent: bool = True, fast_constants: bool = True):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        num_envs: int,
+        substeps: int = 1,
+        nthread: int = 0,
+        persistent: bool = True,
+        fast_constants: bool = True,
+    ):
         self.model = model
         self.num_envs = int(num_envs)
         self.substeps = int(substeps)
@@ -279,4 +287,3 @@ class BatchSim(BatchConstants, PerEnvModels):
         if self._dirty[int(env_id)]:
             self.forward([int(env_id)])
         return self.batch.get_data(int(env_id), data)
-

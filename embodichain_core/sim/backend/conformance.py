@@ -99,7 +99,7 @@ def check_reset_and_forward(factory: Factory) -> None:
     assert np.allclose(_np(sim.view("qpos"))[0], model.qpos0), "reset did not restore the model defaults"
     assert (_np(sim.view("qpos"))[1:] == stepped[1:]).all(), "reset changed other envs"
     adr = model.jnt_qposadr[model.body_jntadr[box]]
-    sim.view("qpos")[2, adr:adr + 3] = torch.tensor([0.3, -0.2, 0.7], dtype=sim.dtype)
+    sim.view("qpos")[2, adr : adr + 3] = torch.tensor([0.3, -0.2, 0.7], dtype=sim.dtype)
     sim.mark_dirty([2])
     assert np.allclose(_np(sim.view("xpos"))[2, box], [0.3, -0.2, 0.7]), "a marked write did not reach xpos"
     sim.view("qpos")[1, adr] = 0.9
@@ -126,8 +126,9 @@ def check_model_fields(factory: Factory) -> None:
     sim.step(1)
     assert np.isclose(sim.get_model(1).body_subtreemass[box], 2.5), "derived constants did not follow the mass"
     sim.set_body_masses([0], [box], np.array([[4.0]]))
-    assert np.isclose(sim.model_field("body_inertia")[0, box, 0], model.body_inertia[box, 0] * 4.0 /
-                      model.body_mass[box]), "set_body_masses did not scale the inertia"
+    assert np.isclose(
+        sim.model_field("body_inertia")[0, box, 0], model.body_inertia[box, 0] * 4.0 / model.body_mass[box]
+    ), "set_body_masses did not scale the inertia"
 
 
 def check_divergence(factory: Factory) -> None:

@@ -39,7 +39,13 @@ import mujoco.batch as mjbatch
 import numpy as np
 
 from embodichain_core.sim.backend.free_body_geometry import (
-    GEOMETRY_FIELDS, GeomLayout, body_sameframe, member_sameframe, null_quat, null_vec, quat_to_mat,
+    GEOMETRY_FIELDS,
+    GeomLayout,
+    body_sameframe,
+    member_sameframe,
+    null_quat,
+    null_vec,
+    quat_to_mat,
 )
 
 INERTIAL_FIELDS = frozenset({"body_mass", "body_inertia", "body_ipos", "body_iquat"})
@@ -63,7 +69,7 @@ def eligible_bodies(model: mujoco.MjModel) -> list[int]:
             continue
         if (model.body_parentid[1:] == b).any():
             continue
-        if np.any(model.dof_armature[model.body_dofadr[b]:model.body_dofadr[b] + 6] != 0):
+        if np.any(model.dof_armature[model.body_dofadr[b] : model.body_dofadr[b] + 6] != 0):
             continue
         out.append(b)
     return out
@@ -160,8 +166,16 @@ class FreeBodyConstants:
             flags = get(geom_field, self.all_geoms)
             put(body_field, self.filter_bodies, np.bitwise_or.reduceat(flags, self.filter_starts, axis=-1))
 
-    def _inertia_terms(self, put: _Put, mass: np.ndarray, inertia: np.ndarray, ipos: np.ndarray,
-                       rot: np.ndarray, cc: np.ndarray, c2: np.ndarray) -> None:
+    def _inertia_terms(
+        self,
+        put: _Put,
+        mass: np.ndarray,
+        inertia: np.ndarray,
+        ipos: np.ndarray,
+        rot: np.ndarray,
+        cc: np.ndarray,
+        c2: np.ndarray,
+    ) -> None:
         """``body_subtreemass``, ``body_invweight0``, ``dof_M0`` and ``dof_invweight0``."""
         n = max(len(mass), len(inertia), len(ipos), len(rot))
         inv_i, inv_m = 1.0 / inertia, 1.0 / mass
@@ -180,8 +194,7 @@ class FreeBodyConstants:
         put("dof_M0", self.dofs, out[..., 2:8])
         put("dof_invweight0", self.dofs, out[..., 8:])
 
-    def _frame_terms(self, put: _Put, ipos: np.ndarray, iquat: np.ndarray, rot: np.ndarray,
-                     c2: np.ndarray) -> None:
+    def _frame_terms(self, put: _Put, ipos: np.ndarray, iquat: np.ndarray, rot: np.ndarray, c2: np.ndarray) -> None:
         """``*_sameframe``, ``dof_length`` of the rotations and ``bvh_aabb``."""
         layout = self.layout
         put("body_sameframe", self.bodies, body_sameframe(null_vec(ipos), null_quat(iquat)))
@@ -201,8 +214,13 @@ class _EnvRows:
     field, as one slice when every env is written and the elements are a contiguous run
     (``blocks`` caches which element-id arrays are)."""
 
-    def __init__(self, batch: mjbatch.Batch, model: mujoco.MjModel, rows: np.ndarray,
-                 blocks: dict[int, tuple[np.ndarray, Optional[slice]]]):
+    def __init__(
+        self,
+        batch: mjbatch.Batch,
+        model: mujoco.MjModel,
+        rows: np.ndarray,
+        blocks: dict[int, tuple[np.ndarray, Optional[slice]]],
+    ):
         self.batch, self.model, self.rows, self.blocks = batch, model, rows, blocks
         self.all = len(rows) == batch.nsim
 

@@ -19,10 +19,19 @@ _MIN_SIZE = 1e-5  # MuJoCo's smallest body size
 
 # rotation matrix entries as a linear map of the quaternion's outer product q q^T
 _QUAT_TO_MAT = np.zeros((16, 9))
-for _entry, _terms in enumerate((
-        ((0, 0, 1), (1, 1, 1), (2, 2, -1), (3, 3, -1)), ((1, 2, 2), (0, 3, -2)), ((1, 3, 2), (0, 2, 2)),
-        ((1, 2, 2), (0, 3, 2)), ((0, 0, 1), (1, 1, -1), (2, 2, 1), (3, 3, -1)), ((2, 3, 2), (0, 1, -2)),
-        ((1, 3, 2), (0, 2, -2)), ((2, 3, 2), (0, 1, 2)), ((0, 0, 1), (1, 1, -1), (2, 2, -1), (3, 3, 1)))):
+for _entry, _terms in enumerate(
+    (
+        ((0, 0, 1), (1, 1, 1), (2, 2, -1), (3, 3, -1)),
+        ((1, 2, 2), (0, 3, -2)),
+        ((1, 3, 2), (0, 2, 2)),
+        ((1, 2, 2), (0, 3, 2)),
+        ((0, 0, 1), (1, 1, -1), (2, 2, 1), (3, 3, -1)),
+        ((2, 3, 2), (0, 1, -2)),
+        ((1, 3, 2), (0, 2, -2)),
+        ((2, 3, 2), (0, 1, 2)),
+        ((0, 0, 1), (1, 1, -1), (2, 2, -1), (3, 3, 1)),
+    )
+):
     for _a, _b, _coef in _terms:
         _QUAT_TO_MAT[4 * _a + _b, _entry] = _coef
 
@@ -108,8 +117,16 @@ class _Bvh:
     """Bounding-volume nodes: leaves (one geom each) and inner nodes by depth, deepest
     first, so children are boxed before their parent."""
 
-    def __init__(self, model: mujoco.MjModel, bodies: np.ndarray, geoms: np.ndarray, geom_owner: np.ndarray,
-                 gpos: np.ndarray, gquat: np.ndarray, gaabb: np.ndarray):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        bodies: np.ndarray,
+        geoms: np.ndarray,
+        geom_owner: np.ndarray,
+        gpos: np.ndarray,
+        gquat: np.ndarray,
+        gaabb: np.ndarray,
+    ):
         column = {int(g): i for i, g in enumerate(geoms)}
         nodes: list[int] = []
         leaves: list[int] = []
@@ -132,9 +149,13 @@ class _Bvh:
         geom_rot = quat_to_mat(gquat[g])
         self.leaf_rot, self.leaf_half = geom_rot, gaabb[g, 3:, None]
         self.leaf_centre = gpos[g] + (geom_rot @ gaabb[g, :3, None])[..., 0]  # box centre, body frame
-        self.inner = [(np.asarray([col[n] for n, _ in levels[d]], dtype=np.int64),
-                       np.asarray([[col[c] for c in kids[:2]] for _, kids in levels[d]], dtype=np.int64))
-                      for d in sorted(levels, reverse=True)]
+        self.inner = [
+            (
+                np.asarray([col[n] for n, _ in levels[d]], dtype=np.int64),
+                np.asarray([[col[c] for c in kids[:2]] for _, kids in levels[d]], dtype=np.int64),
+            )
+            for d in sorted(levels, reverse=True)
+        ]
 
     def boxes(self, rot: np.ndarray, ipos: np.ndarray) -> np.ndarray:
         """``(n, nodes, 6)`` centre and half-size of every node in its body's inertial frame,
@@ -169,5 +190,5 @@ def _slots(owner: np.ndarray, nb: int) -> np.ndarray:
     slots = -np.ones((nb, width), dtype=np.int64)
     for k in range(nb):
         members = np.flatnonzero(owner == k)
-        slots[k, :len(members)] = members
+        slots[k, : len(members)] = members
     return slots

@@ -36,9 +36,26 @@ import torch
 
 STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied", "xfrc_applied", "mocap_pos", "mocap_quat", "eq_active")
 """Writable state views, ``(num_envs, ...)`` (``xfrc_applied`` ``(N, nbody, 6)``, quaternions wxyz)."""
-DERIVED_FIELDS = ("xpos", "xquat", "xmat", "cvel", "site_xpos", "site_xmat", "qfrc_actuator", "actuator_force",
-                  "cfrc_ext", "qacc", "sensordata", "light_xpos", "light_xdir", "cam_xpos", "cam_xmat", "geom_xpos",
-                  "geom_xmat", "ncon")
+DERIVED_FIELDS = (
+    "xpos",
+    "xquat",
+    "xmat",
+    "cvel",
+    "site_xpos",
+    "site_xmat",
+    "qfrc_actuator",
+    "actuator_force",
+    "cfrc_ext",
+    "qacc",
+    "sensordata",
+    "light_xpos",
+    "light_xdir",
+    "cam_xpos",
+    "cam_xmat",
+    "geom_xpos",
+    "geom_xmat",
+    "ncon",
+)
 """Read-only views computed from the state (current for every env that is not dirty)."""
 
 

@@ -53,9 +53,12 @@ def init_warp() -> Any:
         import warp as wp
         import mujoco_warp  # noqa: F401
     except ImportError as err:
-        raise ConfigError("sim_cfg.backend", "backend 'warp' needs MuJoCo Warp: pip install "
-                          "'embodichain-core[warp]' (mujoco-warp, warp-lang); or use backend "
-                          f"'mujoco_batch' ({err})") from err
+        raise ConfigError(
+            "sim_cfg.backend",
+            "backend 'warp' needs MuJoCo Warp: pip install "
+            "'embodichain-core[warp]' (mujoco-warp, warp-lang); or use backend "
+            f"'mujoco_batch' ({err})",
+        ) from err
     if wp.config.kernel_cache_dir is None:  # not initialized yet (init sets the default)
         cache = default_cache_dir()
         if cache is not None:
@@ -76,11 +79,15 @@ def resolve_device(wp: Any, sim_device: str) -> str:
         return "cpu"
     if name == "cuda" or (name.startswith("cuda:") and name[5:].isdigit()):
         if not wp.is_cuda_available():
-            raise ConfigError("sim_cfg.sim_device", f"{sim_device!r}: Warp finds no CUDA device here; "
-                              "use 'cpu' (Warp's CPU device, slow but exact enough for testing)")
+            raise ConfigError(
+                "sim_cfg.sim_device",
+                f"{sim_device!r}: Warp finds no CUDA device here; "
+                "use 'cpu' (Warp's CPU device, slow but exact enough for testing)",
+            )
         return "cuda:0" if name == "cuda" else name
-    raise ConfigError("sim_cfg.sim_device", f"{sim_device!r} is not a device of backend 'warp'; "
-                      "use 'cpu', 'cuda' or 'cuda:N'")
+    raise ConfigError(
+        "sim_cfg.sim_device", f"{sim_device!r} is not a device of backend 'warp'; use 'cpu', 'cuda' or 'cuda:N'"
+    )
 
 
 def torch_device(device: str) -> torch.device:
@@ -122,8 +129,12 @@ class StepGraphs:
                 with wp.ScopedDevice(self.device), wp.ScopedCapture(device=self.device) as capture:
                     fn()
             except Exception as err:  # a capture runs nothing: fall back to direct calls, once
-                warnings.warn(f"Warp graph capture failed on {self.device} ({err}); the warp backend "
-                              "launches its kernels directly from now on", RuntimeWarning, stacklevel=3)
+                warnings.warn(
+                    f"Warp graph capture failed on {self.device} ({err}); the warp backend "
+                    "launches its kernels directly from now on",
+                    RuntimeWarning,
+                    stacklevel=3,
+                )
                 self.enabled = False
                 self.run(key, fn)
                 return

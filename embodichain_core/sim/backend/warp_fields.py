@@ -36,17 +36,40 @@ ALL = FIXED | KIN0 | INERT0
 #: Constant inputs -> the groups to recompute after a write (others of
 #: ``MjModel._setconst_inputs``: :data:`ALL`).
 CONST_GROUPS: dict[str, int] = {
-    "body_mass": ALL, "body_inertia": INERT0, "body_ipos": ALL, "body_iquat": INERT0,
-    "body_pos": ALL, "body_quat": ALL, "dof_armature": INERT0, "actuator_armature": INERT0,
-    "actuator_gear": INERT0, "tendon_armature": INERT0, "qpos0": KIN0 | INERT0, "geom_size": FIXED,
-    "cam_pos": KIN0, "cam_quat": KIN0, "light_pos": KIN0, "light_dir": KIN0, "eq_data": KIN0,
-    "body_gravcomp": 0, "geom_pos": 0, "geom_quat": 0,
+    "body_mass": ALL,
+    "body_inertia": INERT0,
+    "body_ipos": ALL,
+    "body_iquat": INERT0,
+    "body_pos": ALL,
+    "body_quat": ALL,
+    "dof_armature": INERT0,
+    "actuator_armature": INERT0,
+    "actuator_gear": INERT0,
+    "tendon_armature": INERT0,
+    "qpos0": KIN0 | INERT0,
+    "geom_size": FIXED,
+    "cam_pos": KIN0,
+    "cam_quat": KIN0,
+    "light_pos": KIN0,
+    "light_dir": KIN0,
+    "eq_data": KIN0,
+    "body_gravcomp": 0,
+    "geom_pos": 0,
+    "geom_quat": 0,
 }
 #: Fields each group writes (only those MuJoCo Warp batches).
 GROUP_OUTPUTS: dict[int, tuple[str, ...]] = {
     FIXED: ("body_subtreemass", "geom_aabb", "geom_rbound"),
-    KIN0: ("tendon_length0", "eq_data", "cam_pos0", "cam_poscom0", "cam_mat0", "light_pos0", "light_poscom0",
-           "light_dir0"),
+    KIN0: (
+        "tendon_length0",
+        "eq_data",
+        "cam_pos0",
+        "cam_poscom0",
+        "cam_mat0",
+        "light_pos0",
+        "light_poscom0",
+        "light_dir0",
+    ),
     INERT0: ("dof_invweight0", "body_invweight0", "tendon_invweight0", "actuator_acc0"),
 }
 #: Prefixes of visual fields kept per env on the host when MuJoCo Warp has no such field.
@@ -93,8 +116,10 @@ def field_kind(name: str, model: mujoco.MjModel) -> str:
 def unsupported(name: str, model: mujoco.MjModel) -> ConfigError:
     """The build-time error for a per-env write of ``name`` that the warp backend cannot do."""
     if name in ("geom_contype", "geom_conaffinity"):
-        why = ("MuJoCo Warp computes the colliding geom pairs once, for every world; per-env mesh variants "
-               "(reserve_mesh_variants/reserve_scale_variants) switch them")
+        why = (
+            "MuJoCo Warp computes the colliding geom pairs once, for every world; per-env mesh variants "
+            "(reserve_mesh_variants/reserve_scale_variants) switch them"
+        )
     elif name.startswith("opt."):
         why = "MuJoCo Warp's solver, integrator, iterations, cone and flags are one value for every world"
     elif name.startswith(("mesh_", "hfield_", "geom_type")):
@@ -102,10 +127,14 @@ def unsupported(name: str, model: mujoco.MjModel) -> ConfigError:
     elif hasattr(model, name):
         why = "MuJoCo Warp does not batch this field per world"
     else:
-        return ConfigError("sim_cfg.backend", f"unknown model field {name!r}."
-                           f"{did_you_mean(name, sorted(batched_fields()))}")
-    return ConfigError("sim_cfg.backend", f"model field {name!r} cannot take per-env values on backend "
-                       f"'warp' ({why}); use backend 'mujoco_batch' for this scene")
+        return ConfigError(
+            "sim_cfg.backend", f"unknown model field {name!r}.{did_you_mean(name, sorted(batched_fields()))}"
+        )
+    return ConfigError(
+        "sim_cfg.backend",
+        f"model field {name!r} cannot take per-env values on backend "
+        f"'warp' ({why}); use backend 'mujoco_batch' for this scene",
+    )
 
 
 def const_groups(name: str) -> int:

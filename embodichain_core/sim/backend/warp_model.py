@@ -130,8 +130,10 @@ class WarpModelFields:
             return
         self.declare_per_env([name])
         view = self._view(name)
-        sel = tuple(torch.as_tensor(s, device=view.device) if isinstance(s, np.ndarray) else s
-                    for s in field_selector(ids, index))
+        sel = tuple(
+            torch.as_tensor(s, device=view.device) if isinstance(s, np.ndarray) else s
+            for s in field_selector(ids, index)
+        )
         view[sel] = torch.as_tensor(np.array(values), dtype=view.dtype, device=view.device)
         if set_const:
             self._const_groups |= const_groups(name)
@@ -167,8 +169,11 @@ class WarpModelFields:
     # -- host copies -----------------------------------------------------------------------------
     def use_env_models(self, models: Sequence[mujoco.MjModel]) -> None:
         """Not on this backend: every world runs one model structure."""
-        raise ConfigError("sim_cfg.backend", "per-env models (structurally different envs) are not supported "
-                          "on backend 'warp'; use backend 'mujoco_batch'")
+        raise ConfigError(
+            "sim_cfg.backend",
+            "per-env models (structurally different envs) are not supported "
+            "on backend 'warp'; use backend 'mujoco_batch'",
+        )
 
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
         """Env ``env_id``'s model on the host: the template with that env's per-env rows

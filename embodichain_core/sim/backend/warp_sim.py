@@ -39,8 +39,19 @@ from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
 
 _AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
 #: State (and acceleration-level outputs) a subset step puts back for the envs outside the subset.
-_KEPT = ("qpos", "qvel", "act", "qacc_warmstart", "time", "history", "plastic", "qacc", "qfrc_actuator",
-         "actuator_force", "cfrc_ext")
+_KEPT = (
+    "qpos",
+    "qvel",
+    "act",
+    "qacc_warmstart",
+    "time",
+    "history",
+    "plastic",
+    "qacc",
+    "qfrc_actuator",
+    "actuator_force",
+    "cfrc_ext",
+)
 
 
 class WarpSim(WarpModelFields):
@@ -64,8 +75,15 @@ class WarpSim(WarpModelFields):
     #: :meth:`reset` takes no saved state row (the scene's default-row fast path is off).
     restores_state_rows = False
 
-    def __init__(self, model: mujoco.MjModel, num_envs: int, substeps: int = 1, device: str = "cpu",
-                 nconmax: Optional[int] = None, njmax: Optional[int] = None):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        num_envs: int,
+        substeps: int = 1,
+        device: str = "cpu",
+        nconmax: Optional[int] = None,
+        njmax: Optional[int] = None,
+    ):
         self.wp = init_warp()
         import mujoco_warp
 
@@ -77,9 +95,13 @@ class WarpSim(WarpModelFields):
         self.device = torch_device(self.wp_device)
         self.dtype = torch.float32
         on_cpu = self.wp_device == "cpu"
-        self.capabilities = SimCapabilities(subset_step=False, per_env_models=False,
-                                            host_arrays=on_cpu and self.host_arrays_on_cpu, float64=False,
-                                            deterministic=on_cpu)
+        self.capabilities = SimCapabilities(
+            subset_step=False,
+            per_env_models=False,
+            host_arrays=on_cpu and self.host_arrays_on_cpu,
+            float64=False,
+            deterministic=on_cpu,
+        )
         self.graphs = StepGraphs(self.wp, self.wp_device)
         self._init_fields()
         self._make(nconmax, njmax)
@@ -101,8 +123,11 @@ class WarpSim(WarpModelFields):
             try:
                 self.wp_model = self.mjw.put_model(mjm)
             except NotImplementedError as err:
-                raise ConfigError("sim_cfg.backend", f"backend 'warp' cannot simulate this scene: {err} "
-                                  "(use backend 'mujoco_batch', or change sim_cfg.physics_config)") from err
+                raise ConfigError(
+                    "sim_cfg.backend",
+                    f"backend 'warp' cannot simulate this scene: {err} "
+                    "(use backend 'mujoco_batch', or change sim_cfg.physics_config)",
+                ) from err
             self.wp_data = self.mjw.put_data(mjm, data, nworld=self.num_envs, nconmax=nconmax, njmax=njmax)
             self._reset_mask = self.wp.zeros(self.num_envs, dtype=bool)
         self._mask = self.wp.to_torch(self._reset_mask)
@@ -111,8 +136,9 @@ class WarpSim(WarpModelFields):
             array = getattr(self.wp_data, name, None)
             if array is not None:
                 self._views[name] = flat_rows(self.wp.to_torch(array), self.num_envs)
-        self._kept = {n: self.wp.to_torch(getattr(self.wp_data, n)) for n in _KEPT
-                      if getattr(self.wp_data, n, None) is not None}
+        self._kept = {
+            n: self.wp.to_torch(getattr(self.wp_data, n)) for n in _KEPT if getattr(self.wp_data, n, None) is not None
+        }
         self._overflow = self.wp.to_torch(self.wp_data.overflow)
         if self.capabilities.host_arrays:
             self.arrays: Any = {n: getattr(self.wp_data, n).numpy() for n in STATE_FIELDS}
@@ -194,13 +220,15 @@ class WarpSim(WarpModelFields):
         overflow = (self._overflow & int(kinds.NEFC)) != 0
         ids = torch.nonzero(bad | overflow).flatten().tolist()
         for i in ids:
-            self._errors[i] = ("non-finite state" if bad[i] else
-                               "constraint rows over njmax (raise WarpSim(njmax=...))")
+            self._errors[i] = "non-finite state" if bad[i] else "constraint rows over njmax (raise WarpSim(njmax=...))"
         contacts = int(kinds.BROADPHASE | kinds.NARROWPHASE | kinds.CCD)
         if not self._warned_overflow and bool((self._overflow & contacts).any()):
             self._warned_overflow = True
-            warnings.warn("MuJoCo Warp's contact buffers overflowed; some contacts were dropped "
-                          "(raise WarpSim(nconmax=...))", RuntimeWarning, stacklevel=3)
+            warnings.warn(
+                "MuJoCo Warp's contact buffers overflowed; some contacts were dropped (raise WarpSim(nconmax=...))",
+                RuntimeWarning,
+                stacklevel=3,
+            )
         return ids
 
     def forward(self, env_ids: Any = None) -> None:
@@ -219,9 +247,11 @@ class WarpSim(WarpModelFields):
                 backend has no ``restores_state_rows`` (the scene resets entities instead).
         """
         if state is not None:
-            raise ValueError("WarpSim.reset(state=...): backend 'warp' does not restore saved state rows "
-                             "(restores_state_rows is False); reset without state and write the entities' "
-                             "initial state instead")
+            raise ValueError(
+                "WarpSim.reset(state=...): backend 'warp' does not restore saved state rows "
+                "(restores_state_rows is False); reset without state and write the entities' "
+                "initial state instead"
+            )
         rows = np_ids(env_ids, self.num_envs)
         self._mask.zero_()
         self._mask[torch.as_tensor(rows, device=self.device)] = True

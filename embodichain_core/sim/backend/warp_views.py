@@ -62,8 +62,9 @@ class DeviceArray:
 
     def __setitem__(self, key: Any, values: Any) -> None:
         values = values.detach() if isinstance(values, torch.Tensor) else np.asarray(values)
-        self.tensor[_index(key, self.tensor.device)] = torch.as_tensor(values, dtype=self.tensor.dtype,
-                                                                       device=self.tensor.device)
+        self.tensor[_index(key, self.tensor.device)] = torch.as_tensor(
+            values, dtype=self.tensor.dtype, device=self.tensor.device
+        )
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
         out = self.tensor.detach().cpu().numpy()

@@ -93,8 +93,10 @@ class Articulation(JointModelFields, Entity):
             return torch.as_tensor(model.qpos0[self.qpos_adr.numpy()], dtype=torch.float64)
         init = torch.as_tensor(np.asarray(init, dtype=np.float64))
         if init.shape != (self.dof,):
-            raise ConfigError(f"{path}.init_qpos", f"{self.uid!r} has {self.dof} joints (in this order: "
-                                                   f"{self.joint_names}); got {init.numel()} values")
+            raise ConfigError(
+                f"{path}.init_qpos",
+                f"{self.uid!r} has {self.dof} joints (in this order: {self.joint_names}); got {init.numel()} values",
+            )
         return init
 
     # -- sizes and names --------------------------------------------------------------------------
@@ -161,8 +163,9 @@ class Articulation(JointModelFields, Entity):
         """Mimic joints of ``rows`` ((n, 1) env indices) follow their parents."""
         qpos = self.sim.arrays["qpos"]
         if self._mimic_chained:  # a mimic of a mimic: in order
-            for child, parent, k, off in zip(self._mimic_child_adr, self._mimic_parent_adr, self._mimic_k,
-                                             self._mimic_off):
+            for child, parent, k, off in zip(
+                self._mimic_child_adr, self._mimic_parent_adr, self._mimic_k, self._mimic_off
+            ):
                 qpos[rows[:, 0], child] = k * qpos[rows[:, 0], parent] + off
         elif self._mimic_child_adr.size:
             qpos[rows, self._mimic_child_adr] = qpos[rows, self._mimic_parent_adr] * self._mimic_k + self._mimic_off
@@ -272,8 +275,14 @@ class Articulation(JointModelFields, Entity):
         self.sim.mark_dirty(ids)
 
     # -- drives and masses ----------------------------------------------------------------------------
-    def set_joint_drive(self, stiffness: Any = None, damping: Any = None, max_effort: Any = None,
-                        joint_ids: Any = None, env_ids: Any = None) -> None:
+    def set_joint_drive(
+        self,
+        stiffness: Any = None,
+        damping: Any = None,
+        max_effort: Any = None,
+        joint_ids: Any = None,
+        env_ids: Any = None,
+    ) -> None:
         """Change per-env drive gains and effort limits of the driven joints among ``joint_ids``.
 
         Args:

@@ -29,8 +29,9 @@ def env_index(env_ids: Any, num_envs: int) -> torch.Tensor:
     return t.reshape(-1).long()
 
 
-def find_names(names: Sequence[str], patterns: Any, preserve_order: bool = False, what: str = "name",
-               owner: str = "") -> tuple[list[int], list[str]]:
+def find_names(
+    names: Sequence[str], patterns: Any, preserve_order: bool = False, what: str = "name", owner: str = ""
+) -> tuple[list[int], list[str]]:
     """Match regex ``patterns`` (full match) against ``names``; return ids and names.
 
     Unmatched patterns raise ``KeyError`` naming the owner and the closest names.
@@ -92,8 +93,11 @@ class Entity:
         host = self.__dict__.get("_host_reads_ok")
         if host is None:
             sim = self.sim
-            host = bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False)) \
-                and getattr(sim, "device", torch.device("cpu")).type == "cpu" and self.device.type == "cpu"
+            host = (
+                bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False))
+                and getattr(sim, "device", torch.device("cpu")).type == "cpu"
+                and self.device.type == "cpu"
+            )
             self.__dict__["_host_reads_ok"] = host
         return host
 
@@ -115,8 +119,12 @@ class Entity:
 def as_values(values: Any, n: int, width: int | None = None) -> torch.Tensor:
     """Values as a float64 CPU tensor broadcast to (n, width) or (n,)."""
     shape = (n,) if width is None else (n, width)
-    if isinstance(values, torch.Tensor) and values.dtype == torch.float64 and values.shape == shape \
-            and values.device.type == "cpu":
+    if (
+        isinstance(values, torch.Tensor)
+        and values.dtype == torch.float64
+        and values.shape == shape
+        and values.device.type == "cpu"
+    ):
         return values.detach()
     t = torch.as_tensor(np.asarray(values) if not isinstance(values, torch.Tensor) else values)
     t = t.detach().to("cpu", torch.float64)

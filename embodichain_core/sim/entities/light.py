@@ -32,8 +32,9 @@ class Light(Entity):
         # a world light that does not track: its *0 reference fields equal the written
         # values, so position/direction writes need no mj_setConst
         model = scene.model
-        self._fixed_world = int(model.light_bodyid[self.light_id]) == 0 and \
-            int(model.light_mode[self.light_id]) == int(mujoco.mjtCamLight.mjCAMLIGHT_FIXED)
+        self._fixed_world = int(model.light_bodyid[self.light_id]) == 0 and int(model.light_mode[self.light_id]) == int(
+            mujoco.mjtCamLight.mjCAMLIGHT_FIXED
+        )
 
     def _ids_for_write(self, env_ids: Any) -> torch.Tensor:
         return self._ids(None) if self.is_global else self._ids(env_ids)
@@ -75,8 +76,15 @@ class Light(Entity):
         self.sim.set_model_field("light_dir0", ids, self.light_id, vals)
         self.sim.mark_dirty(ids)
 
-    def set_properties(self, env_ids: Any = None, *, position: Any = None, color: Any = None,
-                       intensity: Any = None, direction: Any = None) -> None:
+    def set_properties(
+        self,
+        env_ids: Any = None,
+        *,
+        position: Any = None,
+        color: Any = None,
+        intensity: Any = None,
+        direction: Any = None,
+    ) -> None:
         """Set any of position, colour, intensity and direction of ``env_ids`` in one pass.
 
         The same as the single setters, with each model field written once (the
@@ -115,7 +123,11 @@ class Light(Entity):
         ids = self._ids_for_write(env_ids)
         n = len(ids)
         direction = self.cfg.direction if self.cfg.light_type != "point" else None
-        self.set_properties(ids, position=self._init_pos_np,
-                            direction=direction, color=np.broadcast_to(self._color0, (n, 3)),
-                            intensity=np.full(n, float(self.cfg.intensity)))
+        self.set_properties(
+            ids,
+            position=self._init_pos_np,
+            direction=direction,
+            color=np.broadcast_to(self._color0, (n, 3)),
+            intensity=np.full(n, float(self.cfg.intensity)),
+        )
         self._touched = self.is_global is False and n < self.num_envs

@@ -49,8 +49,10 @@ def per_env_values(values: Any, n: int, k: int, what: str = "values") -> np.ndar
     try:
         return np.broadcast_to(arr, (n, k))
     except ValueError:
-        raise ValueError(f"{what}: got shape {arr.shape}; expected a number, ({k},) per joint/link, "
-                         f"({n}, {k}) per env and joint/link, ({n}, 1) or ({n},) per env") from None
+        raise ValueError(
+            f"{what}: got shape {arr.shape}; expected a number, ({k},) per joint/link, "
+            f"({n}, {k}) per env and joint/link, ({n}, 1) or ({n},) per env"
+        ) from None
 
 
 class JointModelFields:
@@ -69,6 +71,7 @@ class JointModelFields:
     _joint_ids: list[int]
 
     if TYPE_CHECKING:  # defined by the host class (properties and methods of Entity/Articulation)
+
         @property
         def sim(self) -> Any: ...  # the SimBackend; Any as in Entity: its views (sim.qpos) are dynamic
 
@@ -122,9 +125,11 @@ class JointModelFields:
     def _write_drive(self, stiffness: Any, damping: Any, max_effort: Any, joint_ids: Any, env_ids: Any) -> None:
         """``set_joint_drive``'s writes: drive gains and effort limits of the driven joints."""
         env, jids = self._ids(env_ids).numpy(), self._jids_np(joint_ids)
-        vals = {key: per_env_values(v, len(env), len(jids), f"{self.uid}: {key}")
-                for key, v in (("stiffness", stiffness), ("damping", damping), ("max_effort", max_effort))
-                if v is not None}
+        vals = {
+            key: per_env_values(v, len(env), len(jids), f"{self.uid}: {key}")
+            for key, v in (("stiffness", stiffness), ("damping", damping), ("max_effort", max_effort))
+            if v is not None
+        }
         if not len(env):
             return
         pos, vel = self.pos_act.numpy()[jids], self.vel_act.numpy()[jids]
@@ -132,12 +137,16 @@ class JointModelFields:
         servo_kv = has & (vel < 0)  # a kept position servo without a velocity servo: kv is its bias
         writes = []
         if "stiffness" in vals:
-            writes += [("actuator_gainprm", pos, has, 0, vals["stiffness"]),
-                       ("actuator_biasprm", pos, has, 1, -vals["stiffness"])]
+            writes += [
+                ("actuator_gainprm", pos, has, 0, vals["stiffness"]),
+                ("actuator_biasprm", pos, has, 1, -vals["stiffness"]),
+            ]
         if "damping" in vals:
-            writes += [("actuator_gainprm", vel, own_vel, 0, vals["damping"]),
-                       ("actuator_biasprm", vel, own_vel, 2, -vals["damping"]),
-                       ("actuator_biasprm", pos, servo_kv, 2, -vals["damping"])]
+            writes += [
+                ("actuator_gainprm", vel, own_vel, 0, vals["damping"]),
+                ("actuator_biasprm", vel, own_vel, 2, -vals["damping"]),
+                ("actuator_biasprm", pos, servo_kv, 2, -vals["damping"]),
+            ]
         for field, acts, mask, col, values in writes:
             if mask.any():
                 self.sim.set_model_field(field, env, (acts[mask].tolist(), col), values[:, mask])
@@ -210,8 +219,10 @@ def set_gravity(sim: Any, gravity: Any, env_ids: Any = None) -> None:
     try:
         sim.set_model_field(_GRAVITY, env, Ellipsis, vals)
     except (AttributeError, KeyError, ValueError) as err:
-        raise ValueError(f"gravity is a global option on this simulation backend (per-env gravity is "
-                         f"unavailable here: {err}); set physics_config.gravity in the config instead") from err
+        raise ValueError(
+            f"gravity is a global option on this simulation backend (per-env gravity is "
+            f"unavailable here: {err}); set physics_config.gravity in the config instead"
+        ) from err
     sim.mark_dirty(env)
 
 

@@ -49,8 +49,14 @@ class RigidObject(Entity):
         else:
             self.mocap_id = int(model.body_mocapid[self.body_id])
         self.init_pose = torch.as_tensor(
-            np.concatenate([init_pos_from_cfg(cfg.init_pos, cfg.init_local_pose),
-                            init_quat_from_cfg(cfg.init_rot, cfg.init_local_pose)]), dtype=torch.float64)
+            np.concatenate(
+                [
+                    init_pos_from_cfg(cfg.init_pos, cfg.init_local_pose),
+                    init_quat_from_cfg(cfg.init_rot, cfg.init_local_pose),
+                ]
+            ),
+            dtype=torch.float64,
+        )
         self.default_mass = float(model.body_mass[self.body_id])
 
     @property

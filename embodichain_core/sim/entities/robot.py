@@ -43,8 +43,9 @@ class Robot(Articulation):
         super().__init__(uid, cfg, scene, record)
         self.control_parts: dict[str, list[int]] = {}
         for part, patterns in (cfg.control_parts or {}).items():
-            ids, _ = find_names(self.joint_names, patterns, preserve_order=True, what="joint",
-                                owner=f"{uid} control part {part!r}")
+            ids, _ = find_names(
+                self.joint_names, patterns, preserve_order=True, what="joint", owner=f"{uid} control part {part!r}"
+            )
             self.control_parts[part] = ids
         self.solvers: dict[str, Any] = {}
         builder = getattr(cfg, "build_solvers", None)
@@ -85,8 +86,14 @@ class Robot(Articulation):
         jnt_bodies = {int(model.jnt_bodyid[self._joint_ids[j]]) for j in self.get_joint_ids(name)}
         return [n for n, b in zip(self.link_names, self.body_ids.tolist()) if b in jnt_bodies]
 
-    def compute_fk(self, qpos: Optional[torch.Tensor] = None, link_names: Any = None,
-                   env_ids: Any = None, to_matrix: bool = True, name: Optional[str] = None) -> torch.Tensor:
+    def compute_fk(
+        self,
+        qpos: Optional[torch.Tensor] = None,
+        link_names: Any = None,
+        env_ids: Any = None,
+        to_matrix: bool = True,
+        name: Optional[str] = None,
+    ) -> torch.Tensor:
         """Forward kinematics in the env frame.
 
         With ``name`` (a control part with a solver) and no ``link_names``: the
@@ -104,7 +111,9 @@ class Robot(Articulation):
         single = isinstance(link_names, str)
         links, _ = self.find_bodies(link_names if link_names is not None else self.link_names, preserve_order=True)
         bodies = self.body_ids[links].numpy()
-        qpos = self.get_qpos()[env] if qpos is None else torch.as_tensor(qpos, dtype=torch.float64).reshape(len(env), -1)
+        qpos = (
+            self.get_qpos()[env] if qpos is None else torch.as_tensor(qpos, dtype=torch.float64).reshape(len(env), -1)
+        )
         out = np.zeros((len(env), len(bodies), 7))
         data = mujoco.MjData(self.scene.model)
         adr = self.qpos_adr.numpy()
@@ -123,13 +132,15 @@ class Robot(Articulation):
         if name is None and len(self.solvers) == 1:
             return next(iter(self.solvers.values()))
         if name not in self.solvers:
-            have = list(self.solvers) or ("none; the robot config builds no solvers: add "
-                                          "'solver_cfg': {part: {'class_type': ...}} to it")
+            have = list(self.solvers) or (
+                "none; the robot config builds no solvers: add 'solver_cfg': {part: {'class_type': ...}} to it"
+            )
             raise KeyError(f"{self.uid}: no kinematics solver for control part {name!r} (solvers: {have})")
         return self.solvers[name]
 
-    def get_control_part_base_pose(self, name: Optional[str] = None, env_ids: Any = None,
-                                   to_matrix: bool = True) -> torch.Tensor:
+    def get_control_part_base_pose(
+        self, name: Optional[str] = None, env_ids: Any = None, to_matrix: bool = True
+    ) -> torch.Tensor:
         """Pose of the solver root link of part ``name`` in the env frame, (n, 4, 4) or (n, 7)."""
         return self.get_link_pose(self.get_solver(name).root_link_name, env_ids, to_matrix)
 
@@ -144,8 +155,10 @@ class Robot(Articulation):
             return q
         if q.shape[-1] == self.dof:
             return q[:, ids]
-        raise ValueError(f"{self.uid}: qpos has {q.shape[-1]} values per env; expected {len(ids)} "
-                         f"(the part's joints) or {self.dof} (all joints)")
+        raise ValueError(
+            f"{self.uid}: qpos has {q.shape[-1]} values per env; expected {len(ids)} "
+            f"(the part's joints) or {self.dof} (all joints)"
+        )
 
     def _base_matrix(self, solver: Any, qpos: Any, env: torch.Tensor) -> torch.Tensor:
         """(n, 4, 4) float64 root link pose; follows ``qpos`` when it is a full joint vector."""
@@ -162,8 +175,9 @@ class Robot(Articulation):
         pose = self._out(pose)
         return pose if to_matrix else matrix_to_pose(pose)
 
-    def compute_ik(self, pose: Any, joint_seed: Optional[torch.Tensor] = None, name: Optional[str] = None,
-                   env_ids: Any = None) -> tuple[torch.Tensor, torch.Tensor]:
+    def compute_ik(
+        self, pose: Any, joint_seed: Optional[torch.Tensor] = None, name: Optional[str] = None, env_ids: Any = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """Inverse kinematics of control part ``name``'s TCP for ``env_ids``.
 
         Args:

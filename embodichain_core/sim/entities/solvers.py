@@ -59,8 +59,10 @@ def check_part_links(robot: Any, entry: Mapping[str, Any], path: str) -> None:
         if link is None:
             continue
         if not isinstance(link, str) or link not in robot.link_names:
-            raise ConfigError(join_path(path, key), f"robot {robot.uid!r} has no link {link!r}."
-                              f"{did_you_mean(str(link), robot.link_names)}")
+            raise ConfigError(
+                join_path(path, key),
+                f"robot {robot.uid!r} has no link {link!r}.{did_you_mean(str(link), robot.link_names)}",
+            )
 
 
 def check_solver_joints(robot: Any, part: str, solver: Any, path: str) -> None:
@@ -70,8 +72,11 @@ def check_solver_joints(robot: Any, part: str, solver: Any, path: str) -> None:
     if ids != expected:
         got = [robot.joint_names[i] for i in ids if 0 <= i < robot.dof]
         want = [robot.joint_names[i] for i in expected]
-        raise ConfigError(path, f"the solver's chain has joints {got}, but control part {part!r} of "
-                                f"{robot.uid!r} has {want}; pick the links that bound exactly the part's joints")
+        raise ConfigError(
+            path,
+            f"the solver's chain has joints {got}, but control part {part!r} of "
+            f"{robot.uid!r} has {want}; pick the links that bound exactly the part's joints",
+        )
 
 
 def build_cfg_solvers(robot: Any, solver_cfg: Any, path: str) -> dict[str, Any]:
@@ -97,8 +102,11 @@ def build_cfg_solvers(robot: Any, solver_cfg: Any, path: str) -> dict[str, Any]:
     for part, cfg in solver_cfg.items():
         where = join_path(path, str(part))
         if part not in robot.control_parts:
-            raise ConfigError(where, f"robot {robot.uid!r} has no control part {part!r}."
-                              f"{did_you_mean(str(part), robot.control_parts) or ' Define it in control_parts.'}")
+            raise ConfigError(
+                where,
+                f"robot {robot.uid!r} has no control part {part!r}."
+                f"{did_you_mean(str(part), robot.control_parts) or ' Define it in control_parts.'}",
+            )
         entry = part_entry(cfg, where)
         solver_class = resolve_solver_class(entry.get("class_type"), join_path(where, "class_type"))
         check_part_links(robot, entry, where)

@@ -68,8 +68,12 @@ def replace_actuators(spec: mujoco.MjSpec, owner: str) -> list[str]:
         spec.delete(act)
     if labels:
         shown = ", ".join(repr(n) for n in labels[:_MAX_NAMED]) + (", ..." if len(labels) > _MAX_NAMED else "")
-        warnings.warn(f"{owner}: the model's {len(labels)} actuator(s) ({shown}) are replaced by drive_pros drives; "
-                      f"set keep_actuators: true to keep them", ModelImportWarning, stacklevel=4)
+        warnings.warn(
+            f"{owner}: the model's {len(labels)} actuator(s) ({shown}) are replaced by drive_pros drives; "
+            f"set keep_actuators: true to keep them",
+            ModelImportWarning,
+            stacklevel=4,
+        )
     return labels
 
 

@@ -86,8 +86,7 @@ def _load_urdf(path: str) -> mujoco.MjSpec:
     spec = mujoco.MjSpec.from_string(text)
     spec.modelfiledir = os.path.dirname(path) + os.sep
     for joint in spec.joints:
-        if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE) \
-                and joint.range[0] < joint.range[1]:
+        if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE) and joint.range[0] < joint.range[1]:
             joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
     return spec
 
@@ -136,10 +135,10 @@ def resolve_mesh_path(filename: str, base_dir: str) -> str:
     Raises:
         FileNotFoundError: no candidate exists (the message lists those tried).
     """
-    name = filename[len("file://"):] if filename.startswith("file://") else filename
+    name = filename[len("file://") :] if filename.startswith("file://") else filename
     base_dir = os.path.abspath(base_dir)
     if name.startswith("package://"):
-        rel = name[len("package://"):]
+        rel = name[len("package://") :]
         rest = rel.partition("/")[2]
         candidates = []
         folder = base_dir
@@ -202,8 +201,9 @@ def _inline_meshes(spec: mujoco.MjSpec, everything: bool = False) -> None:
             try:
                 set_user_mesh(mesh, load_mesh(mesh.file))
             except Exception as err:
-                raise ValueError(f"cannot read mesh file {mesh.file!r} (mesh {mesh.name!r}, used by link(s) "
-                                 f"{links}): {err}") from err
+                raise ValueError(
+                    f"cannot read mesh file {mesh.file!r} (mesh {mesh.name!r}, used by link(s) {links}): {err}"
+                ) from err
 
 
 def list_joints(spec: mujoco.MjSpec) -> list[JointInfo]:
@@ -215,8 +215,13 @@ def list_joints(spec: mujoco.MjSpec) -> list[JointInfo]:
     out = []
     for joint in spec.joints:
         lo, hi = (float(x) for x in joint.range)
-        out.append(JointInfo(joint.name, _JOINT_TYPES.get(joint.type, str(joint.type)),
-                             (lo, hi) if _is_limited(joint.limited, lo, hi) else None))
+        out.append(
+            JointInfo(
+                joint.name,
+                _JOINT_TYPES.get(joint.type, str(joint.type)),
+                (lo, hi) if _is_limited(joint.limited, lo, hi) else None,
+            )
+        )
     return out
 
 
@@ -237,6 +242,4 @@ def joint_dynamics(spec: mujoco.MjSpec) -> dict[str, dict[str, Any]]:
 
 def _is_limited(flag: Any, lo: float, hi: float) -> bool:
     """MuJoCo's limited flag, with ``auto`` meaning "the range is not empty"."""
-    return flag == mujoco.mjtLimited.mjLIMITED_TRUE or (
-        flag == mujoco.mjtLimited.mjLIMITED_AUTO and lo < hi
-    )
+    return flag == mujoco.mjtLimited.mjLIMITED_TRUE or (flag == mujoco.mjtLimited.mjLIMITED_AUTO and lo < hi)

@@ -93,8 +93,12 @@ class SceneBuilder:
         mat.texrepeat = [8, 8]
         mat.reflectance = 0.0
         self.spec.worldbody.add_geom(
-            name=GROUND_UID, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material=f"{GROUND_UID}/mat",
-            contype=1, conaffinity=(1 << 30) - 1,
+            name=GROUND_UID,
+            type=mujoco.mjtGeom.mjGEOM_PLANE,
+            size=[0, 0, 0.05],
+            material=f"{GROUND_UID}/mat",
+            contype=1,
+            conaffinity=(1 << 30) - 1,
         )
         self.records[GROUND_UID] = EntityRecord(GROUND_UID, "ground", None)
 
@@ -152,9 +156,7 @@ class SceneBuilder:
         return record
 
     def compile(self) -> mujoco.MjModel:
-        """Compile the spec; errors name the scene element MuJoCo complained about.
-
-        """
+        """Compile the spec; errors name the scene element MuJoCo complained about."""
         return self.compile_spec(self.spec)
 
     def compile_spec(self, spec: mujoco.MjSpec) -> mujoco.MjModel:

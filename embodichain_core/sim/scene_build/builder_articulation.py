@@ -137,8 +137,13 @@ def joint_value(values: Any, joint: str, path: str) -> float:
         raise ConfigError(path, f"expected a number or a {{regex: number}} mapping, got {values!r}") from err
 
 
-def _add_drives(spec: mujoco.MjSpec, joints: list[str], drive: JointDrivePropertiesCfg, path: str,
-                skip_actuators: frozenset[str] | set[str] = frozenset()) -> None:
+def _add_drives(
+    spec: mujoco.MjSpec,
+    joints: list[str],
+    drive: JointDrivePropertiesCfg,
+    path: str,
+    skip_actuators: frozenset[str] | set[str] = frozenset(),
+) -> None:
     """Joint properties of ``drive`` on ``joints``, and their two drive actuators (except for
     the joints in ``skip_actuators``: they keep the model's own servos)."""
     defaults = JointDrivePropertiesCfg()
@@ -147,7 +152,9 @@ def _add_drives(spec: mujoco.MjSpec, joints: list[str], drive: JointDrivePropert
         vals = {}
         for key in ("stiffness", "damping", "max_effort", "friction", "armature"):
             v = joint_value(getattr(drive, key), name, f"{path}.{key}")
-            vals[key] = v if np.isfinite(v) else float(getattr(defaults, key)) if key in ("stiffness", "damping") else np.nan
+            vals[key] = (
+                v if np.isfinite(v) else float(getattr(defaults, key)) if key in ("stiffness", "damping") else np.nan
+            )
         if np.isfinite(vals["armature"]) and vals["armature"] > 0:
             joint.armature = vals["armature"]
         if np.isfinite(vals["friction"]) and vals["friction"] > 0:

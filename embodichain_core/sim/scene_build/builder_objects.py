@@ -170,7 +170,9 @@ def _add_mesh_shape(builder, body, cfg, shape, name, scale, material, path) -> d
         fpath = get_data_path(shape.fpath)
     except FileNotFoundError as err:
         raise ConfigError(f"{path}.shape.fpath", str(err)) from err
-    mesh = load_mesh(fpath, scale=tuple(scale), compute_uv=shape.compute_uv, project_direction=tuple(shape.project_direction))
+    mesh = load_mesh(
+        fpath, scale=tuple(scale), compute_uv=shape.compute_uv, project_direction=tuple(shape.project_direction)
+    )
     hulls = cfg.max_convex_hull_num if cfg.max_convex_hull_num is not None else shape.max_convex_hull_num
     parts = collision_parts(mesh, max_convex_hull_num=int(hulls))
     visual = add_mesh_asset(builder.spec, f"{name}/visual", mesh)

@@ -74,8 +74,14 @@ class DecompositionReport:
         """A plain-text table: mesh, components, convex components, hulls, cached, time."""
         header = ("mesh", "components", "convex", "hulls", "cached", "time [s]")
         lines = [
-            (r.mesh, str(r.components), str(r.convex_components), str(r.hulls),
-             "yes" if r.cached else "no", f"{r.seconds:.3f}")
+            (
+                r.mesh,
+                str(r.components),
+                str(r.convex_components),
+                str(r.hulls),
+                "yes" if r.cached else "no",
+                f"{r.seconds:.3f}",
+            )
             for r in self.rows
         ]
         widths = [max(len(row[i]) for row in [header, *lines]) for i in range(len(header))]
@@ -129,8 +135,15 @@ def decompose(
         raise ValueError(f"max_convex_hull_num must be >= 1, got {max_convex_hull_num}")
     start = time.perf_counter()
     use_coacd = method == "coacd" and max_convex_hull_num > 1
-    key = mesh_hash(mesh, method=method, n=max_convex_hull_num, threshold=threshold, seed=SEED,
-                    format=_CACHE_FORMAT, coacd=_coacd_version() if use_coacd else "")
+    key = mesh_hash(
+        mesh,
+        method=method,
+        n=max_convex_hull_num,
+        threshold=threshold,
+        seed=SEED,
+        format=_CACHE_FORMAT,
+        coacd=_coacd_version() if use_coacd else "",
+    )
     cache_file = os.path.join(cache_root(cache_dir), key[:2], key + ".npz")
     if use_coacd:
         hit = _load_cache(cache_file)
@@ -177,7 +190,9 @@ def _run_coacd(mesh: MeshData, max_convex_hull: int, threshold: float, seed: int
     coacd.set_log_level("error")
     result = coacd.run_coacd(
         coacd.Mesh(mesh.vertices, mesh.faces.astype(np.int32)),
-        threshold=threshold, max_convex_hull=max_convex_hull, seed=seed,
+        threshold=threshold,
+        max_convex_hull=max_convex_hull,
+        seed=seed,
     )
     return [MeshData(np.asarray(v), np.asarray(f)) for v, f in result]
 
@@ -235,8 +250,14 @@ def decompose_file(
     report = DecompositionReport(path)
     for file in files:
         result = decompose(load_mesh(file), max_convex_hull_num, cache_dir=cache_dir)
-        report.rows.append(MeshReport(
-            os.path.basename(file), result.components, result.convex_components,
-            len(result.parts), result.cached, result.seconds,
-        ))
+        report.rows.append(
+            MeshReport(
+                os.path.basename(file),
+                result.components,
+                result.convex_components,
+                len(result.parts),
+                result.cached,
+                result.seconds,
+            )
+        )
     return report

@@ -65,9 +65,12 @@ def balance_inertias(spec: mujoco.MjSpec, owner: str) -> list[str]:
     bad = unbalanced_inertia_bodies(spec)
     if bad:
         spec.compiler.balanceinertia = True
-        warnings.warn(f"{owner}: the inertias of link(s) {', '.join(repr(b) for b in bad)} break MuJoCo's "
-                      f"triangle inequality (A + B >= C); balanced with MuJoCo's balanceinertia",
-                      ModelImportWarning, stacklevel=4)
+        warnings.warn(
+            f"{owner}: the inertias of link(s) {', '.join(repr(b) for b in bad)} break MuJoCo's "
+            f"triangle inequality (A + B >= C); balanced with MuJoCo's balanceinertia",
+            ModelImportWarning,
+            stacklevel=4,
+        )
     return bad
 
 
@@ -93,8 +96,7 @@ def explain_compile_error(err: Exception, spec: mujoco.MjSpec, paths: Mapping[st
     """
     found = _ELEMENT.search(str(err))
     name = found.group(1) if found else None
-    mesh = next((m for m in spec.meshes if m.name == name or (name is None and m.file and m.file in str(err))),
-                None)
+    mesh = next((m for m in spec.meshes if m.name == name or (name is None and m.file and m.file in str(err))), None)
     if mesh is None:
         return None
     name = mesh.name
@@ -103,5 +105,6 @@ def explain_compile_error(err: Exception, spec: mujoco.MjSpec, paths: Mapping[st
     where = join_path(paths[uid], "fpath") if uid in paths else ""
     detail = str(err).splitlines()[0].removeprefix("Error: ")
     used = f"link(s) {', '.join(repr(link) for link in links)}" if links else "no link"
-    return ConfigError(where, f"cannot read mesh file {mesh.file or '(inline)'!r} (mesh {name!r}, used by {used}): "
-                              f"{detail}")
+    return ConfigError(
+        where, f"cannot read mesh file {mesh.file or '(inline)'!r} (mesh {name!r}, used by {used}): {detail}"
+    )

@@ -233,8 +233,11 @@ def convex_hull(mesh: MeshData) -> MeshData:
 
     spec = mujoco.MjSpec()
     spec.add_mesh(
-        name="hull", uservert=mesh.vertices.ravel().tolist(), userface=mesh.faces.ravel().tolist(),
-        maxhullvert=-1, inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
+        name="hull",
+        uservert=mesh.vertices.ravel().tolist(),
+        userface=mesh.faces.ravel().tolist(),
+        maxhullvert=-1,
+        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
     )
     spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="hull")
     try:
@@ -243,11 +246,11 @@ def convex_hull(mesh: MeshData) -> MeshData:
         raise ValueError(f"cannot build a convex hull: {exc}") from exc
     if model.mesh_graphadr[0] < 0:
         raise ValueError("cannot build a convex hull: degenerate points")
-    graph = model.mesh_graph[model.mesh_graphadr[0]:]
+    graph = model.mesh_graph[model.mesh_graphadr[0] :]
     nv, nf = int(graph[0]), int(graph[1])
-    tri = graph[2 + 3 * nv + 3 * nf: 2 + 3 * nv + 6 * nf].reshape(-1, 3)
+    tri = graph[2 + 3 * nv + 3 * nf : 2 + 3 * nv + 6 * nf].reshape(-1, 3)
     start, count = model.mesh_vertadr[0], model.mesh_vertnum[0]
-    local = model.mesh_vert[start:start + count].astype(np.float64)
+    local = model.mesh_vert[start : start + count].astype(np.float64)
     rot = np.zeros(9)
     mujoco.mju_quat2Mat(rot, model.mesh_quat[0].astype(np.float64))
     world = local @ rot.reshape(3, 3).T + model.mesh_pos[0]
@@ -317,4 +320,3 @@ def set_user_mesh(element: Any, mesh: MeshData) -> None:
     element.userface = mesh.faces.ravel().tolist()
     if mesh.texcoords is not None:
         element.usertexcoord = mesh.texcoords.ravel().tolist()
-

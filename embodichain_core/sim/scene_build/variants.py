@@ -45,8 +45,12 @@ def load_variant_parts(cfg: Any, fpath: str, factor: Optional[Sequence[float]] =
     from embodichain_core.sim.scene_build.mesh import load_mesh
 
     shape = cfg.shape
-    mesh = load_mesh(fpath, scale=tuple(cfg.body_scale), compute_uv=shape.compute_uv,
-                     project_direction=tuple(shape.project_direction))
+    mesh = load_mesh(
+        fpath,
+        scale=tuple(cfg.body_scale),
+        compute_uv=shape.compute_uv,
+        project_direction=tuple(shape.project_direction),
+    )
     hulls = cfg.max_convex_hull_num if cfg.max_convex_hull_num is not None else shape.max_convex_hull_num
     parts = collision_parts(mesh, max_convex_hull_num=int(hulls))
     if factor is None:
@@ -67,7 +71,9 @@ def scale_key(factor: Sequence[float]) -> str:
     return "scale:" + "x".join(f"{float(v):.6g}" for v in factor)
 
 
-def add_variants(builder: Any, uid: str, files: list[str], factors: Optional[list[Sequence[float]]] = None) -> list[str]:
+def add_variants(
+    builder: Any, uid: str, files: list[str], factors: Optional[list[Sequence[float]]] = None
+) -> list[str]:
     """Add the geoms of every file in ``files`` (or of the object's mesh scaled by each of
     ``factors``) to ``uid``'s body, disabled; return their keys."""
     from embodichain_core.sim.scene_build.builder_objects import add_collision_geoms, add_mesh_asset
@@ -77,20 +83,30 @@ def add_variants(builder: Any, uid: str, files: list[str], factors: Optional[lis
     variants = record.extra.setdefault("variants", {})
     if not variants:
         variants[record.extra["mesh_file"]] = {
-            "visual": list(record.extra["visual_geoms"]), "collision": list(record.extra["collision_geoms"])}
+            "visual": list(record.extra["visual_geoms"]),
+            "collision": list(record.extra["collision_geoms"]),
+        }
     _hidden_material(builder.spec)
     body = builder.spec.body(uid)
     body.simple = False  # the inertial frame changes per env: keep a general mass matrix
-    items = [(f, f, None) for f in files] if factors is None else \
-        [(scale_key(f), record.extra["mesh_file"], tuple(float(v) for v in f)) for f in factors]
+    items = (
+        [(f, f, None) for f in files]
+        if factors is None
+        else [(scale_key(f), record.extra["mesh_file"], tuple(float(v) for v in f)) for f in factors]
+    )
     for key, fpath, factor in items:
         if key in variants:
             continue
         name = f"{uid}/v{len(variants)}"
         mesh, parts = load_variant_parts(cfg, fpath, factor)
         asset = add_mesh_asset(builder.spec, f"{name}/visual", mesh)
-        vgeom = body.add_geom(name=f"{name}/visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=asset,
-                              material=HIDDEN_MATERIAL, rgba=[0, 0, 0, 0])
+        vgeom = body.add_geom(
+            name=f"{name}/visual",
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname=asset,
+            material=HIDDEN_MATERIAL,
+            rgba=[0, 0, 0, 0],
+        )
         vgeom.contype = vgeom.conaffinity = 0
         vgeom.group, vgeom.density = VISUAL_GROUP, 0.0
         collision = add_collision_geoms(builder.spec, body, name, parts, cfg)
@@ -144,8 +160,10 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
     names = list(variants)
     for key in set(keys):
         if key not in variants:
-            raise ValueError(f"{uid}: {key!r} was not reserved; call scene.reserve_mesh_variants({uid!r}, files) "
-                             f"or reserve_scale_variants before build (reserved: {names})")
+            raise ValueError(
+                f"{uid}: {key!r} was not reserved; call scene.reserve_mesh_variants({uid!r}, files) "
+                f"or reserve_scale_variants before build (reserved: {names})"
+            )
     model, sim = scene.model, scene.sim
     choice = np.array([names.index(k) for k in keys], dtype=np.int64)
 
@@ -154,8 +172,10 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
 
     mat = find(mujoco.mjtObj.mjOBJ_MATERIAL, record.extra["material"])
     hidden = find(mujoco.mjtObj.mjOBJ_MATERIAL, HIDDEN_MATERIAL)
-    for part, fields in (("collision", (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))),
-                         ("visual", (("geom_matid", mat, hidden),))):
+    for part, fields in (
+        ("collision", (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))),
+        ("visual", (("geom_matid", mat, hidden),)),
+    ):
         geoms = [(v, find(mujoco.mjtObj.mjOBJ_GEOM, g)) for v, name in enumerate(names) for g in variants[name][part]]
         on = choice[:, None] == np.array([v for v, _ in geoms])[None, :]
         index = [g for _, g in geoms]
@@ -167,4 +187,3 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
     for k, field in enumerate(_INERTIAL):
         stacked = np.stack([np.asarray(variants[name]["inertial"][k]) for name in names])
         sim.set_model_field(field, env_ids, body, stacked[choice])
-

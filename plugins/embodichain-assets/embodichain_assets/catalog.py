@@ -47,21 +47,35 @@ def _fork_assets() -> list[MeshAsset]:
     for file, spec in tableware.FORKS.items():
         extra = ", handle raised 15 mm" if spec.handle_rise else ""
         extra += ", wide cutting tine" if spec.wide_first_tine else ""
-        out.append(MeshAsset(
-            FORK_FOLDER + file, functools.partial(tableware.fork, spec),
-            f"fork, {spec.length * 100:.0f} cm, {spec.tines} tines, head {spec.head_width * 1000:.0f} mm{extra}"))
+        out.append(
+            MeshAsset(
+                FORK_FOLDER + file,
+                functools.partial(tableware.fork, spec),
+                f"fork, {spec.length * 100:.0f} cm, {spec.tines} tines, head {spec.head_width * 1000:.0f} mm{extra}",
+            )
+        )
     return out
 
 
 MESHES: list[MeshAsset] = [
-    MeshAsset(CIRCLE_TABLE, furniture.circle_table,
-              "round table r 0.45 m, up = mesh -X, origin at the top slab centre (top surface 0.02 above)"),
-    MeshAsset(SHOP_TABLE, furniture.shop_table,
-              "rectangular table, Z-up, origin at the floor centre, top 0.60 x 0.50 m at z 0.76-0.80"),
+    MeshAsset(
+        CIRCLE_TABLE,
+        furniture.circle_table,
+        "round table r 0.45 m, up = mesh -X, origin at the top slab centre (top surface 0.02 above)",
+    ),
+    MeshAsset(
+        SHOP_TABLE,
+        furniture.shop_table,
+        "rectangular table, Z-up, origin at the floor centre, top 0.60 x 0.50 m at z 0.76-0.80",
+    ),
     *_fork_assets(),
     MeshAsset(PAPER_CUP, objects.paper_cup, "paper cup: frustum r 0.025-0.035 m, 0.09 m high, origin at the bottom"),
-    MeshAsset(MUG, objects.mug,
-              "mug r 0.04 m, 0.09 m high, convex body + non-convex half-ring handle on +X", convex_parts=False),
+    MeshAsset(
+        MUG,
+        objects.mug,
+        "mug r 0.04 m, 0.09 m high, convex body + non-convex half-ring handle on +X",
+        convex_parts=False,
+    ),
     MeshAsset(SODA_CAN, objects.soda_can, "soda can r 0.033 m, 0.122 m high, chamfered edges (OBJ)"),
     MeshAsset(CUBE, objects.cube, "5 cm cube centred at the origin"),
 ]

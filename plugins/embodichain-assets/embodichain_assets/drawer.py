@@ -77,9 +77,11 @@ def _box_inertia(mass: float, size: Sequence[float]) -> str:
 
 def _link(name: str, mass: float, com: Sequence[float], extent: Sequence[float], plates: list[Plate]) -> str:
     """A ``<link>`` with an inertial and one visual and one collision element per plate."""
-    out = [f'  <link name="{name}">',
-           f'    <inertial><origin xyz="{_fmt(com)}" rpy="0 0 0"/><mass value="{mass:g}"/>'
-           f"{_box_inertia(mass, extent)}</inertial>"]
+    out = [
+        f'  <link name="{name}">',
+        f'    <inertial><origin xyz="{_fmt(com)}" rpy="0 0 0"/><mass value="{mass:g}"/>'
+        f"{_box_inertia(mass, extent)}</inertial>",
+    ]
     for p in plates:
         geo = f'<origin xyz="{_fmt(p.center)}" rpy="0 0 0"/><geometry><box size="{_fmt(p.size)}"/></geometry>'
         out.append(f'    <visual name="{p.name}_visual">{geo}<material name="{p.material}"/></visual>')

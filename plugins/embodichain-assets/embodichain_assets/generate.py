@@ -101,8 +101,7 @@ def differing_files(root: str | os.PathLike[str] | None = None) -> list[str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point (see the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m embodichain_assets.generate",
-                                     description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m embodichain_assets.generate", description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=None, help=f"output folder (default: {DATA_ROOT})")
     parser.add_argument("--check", action="store_true", help="compare with the files in --out instead of writing")
     args = parser.parse_args(argv)

@@ -20,14 +20,22 @@ from typing import Sequence
 import numpy as np
 
 # corner k of a box has x, y, z signs from the bits of k (bit 0: x, bit 1: y, bit 2: z)
-_BOX_FACES = np.array([
-    [0, 2, 1], [1, 2, 3],  # -z
-    [4, 5, 6], [5, 7, 6],  # +z
-    [0, 1, 4], [1, 5, 4],  # -y
-    [2, 6, 3], [3, 6, 7],  # +y
-    [0, 4, 2], [2, 4, 6],  # -x
-    [1, 3, 5], [3, 7, 5],  # +x
-])
+_BOX_FACES = np.array(
+    [
+        [0, 2, 1],
+        [1, 2, 3],  # -z
+        [4, 5, 6],
+        [5, 7, 6],  # +z
+        [0, 1, 4],
+        [1, 5, 4],  # -y
+        [2, 6, 3],
+        [3, 6, 7],  # +y
+        [0, 4, 2],
+        [2, 4, 6],  # -x
+        [1, 3, 5],
+        [3, 7, 5],  # +x
+    ]
+)
 
 
 @dataclass
@@ -92,8 +100,9 @@ def cylinder(radius: float, z0: float, z1: float, segments: int = 48) -> Part:
     return revolve([(radius, z0), (radius, z1)], segments)
 
 
-def tube_arc(major: float, minor: float, start_deg: float, stop_deg: float,
-             segments: int = 24, sides: int = 16) -> Part:
+def tube_arc(
+    major: float, minor: float, start_deg: float, stop_deg: float, segments: int = 24, sides: int = 16
+) -> Part:
     """A circular tube (radius ``minor``) swept along an arc of radius ``major`` in the XZ plane.
 
     The arc is centred at the origin and runs from ``start_deg`` to ``stop_deg`` (0 deg on +X,

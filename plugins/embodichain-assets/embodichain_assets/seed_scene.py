@@ -35,10 +35,13 @@ def seed_scene_cfgs() -> dict[str, Any]:
         uid="table",
         shape=MeshCfg(fpath=get_data_path(catalog.CIRCLE_TABLE), compute_uv=True),
         attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85, restitution=0.01),
-        body_type="kinematic", init_pos=TABLE_POS, init_rot=TABLE_ROT,
+        body_type="kinematic",
+        init_pos=TABLE_POS,
+        init_rot=TABLE_ROT,
     )
-    fork = RigidObjectCfg(uid="fork", shape=MeshCfg(fpath=get_data_path(catalog.STANDARD_FORK)),
-                          body_scale=FORK_SCALE, init_pos=FORK_POS)
+    fork = RigidObjectCfg(
+        uid="fork", shape=MeshCfg(fpath=get_data_path(catalog.STANDARD_FORK)), body_scale=FORK_SCALE, init_pos=FORK_POS
+    )
     drawer = ArticulationCfg(uid="drawer", fpath=catalog.DRAWER, init_pos=DRAWER_POS)
     light = LightCfg(uid="point", light_type="point", color=(1.0, 1.0, 1.0), intensity=20.0, init_pos=(0, 0, 2))
     return {"table": table, "fork": fork, "drawer": drawer, "light": light}
@@ -54,8 +57,9 @@ def fork_variant_files() -> list[str]:
     return [os.path.join(folder, f) for f in sorted(os.listdir(folder))]
 
 
-def build_seed_scene(num_envs: int = 1, fork_variants: Sequence[str] | None = None,
-                     robot_cfg: Any = None, sim_cfg: Any = None) -> Any:
+def build_seed_scene(
+    num_envs: int = 1, fork_variants: Sequence[str] | None = None, robot_cfg: Any = None, sim_cfg: Any = None
+) -> Any:
     """Build the scene (optionally with fork mesh variants reserved and a robot) and return it.
 
     Args:

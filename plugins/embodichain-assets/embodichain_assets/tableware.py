@@ -39,13 +39,14 @@ class ForkSpec:
 
 FORKS: dict[str, ForkSpec] = {
     "standard_fork_scale.ply": ForkSpec(length=0.19, tines=4, tine_length=0.040),
-    "fork_three_tine.ply": ForkSpec(length=0.17, tines=3, tine_length=0.036, head_width=0.024,
-                                    tine_width=0.0045),
+    "fork_three_tine.ply": ForkSpec(length=0.17, tines=3, tine_length=0.036, head_width=0.024, tine_width=0.0045),
     "fork_long.ply": ForkSpec(length=0.21, tines=4, tine_length=0.045, handle_width=0.018),
-    "fork_salad.ply": ForkSpec(length=0.16, tines=4, tine_length=0.032, head_width=0.030,
-                               handle_width=0.014, tine_width=0.005),
-    "fork_cake.ply": ForkSpec(length=0.14, tines=3, tine_length=0.028, head_width=0.022,
-                              handle_width=0.012, wide_first_tine=True),
+    "fork_salad.ply": ForkSpec(
+        length=0.16, tines=4, tine_length=0.032, head_width=0.030, handle_width=0.014, tine_width=0.005
+    ),
+    "fork_cake.ply": ForkSpec(
+        length=0.14, tines=3, tine_length=0.028, head_width=0.022, handle_width=0.012, wide_first_tine=True
+    ),
     "fork_bent.ply": ForkSpec(length=0.19, tines=4, tine_length=0.040, handle_rise=0.015),
 }
 

@@ -26,8 +26,9 @@ def _grid(size: int) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
-def _colour(rng: np.random.Generator, sat: tuple[float, float] = (0.3, 0.9),
-            val: tuple[float, float] = (0.3, 0.95)) -> np.ndarray:
+def _colour(
+    rng: np.random.Generator, sat: tuple[float, float] = (0.3, 0.9), val: tuple[float, float] = (0.3, 0.95)
+) -> np.ndarray:
     """A random RGB colour in [0, 1] from a random hue, saturation and value."""
     h, s, v = rng.random(), rng.uniform(*sat), rng.uniform(*val)
     k = (np.array([5.0, 3.0, 1.0]) + h * 6.0) % 6.0
@@ -54,7 +55,7 @@ def fbm(rng: np.random.Generator, size: int, octaves: int = 5, base: int = 4) ->
     """Fractal value noise normalised to [0, 1]."""
     total: np.ndarray = np.zeros((size, size))
     for o in range(octaves):
-        total = total + value_noise(rng, size, base << o) * 0.5 ** o
+        total = total + value_noise(rng, size, base << o) * 0.5**o
     return (total - total.min()) / max(float(np.ptp(total)), 1e-9)
 
 
@@ -113,7 +114,7 @@ def _wood(rng: np.random.Generator, size: int) -> np.ndarray:
     rings = (d * rng.uniform(5.0, 9.0)) % 1.0
     dark = np.array([0.35, 0.2, 0.1]) * rng.uniform(0.7, 1.1)
     light = np.array([0.8, 0.6, 0.38]) * rng.uniform(0.85, 1.15)
-    return _mix(light, dark, rings ** 3)
+    return _mix(light, dark, rings**3)
 
 
 def _marble(rng: np.random.Generator, size: int) -> np.ndarray:
@@ -121,7 +122,7 @@ def _marble(rng: np.random.Generator, size: int) -> np.ndarray:
     turbulence = fbm(rng, size, octaves=6)
     veins = 0.5 + 0.5 * np.sin((x + y * rng.uniform(0.3, 1.5)) * rng.uniform(8.0, 16.0) + 6.0 * turbulence)
     base = _colour(rng, sat=(0.0, 0.15), val=(0.8, 0.98))
-    return _mix(base, _colour(rng, sat=(0.0, 0.4), val=(0.15, 0.5)), veins ** 6)
+    return _mix(base, _colour(rng, sat=(0.0, 0.4), val=(0.15, 0.5)), veins**6)
 
 
 def _grain(rng: np.random.Generator, size: int) -> np.ndarray:
@@ -130,8 +131,14 @@ def _grain(rng: np.random.Generator, size: int) -> np.ndarray:
 
 
 KINDS: list[tuple[str, Callable[[np.random.Generator, int], np.ndarray]]] = [
-    ("checker", _checker), ("stripes", _stripes), ("gradient", _gradient), ("clouds", _clouds),
-    ("shapes", _shapes), ("wood", _wood), ("marble", _marble), ("grain", _grain),
+    ("checker", _checker),
+    ("stripes", _stripes),
+    ("gradient", _gradient),
+    ("clouds", _clouds),
+    ("shapes", _shapes),
+    ("wood", _wood),
+    ("marble", _marble),
+    ("grain", _grain),
 ]
 
 

@@ -66,8 +66,12 @@ def _scene(shot: Shot, name: str | None = None, urdf: str | None = None) -> Any:
     if name is not None:
         material = VisualMaterialCfg(base_color=shot.color, base_color_texture=shot.texture)
         shape = MeshCfg(fpath=name, compute_uv=shot.texture is not None, visual_material=material)
-        scene.add_rigid_object(RigidObjectCfg(uid="asset", shape=shape, body_type="kinematic",
-                                              init_pos=shot.init_pos, init_rot=shot.init_rot), background=True)
+        scene.add_rigid_object(
+            RigidObjectCfg(
+                uid="asset", shape=shape, body_type="kinematic", init_pos=shot.init_pos, init_rot=shot.init_rot
+            ),
+            background=True,
+        )
     if urdf is not None:
         scene.add_articulation(ArticulationCfg(uid="asset", fpath=urdf, init_pos=shot.init_pos))
     scene.add_light(LightCfg(uid="key", light_type="point", intensity=30.0, init_pos=(1.0, -1.5, 3.0)))
@@ -107,7 +111,7 @@ def _geom_bounds(model: Any, data: Any, geom_name: str) -> tuple[np.ndarray, np.
     geom = model.geom(geom_name).id
     mesh = int(model.geom_dataid[geom])
     start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
-    local = model.mesh_vert[start:start + count].astype(float)
+    local = model.mesh_vert[start : start + count].astype(float)
     world = local @ data.geom_xmat[geom].reshape(3, 3).T + data.geom_xpos[geom]
     return world.min(axis=0), world.max(axis=0)
 
@@ -136,7 +140,7 @@ def coco_sheet(columns: int = 8, tile: int = 64) -> np.ndarray:
     """All background textures, downsampled, in a ``columns``-wide grid."""
     step = max(1, textures.SIZE // tile)
     tiles = [textures.texture(i)[::step, ::step] for i in range(textures.COUNT)]
-    rows = [np.concatenate(tiles[r:r + columns], axis=1) for r in range(0, len(tiles), columns)]
+    rows = [np.concatenate(tiles[r : r + columns], axis=1) for r in range(0, len(tiles), columns)]
     return np.concatenate(rows, axis=0)
 
 
@@ -161,8 +165,9 @@ def render_all(out: str | os.PathLike[str], size: Sequence[int] = (400, 300)) ->
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point (see the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m embodichain_assets.thumbnails",
-                                     description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m embodichain_assets.thumbnails", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--out", default="docs/images", help="output folder (default: docs/images)")
     parser.add_argument("--size", type=int, nargs=2, default=(400, 300), metavar=("W", "H"))
     args = parser.parse_args(argv)

@@ -66,8 +66,9 @@ def png_bytes(image: np.ndarray) -> bytes:
     height, width = img.shape[:2]
     raw = _filtered_rows(img.reshape(height, width * 3))
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
-    return (PNG_SIGNATURE + _chunk(b"IHDR", ihdr) + _chunk(b"IDAT", zlib.compress(raw, _PNG_LEVEL))
-            + _chunk(b"IEND", b""))
+    return (
+        PNG_SIGNATURE + _chunk(b"IHDR", ihdr) + _chunk(b"IDAT", zlib.compress(raw, _PNG_LEVEL)) + _chunk(b"IEND", b"")
+    )
 
 
 def _chunk(kind: bytes, payload: bytes) -> bytes:

@@ -79,4 +79,4 @@ def test_mesh_writers_round_trip(tmp_path):
         path.write_bytes(data)
         mesh = load_mesh(path)
         assert len(mesh.faces) == 4
-        assert mesh.volume == pytest.approx(0.1 ** 3 / 6, rel=1e-5)
+        assert mesh.volume == pytest.approx(0.1**3 / 6, rel=1e-5)

@@ -21,7 +21,7 @@ def _geom_world_z(scene, body: str) -> tuple[float, float]:
         if model.geom_contype[geom] == 0 or model.geom_type[geom] != mujoco.mjtGeom.mjGEOM_MESH:
             continue
         mesh = model.geom_dataid[geom]
-        local = model.mesh_vert[model.mesh_vertadr[mesh]:model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+        local = model.mesh_vert[model.mesh_vertadr[mesh] : model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
         zs.append(local @ data.geom_xmat[geom].reshape(3, 3)[2] + data.geom_xpos[geom][2])
     zs = np.concatenate(zs)
     return float(zs.min()), float(zs.max())

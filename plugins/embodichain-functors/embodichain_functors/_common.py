@@ -68,7 +68,7 @@ def validated(check: Callable[..., None], lead: int = 1) -> Callable[[Callable],
     """
 
     def decorate(fn: Callable) -> Callable:
-        names = list(inspect.signature(fn).parameters)[1 + lead:]
+        names = list(inspect.signature(fn).parameters)[1 + lead :]
 
         @functools.wraps(fn)
         def wrapper(env: Any, *args: Any, **params: Any) -> Any:

@@ -40,8 +40,11 @@ def check_ik(robot: Any, part: Optional[str], functor: str, param: str) -> None:
         try:
             get_solver(part)
         except KeyError as err:
-            raise ParamError(functor, param, str(err).strip("\"'") + "; use a robot whose config builds "
-                                             "kinematics solvers (embodichain-robots)") from None
+            raise ParamError(
+                functor,
+                param,
+                str(err).strip("\"'") + "; use a robot whose config builds kinematics solvers (embodichain-robots)",
+            ) from None
 
 
 def part_joints(robot: Any, part: Optional[str], width: Optional[int] = None) -> list[int]:
@@ -64,8 +67,9 @@ def eef_pose(robot: Any, part: Optional[str]) -> torch.Tensor:
     return robot.compute_fk(name=part, to_matrix=True).to(torch.float32)
 
 
-def solve_ik(robot: Any, pose: torch.Tensor, part: Optional[str], env_ids: torch.Tensor,
-             seed: Optional[torch.Tensor] = None) -> tuple[torch.Tensor, torch.Tensor, list[int]]:
+def solve_ik(
+    robot: Any, pose: torch.Tensor, part: Optional[str], env_ids: torch.Tensor, seed: Optional[torch.Tensor] = None
+) -> tuple[torch.Tensor, torch.Tensor, list[int]]:
     """IK for ``env_ids``; failed envs keep the seed. Returns ``(success, qpos, joint ids)``."""
     joints = part_joints(robot, part)
     if seed is None:

@@ -26,8 +26,17 @@ from embodichain_core.utils.math import euler_xyz_to_quat, pose_to_matrix
 from embodichain_functors._common import ParamError
 from embodichain_functors._kinematics import check_ik, default_part, solve_ik
 
-__all__ = ["DeltaQposTerm", "QposTerm", "QposDenormalizedTerm", "QposNormalizedTerm", "EefPoseTerm", "QvelTerm",
-           "QfTerm", "DEFAULT_QVEL_LIMIT", "DEFAULT_QF_LIMIT"]
+__all__ = [
+    "DeltaQposTerm",
+    "QposTerm",
+    "QposDenormalizedTerm",
+    "QposNormalizedTerm",
+    "EefPoseTerm",
+    "QvelTerm",
+    "QfTerm",
+    "DEFAULT_QVEL_LIMIT",
+    "DEFAULT_QF_LIMIT",
+]
 
 
 class _Term(ActionTerm):
@@ -39,8 +48,9 @@ class _Term(ActionTerm):
         super().__init__(cfg, env)
         unknown = [k for k in cfg.params if k not in self.defaults]
         if unknown:
-            raise ValueError(f"params.{unknown[0]}: unknown parameter of {type(self).__name__} "
-                             f"(parameters: {sorted(self.defaults)})")
+            raise ValueError(
+                f"params.{unknown[0]}: unknown parameter of {type(self).__name__} (parameters: {sorted(self.defaults)})"
+            )
         self.params = {**self.defaults, **cfg.params}
         scale = self.params.get("scale", 1.0)
         if isinstance(scale, bool) or not isinstance(scale, (int, float)) or scale == 0:
@@ -256,14 +266,17 @@ _UNLIMITED = 1e9
 
 def _joint_actuators(model: Any, jnt: int) -> list[int]:
     """Ids of the actuators whose transmission is MuJoCo joint ``jnt``."""
-    return [a for a in range(model.nu)
-            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and model.actuator_trnid[a, 0] == jnt]
+    return [
+        a
+        for a in range(model.nu)
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and model.actuator_trnid[a, 0] == jnt
+    ]
 
 
 def _velocity_actuator_limit(model: Any, act: int) -> float:
     """``max |ctrlrange|`` of a limited velocity servo (bias ``-kv * qdot``), else NaN."""
     bias = model.actuator_biasprm[act]
-    servo = (model.actuator_biastype[act] == mujoco.mjtBias.mjBIAS_AFFINE and bias[1] == 0 and bias[2] != 0)
+    servo = model.actuator_biastype[act] == mujoco.mjtBias.mjBIAS_AFFINE and bias[1] == 0 and bias[2] != 0
     if servo and model.actuator_ctrllimited[act]:
         return float(np.abs(model.actuator_ctrlrange[act]).max())
     return float("nan")
@@ -274,8 +287,10 @@ def _effort_actuator_limit(model: Any, act: int) -> float:
     limited motor, else NaN."""
     if model.actuator_forcelimited[act]:
         return float(np.abs(model.actuator_forcerange[act]).max())
-    motor = (model.actuator_gaintype[act] == mujoco.mjtGain.mjGAIN_FIXED
-             and model.actuator_biastype[act] == mujoco.mjtBias.mjBIAS_NONE)
+    motor = (
+        model.actuator_gaintype[act] == mujoco.mjtGain.mjGAIN_FIXED
+        and model.actuator_biastype[act] == mujoco.mjtBias.mjBIAS_NONE
+    )
     if motor and model.actuator_ctrllimited[act]:
         gain = abs(model.actuator_gainprm[act, 0] * model.actuator_gear[act, 0])
         return float(np.abs(model.actuator_ctrlrange[act]).max() * gain)

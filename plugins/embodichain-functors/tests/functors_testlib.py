@@ -36,12 +36,19 @@ def arm_cfg(**kwargs: Any) -> RobotCfg:
 def scene_cfg(**overrides: Any) -> EmbodiedEnvCfg:
     """The small test scene (see the module docstring) with ``overrides`` applied."""
     cfg = EmbodiedEnvCfg(
-        num_envs=N, seed=0, verbose=False, robot=arm_cfg(), control_parts=["arm"],
+        num_envs=N,
+        seed=0,
+        verbose=False,
+        robot=arm_cfg(),
+        control_parts=["arm"],
         custom_event_modes=["test", "custom", "attach", "detach"],  # the modes the tests apply by hand
-        rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=CUBE_POS),
-                      RigidObjectCfg(uid="ball", shape=SphereCfg(radius=0.03), init_pos=BALL_POS)],
-        background=[RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_POS,
-                                   body_type="kinematic")],
+        rigid_object=[
+            RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=CUBE_POS),
+            RigidObjectCfg(uid="ball", shape=SphereCfg(radius=0.03), init_pos=BALL_POS),
+        ],
+        background=[
+            RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_POS, body_type="kinematic")
+        ],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="point", init_pos=(0.0, 0.0, 2.0), intensity=20.0)]),
     )
     for key, value in overrides.items():
@@ -85,7 +92,9 @@ def write_png(path: str, rgb: tuple, size: int = 8) -> str:
 
     header = struct.pack(">IIBBBBB", size, size, 8, 2, 0, 0, 0)
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+        f.write(
+            b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+        )
     return path
 
 

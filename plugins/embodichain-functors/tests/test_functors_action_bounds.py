@@ -31,8 +31,10 @@ def term(func, **params) -> dict:
     return {"a": ActionTermCfg(func=func, params=params)}
 
 
-@pytest.mark.parametrize("func, default", [(actions.QvelTerm, actions.DEFAULT_QVEL_LIMIT["hinge"]),
-                                           (actions.QfTerm, actions.DEFAULT_QF_LIMIT["hinge"])])
+@pytest.mark.parametrize(
+    "func, default",
+    [(actions.QvelTerm, actions.DEFAULT_QVEL_LIMIT["hinge"]), (actions.QfTerm, actions.DEFAULT_QF_LIMIT["hinge"])],
+)
 def test_unlimited_joints_get_the_default_bounds(build, func, default) -> None:
     env = build(actions=term(func, scale=0.5))
     space = env.single_action_space
@@ -44,13 +46,18 @@ def test_configured_limits_win(build) -> None:
     drives = JointDrivePropertiesCfg(max_velocity={"joint1": 1.5, ".*": 2.0}, max_effort={"joint1": 20.0, ".*": 30.0})
     robot = arm_cfg(drive_pros=drives)
     assert np.allclose(build(robot=robot, actions=term(actions.QvelTerm)).single_action_space.high, [1.5] + [2.0] * 6)
-    assert np.allclose(build(robot=robot, actions=term(actions.QfTerm, scale=2.0)).single_action_space.high,
-                       [10.0] + [15.0] * 6)
+    assert np.allclose(
+        build(robot=robot, actions=term(actions.QfTerm, scale=2.0)).single_action_space.high, [10.0] + [15.0] * 6
+    )
 
 
 def test_mjcf_actuator_ranges_bound_joints_without_limits(build) -> None:
-    robot = RobotCfg(uid="arm", mjcf=MOTOR_ARM, control_parts={"arm": ["j1", "j2"]},
-                     drive_pros=JointDrivePropertiesCfg(drive_type="none"))
+    robot = RobotCfg(
+        uid="arm",
+        mjcf=MOTOR_ARM,
+        control_parts={"arm": ["j1", "j2"]},
+        drive_pros=JointDrivePropertiesCfg(drive_type="none"),
+    )
     qf = build(robot=robot, actions=term(actions.QfTerm, disable_drives=False)).single_action_space
     assert np.allclose(qf.high, [6.0, actions.DEFAULT_QF_LIMIT["slide"]])  # motor: ctrlrange 2 * gear 3
     qvel = build(robot=robot, actions=term(actions.QvelTerm, zero_stiffness=False)).single_action_space

@@ -63,7 +63,9 @@ def test_qpos_and_denormalized(build) -> None:
 
 
 def test_qpos_normalized_as_a_post_term(build) -> None:
-    env = build(actions={**term(actions.QposTerm), **{"n": ActionTermCfg(func=actions.QposNormalizedTerm, mode="post")}})
+    env = build(
+        actions={**term(actions.QposTerm), **{"n": ActionTermCfg(func=actions.QposNormalizedTerm, mode="post")}}
+    )
     env.reset()
     env.step(torch.tensor([[-2.8, 0.0, 2.8, 0, 0, 0, 0]]).expand(4, NA))
     assert torch.allclose(env.last_action[:, :3], torch.tensor([0.0, 0.5, 1.0]).expand(4, 3), atol=1e-6)
@@ -116,14 +118,17 @@ def test_qf_term_drives_effort(build) -> None:
     assert (speeds[0] > 0).all()
 
 
-@pytest.mark.parametrize("func, params, param", [
-    (actions.DeltaQposTerm, {"scael": 0.1}, "scael"),
-    (actions.QposTerm, {"scale": 0}, "scale"),
-    (actions.QposDenormalizedTerm, {"joint_ids": [9]}, "joint_ids"),
-    (actions.QposNormalizedTerm, {"range": [1, 0]}, "range"),
-    (actions.EefPoseTerm, {"pose_dim": 5}, "pose_dim"),
-    (actions.EefPoseTerm, {"part_name": "leg"}, "part_name"),
-])
+@pytest.mark.parametrize(
+    "func, params, param",
+    [
+        (actions.DeltaQposTerm, {"scael": 0.1}, "scael"),
+        (actions.QposTerm, {"scale": 0}, "scale"),
+        (actions.QposDenormalizedTerm, {"joint_ids": [9]}, "joint_ids"),
+        (actions.QposNormalizedTerm, {"range": [1, 0]}, "range"),
+        (actions.EefPoseTerm, {"pose_dim": 5}, "pose_dim"),
+        (actions.EefPoseTerm, {"part_name": "leg"}, "part_name"),
+    ],
+)
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(robot=toy_ik_arm_cfg(), actions=term(func, **params))

@@ -24,8 +24,11 @@ EVENTS = [
     (events.register_entity_pose, {"entity_cfg": {"uid": "nothing"}}, "entity_cfg"),
     (events.register_info_to_env, {"registry": [{"attrs": ["x"]}]}, "registry[0]"),
     (rand.randomize_joint_stiffness, {"entity_cfg": E(uid="arm"), "stiffness_range": [-2, -1]}, "stiffness_range"),
-    (rand.randomize_joint_drive, {"entity_cfg": E(uid="arm", joint_names=["finger_joint2"]),
-                                  "stiffness_range": [1, 2]}, "entity_cfg"),
+    (
+        rand.randomize_joint_drive,
+        {"entity_cfg": E(uid="arm", joint_names=["finger_joint2"]), "stiffness_range": [1, 2]},
+        "entity_cfg",
+    ),
     (rand.randomize_robot_eef_pose, {"entity_cfg": E(uid="cube")}, "entity_cfg"),
     (rand.randomize_camera_extrinsics, {"entity_cfg": E(uid="cube"), "pos_range": [[0] * 3, [1] * 3]}, "entity_cfg"),
 ]
@@ -43,16 +46,25 @@ CLASSES = [
     (events.replace_assets_from_group, {"entity_cfg": E(uid="cube"), "folder_path": 3}, "folder_path"),
     (events.prepare_extra_attr, {"attrs": [{"name": "x", "entity_uids": "nothing"}]}, "attrs[0]"),
     (events.create_rigid_constraint, {"obj_a_cfg": E(uid="cube"), "obj_b_cfg": E(uid="ball"), "name": ""}, "name"),
-    (rand.randomize_rigid_object_center_of_mass, {"entity_cfg": E(uid="point"),
-                                                  "com_pos_offset_range": [[0] * 3, [1] * 3]}, "entity_cfg"),
+    (
+        rand.randomize_rigid_object_center_of_mass,
+        {"entity_cfg": E(uid="point"), "com_pos_offset_range": [[0] * 3, [1] * 3]},
+        "entity_cfg",
+    ),
     (rand.randomize_visual_material, {"entity_cfg": E(uid="cube"), "max_textures": 0}, "max_textures"),
     (rand.set_rigid_object_group_visual_material, {"entity_cfg": E(uid="cube"), "mat_cfg": {}}, "entity_cfg"),
     (rand.set_rigid_object_visual_material, {"entity_cfg": E(uid="cube"), "mat_cfg": 3}, "mat_cfg"),
     (rand.randomize_rigid_objects_scale, {"entity_cfgs": [], "scale_factor_range": [1, 2]}, "entity_cfgs"),
-    (rand.randomize_rigid_object_scale, {"entity_cfg": E(uid="cube"), "scale_factor_range": [1, 2],
-                                         "mesh_scale_levels": 0}, "mesh_scale_levels"),
-    (rand.planner_grid_cell_sampler, {"position_range": [[0, 0], [1, 1]], "reference_height": 0.1,
-                                      "object_uid_list": ["arm"], "grid_size": [2, 2]}, "object_uid_list"),
+    (
+        rand.randomize_rigid_object_scale,
+        {"entity_cfg": E(uid="cube"), "scale_factor_range": [1, 2], "mesh_scale_levels": 0},
+        "mesh_scale_levels",
+    ),
+    (
+        rand.planner_grid_cell_sampler,
+        {"position_range": [[0, 0], [1, 1]], "reference_height": 0.1, "object_uid_list": ["arm"], "grid_size": [2, 2]},
+        "object_uid_list",
+    ),
 ]
 
 
@@ -75,7 +87,9 @@ OBSERVATIONS = [
 ]
 
 
-@pytest.mark.parametrize("func, params, param, mode", OBSERVATIONS, ids=[f"{f[0].__name__}-{f[2]}" for f in OBSERVATIONS])
+@pytest.mark.parametrize(
+    "func, params, param, mode", OBSERVATIONS, ids=[f"{f[0].__name__}-{f[2]}" for f in OBSERVATIONS]
+)
 def test_observations(build, func, params, param, mode) -> None:
     name = "robot/qpos" if mode == "modify" else "x/y"
     with pytest.raises(ConfigError) as err:
@@ -88,12 +102,20 @@ def test_semantic_mask_needs_a_mask(build) -> None:
     sensors = pytest.importorskip("embodichain_sensors.cfg")
     cam = sensors.CameraCfg(uid="cam", width=16, height=12, intrinsics=(10, 10, 8, 6))
     with pytest.raises(ConfigError, match="enable_mask"):
-        build(sensor=[cam], observations={"s": ObservationCfg(func=obs.compute_semantic_mask, mode="add",
-                                                              name="x/s", params={"entity_cfg": E(uid="cam")})})
+        build(
+            sensor=[cam],
+            observations={
+                "s": ObservationCfg(
+                    func=obs.compute_semantic_mask, mode="add", name="x/s", params={"entity_cfg": E(uid="cam")}
+                )
+            },
+        )
 
 
-@pytest.mark.parametrize("func, params, param", [
-    (actions.QvelTerm, {"scale": "fast"}, "scale"), (actions.QfTerm, {"disable_drive": True}, "disable_drive")])
+@pytest.mark.parametrize(
+    "func, params, param",
+    [(actions.QvelTerm, {"scale": "fast"}, "scale"), (actions.QfTerm, {"disable_drive": True}, "disable_drive")],
+)
 def test_velocity_and_effort_terms(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(actions={"a": ActionTermCfg(func=func, params=params)})
@@ -102,11 +124,21 @@ def test_velocity_and_effort_terms(build, func, params, param) -> None:
 
 
 def test_group_material_lands_on_every_member(build) -> None:
-    group = RigidObjectGroupCfg(uid="blocks", rigid_objects={
-        k: RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, y, 0.02)) for k, y in (("a", -0.3), ("b", -0.4))})
-    env = build(rigid_object_group=[group], events=event(
-        rand.set_rigid_object_group_visual_material, entity_cfg=E(uid="blocks"),
-        mat_cfg={"base_color": [0.1, 0.6, 0.1, 1.0], "metallic": 0.5}))
+    group = RigidObjectGroupCfg(
+        uid="blocks",
+        rigid_objects={
+            k: RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, y, 0.02))
+            for k, y in (("a", -0.3), ("b", -0.4))
+        },
+    )
+    env = build(
+        rigid_object_group=[group],
+        events=event(
+            rand.set_rigid_object_group_visual_material,
+            entity_cfg=E(uid="blocks"),
+            mat_cfg={"base_color": [0.1, 0.6, 0.1, 1.0], "metallic": 0.5},
+        ),
+    )
     apply(env, [2])
     mats = [m.material_id for m in env.scene["blocks"].members]
     rgba, metallic = field(env, "mat_rgba")[:, mats], field(env, "mat_metallic")[:, mats]

@@ -35,9 +35,16 @@ def _fork(files: list[str], **kwargs) -> RigidObjectCfg:
 
 def test_replace_assets_gives_each_env_a_mesh_of_the_folder(build, tmp_path) -> None:
     folder, files = _fork_folder(tmp_path)
-    env = build(rigid_object=[_fork(files)], events={
-        "swap": EventCfg(func=events.replace_assets_from_group, mode="reset",
-                         params={"entity_cfg": E(uid="fork"), "folder_path": folder})})
+    env = build(
+        rigid_object=[_fork(files)],
+        events={
+            "swap": EventCfg(
+                func=events.replace_assets_from_group,
+                mode="reset",
+                params={"entity_cfg": E(uid="fork"), "folder_path": folder},
+            )
+        },
+    )
     functor = env.event_manager.get_functor("swap")
     assert sorted(functor.files) == sorted(files)  # every mesh file, no .mtl / .png
     seen = set()
@@ -57,10 +64,20 @@ def test_replace_assets_only_touches_env_ids_and_keeps_the_material_colour(build
     from embodichain_sensors.cfg import CameraCfg
 
     folder, files = _fork_folder(tmp_path)
-    cam = CameraCfg(uid="cam", width=32, height=32, intrinsics=(40, 40, 16, 16),
-                    extrinsics=CameraCfg.ExtrinsicsCfg(eye=(0.3, -0.3, 0.3), target=(0.3, -0.3, 0.0)))
-    env = build(rigid_object=[_fork(files)], sensor=[cam], events=event(
-        events.replace_assets_from_group, entity_cfg=E(uid="fork"), folder_path=str(tmp_path / "forks" / "*_2.obj")))
+    cam = CameraCfg(
+        uid="cam",
+        width=32,
+        height=32,
+        intrinsics=(40, 40, 16, 16),
+        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(0.3, -0.3, 0.3), target=(0.3, -0.3, 0.0)),
+    )
+    env = build(
+        rigid_object=[_fork(files)],
+        sensor=[cam],
+        events=event(
+            events.replace_assets_from_group, entity_cfg=E(uid="fork"), folder_path=str(tmp_path / "forks" / "*_2.obj")
+        ),
+    )
     apply(env, [1])
     current = env.scene.current_mesh["fork"]
     assert current[1] == files[2]
@@ -73,23 +90,32 @@ def test_replace_assets_only_touches_env_ids_and_keeps_the_material_colour(build
 def test_replace_assets_bad_folder(build, tmp_path) -> None:
     _, files = _fork_folder(tmp_path)
     with pytest.raises(ConfigError, match="folder_path"):
-        build(rigid_object=[_fork(files)], events=event(events.replace_assets_from_group, entity_cfg=E(uid="fork"),
-                                                        folder_path=str(tmp_path / "empty*")))
+        build(
+            rigid_object=[_fork(files)],
+            events=event(
+                events.replace_assets_from_group, entity_cfg=E(uid="fork"), folder_path=str(tmp_path / "empty*")
+            ),
+        )
 
 
 def test_detached_uids_are_added_once(build) -> None:
-    env = build(events={"detach": EventCfg(func=events.set_detached_uids_for_env_reset, mode="startup",
-                                           params={"uids": ["cube"]}),
-                        "detach2": EventCfg(func=events.set_detached_uids_for_env_reset, mode="reset",
-                                            params={"uids": "cube"})})
+    env = build(
+        events={
+            "detach": EventCfg(func=events.set_detached_uids_for_env_reset, mode="startup", params={"uids": ["cube"]}),
+            "detach2": EventCfg(func=events.set_detached_uids_for_env_reset, mode="reset", params={"uids": "cube"}),
+        }
+    )
     env.reset()
     env.reset()
     assert env._detached_uids_for_reset == ["cube"]
 
 
 def test_detached_uids_skip_the_reset(build) -> None:
-    env = build(events={"detach": EventCfg(func=events.set_detached_uids_for_env_reset, mode="startup",
-                                           params={"uids": ["cube"]})})
+    env = build(
+        events={
+            "detach": EventCfg(func=events.set_detached_uids_for_env_reset, mode="startup", params={"uids": ["cube"]})
+        }
+    )
     env.reset()
     pose = env.scene["cube"].get_local_pose()
     pose[:, 0] += 0.2
@@ -99,11 +125,23 @@ def test_detached_uids_skip_the_reset(build) -> None:
 
 
 def test_drop_group_sequentially(build) -> None:
-    group = RigidObjectGroupCfg(uid="blocks", rigid_objects={
-        f"b{k}": RigidObjectCfg(shape=CubeCfg(size=[0.03] * 3), init_pos=(0.3, -0.6 - 0.1 * k, 0.015)) for k in range(3)})
-    env = build(rigid_object_group=[group], events=event(
-        events.drop_rigid_object_group_sequentially, entity_cfg=E(uid="blocks"), drop_position=[0.6, 0.3, 0.3],
-        position_range=[[-0.02, -0.02, 0], [0.02, 0.02, 0]], physics_step=5))
+    group = RigidObjectGroupCfg(
+        uid="blocks",
+        rigid_objects={
+            f"b{k}": RigidObjectCfg(shape=CubeCfg(size=[0.03] * 3), init_pos=(0.3, -0.6 - 0.1 * k, 0.015))
+            for k in range(3)
+        },
+    )
+    env = build(
+        rigid_object_group=[group],
+        events=event(
+            events.drop_rigid_object_group_sequentially,
+            entity_cfg=E(uid="blocks"),
+            drop_position=[0.6, 0.3, 0.3],
+            position_range=[[-0.02, -0.02, 0], [0.02, 0.02, 0]],
+            physics_step=5,
+        ),
+    )
     before = env.scene["blocks"].get_local_pose()
     ids = apply(env, IDS)
     pose = env.scene["blocks"].get_local_pose()
@@ -114,10 +152,16 @@ def test_drop_group_sequentially(build) -> None:
 
 
 def test_settle_steps_only_chosen_envs_until_rest(build) -> None:
-    env = build(events={
-        "lift": EventCfg(func=rand.randomize_rigid_object_pose, mode="test", params={
-            "entity_cfg": E(uid="cube"), "position_range": [[0, 0, 0.2], [0, 0, 0.2]]}),
-        "settle": EventCfg(func=events.wait_for_dynamic_objects_to_settle, mode="test", params={"max_steps": 400})})
+    env = build(
+        events={
+            "lift": EventCfg(
+                func=rand.randomize_rigid_object_pose,
+                mode="test",
+                params={"entity_cfg": E(uid="cube"), "position_range": [[0, 0, 0.2], [0, 0, 0.2]]},
+            ),
+            "settle": EventCfg(func=events.wait_for_dynamic_objects_to_settle, mode="test", params={"max_steps": 400}),
+        }
+    )
     ball0 = env.scene["ball"].get_local_pose()
     ids = apply(env, IDS)
     cube = env.scene["cube"].get_local_pose()
@@ -129,24 +173,41 @@ def test_settle_steps_only_chosen_envs_until_rest(build) -> None:
 
 def test_settle_timeout_warns_or_raises(build) -> None:
     params = {"entity_cfgs": [E(uid="cube")], "min_steps": 0, "max_steps": 2, "check_interval_steps": 1}
-    env = build(events={"lift": EventCfg(func=rand.randomize_rigid_object_pose, mode="test", params={
-        "entity_cfg": E(uid="cube"), "position_range": [[0, 0, 1], [0, 0, 1]]}),
-        "settle": EventCfg(func=events.wait_for_dynamic_objects_to_settle, mode="test", params=params)})
+    env = build(
+        events={
+            "lift": EventCfg(
+                func=rand.randomize_rigid_object_pose,
+                mode="test",
+                params={"entity_cfg": E(uid="cube"), "position_range": [[0, 0, 1], [0, 0, 1]]},
+            ),
+            "settle": EventCfg(func=events.wait_for_dynamic_objects_to_settle, mode="test", params=params),
+        }
+    )
     with pytest.warns(RuntimeWarning, match="still moving"):
         apply(env, IDS)
-    env = build(events=event(events.wait_for_dynamic_objects_to_settle, **params, timeout_behavior="raise",
-                             linear_velocity_threshold=1e-12, angular_velocity_threshold=1e-12))
+    env = build(
+        events=event(
+            events.wait_for_dynamic_objects_to_settle,
+            **params,
+            timeout_behavior="raise",
+            linear_velocity_threshold=1e-12,
+            angular_velocity_threshold=1e-12,
+        )
+    )
     env.scene["cube"].set_velocity(torch.ones(4, 6))
     with pytest.raises(RuntimeError, match="still moving"):
         apply(env, IDS)
 
 
-@pytest.mark.parametrize("params, param", [
-    ({"entity_cfgs": [E(uid="table")]}, "entity_cfgs"),
-    ({"entity_cfgs": [E(uid="arm")]}, "entity_cfgs"),
-    ({"min_steps": 50, "max_steps": 10}, "min_steps"),
-    ({"timeout_behavior": "ignore"}, "timeout_behavior"),
-])
+@pytest.mark.parametrize(
+    "params, param",
+    [
+        ({"entity_cfgs": [E(uid="table")]}, "entity_cfgs"),
+        ({"entity_cfgs": [E(uid="arm")]}, "entity_cfgs"),
+        ({"min_steps": 50, "max_steps": 10}, "min_steps"),
+        ({"timeout_behavior": "ignore"}, "timeout_behavior"),
+    ],
+)
 def test_settle_bad_params(build, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         apply(build(events=event(events.wait_for_dynamic_objects_to_settle, **params)), IDS)
@@ -168,9 +229,14 @@ def _ball_in_cube(env) -> torch.Tensor:
 
 
 def _weld_events(**params) -> dict:
-    return {"attach": EventCfg(func=events.create_rigid_constraint, mode="attach",
-                               params={"obj_a_cfg": E(uid="cube"), "obj_b_cfg": E(uid="ball"), "name": "w", **params}),
-            "detach": EventCfg(func=events.remove_rigid_constraint, mode="detach", params={"name": "w"})}
+    return {
+        "attach": EventCfg(
+            func=events.create_rigid_constraint,
+            mode="attach",
+            params={"obj_a_cfg": E(uid="cube"), "obj_b_cfg": E(uid="ball"), "name": "w", **params},
+        ),
+        "detach": EventCfg(func=events.remove_rigid_constraint, mode="detach", params={"name": "w"}),
+    }
 
 
 def test_weld_holds_relative_pose_in_chosen_envs_until_removed(build) -> None:
@@ -204,8 +270,15 @@ def test_weld_with_local_frames_and_reset_clears_it(build) -> None:
 
 def test_constraint_bad_params(build) -> None:
     with pytest.raises(ConfigError, match="obj_b_cfg"):
-        build(events={"attach": EventCfg(func=events.create_rigid_constraint, mode="attach", params={
-            "obj_a_cfg": E(uid="cube"), "obj_b_cfg": E(uid="arm"), "name": "w"})})
+        build(
+            events={
+                "attach": EventCfg(
+                    func=events.create_rigid_constraint,
+                    mode="attach",
+                    params={"obj_a_cfg": E(uid="cube"), "obj_b_cfg": E(uid="arm"), "name": "w"},
+                )
+            }
+        )
     with pytest.raises(ConfigError) as err:
         apply(build(events=event(events.remove_rigid_constraint, name="nope")), IDS)
     assert err.value.path == "env.events.ev.params.name"
@@ -213,22 +286,48 @@ def test_constraint_bad_params(build) -> None:
 
 def test_prepare_and_register_attributes_and_poses(build) -> None:
     grasp = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.02], [0, 0, 0, 1]]
-    env = build(robot=toy_ik_arm_cfg(), events={
-        "prep": EventCfg(func=events.prepare_extra_attr, mode="reset", params={"attrs": [
-            {"name": "grasp_pose_object", "entity_uids": "cube", "mode": "static", "value": grasp},
-            {"name": "hand_pose", "entity_cfg": E(uid="arm"), "mode": "callable", "func_name": "get_link_pose",
-             "func_kwargs": {"link_name": "hand"}}]}),
-        "reg": EventCfg(func=events.register_info_to_env, mode="reset", params={"registry": [
-            {"entity_cfg": E(uid="cube"), "attrs": ["grasp_pose_object", "body_scale"],
-             "pose_register_params": {"compute_relative": ["ball"]}},
-            {"entity_cfg": E(uid="arm", control_parts=["arm"]), "attrs": ["hand_pose"], "prefix": False}]})})
+    env = build(
+        robot=toy_ik_arm_cfg(),
+        events={
+            "prep": EventCfg(
+                func=events.prepare_extra_attr,
+                mode="reset",
+                params={
+                    "attrs": [
+                        {"name": "grasp_pose_object", "entity_uids": "cube", "mode": "static", "value": grasp},
+                        {
+                            "name": "hand_pose",
+                            "entity_cfg": E(uid="arm"),
+                            "mode": "callable",
+                            "func_name": "get_link_pose",
+                            "func_kwargs": {"link_name": "hand"},
+                        },
+                    ]
+                },
+            ),
+            "reg": EventCfg(
+                func=events.register_info_to_env,
+                mode="reset",
+                params={
+                    "registry": [
+                        {
+                            "entity_cfg": E(uid="cube"),
+                            "attrs": ["grasp_pose_object", "body_scale"],
+                            "pose_register_params": {"compute_relative": ["ball"]},
+                        },
+                        {"entity_cfg": E(uid="arm", control_parts=["arm"]), "attrs": ["hand_pose"], "prefix": False},
+                    ]
+                },
+            ),
+        },
+    )
     env.reset()
     data = env.affordance_datas
     assert data["cube_pose"].shape == (4, 4, 4)
-    assert torch.allclose(data["cube_pose"][:, :3, 3],
-                                                                     torch.tensor(CUBE_POS).expand(4, 3))
-    assert torch.allclose(data["ball_pose_in_cube"][:, :3, 3], torch.tensor([-0.1, 0.25, 0.005]).expand(4, 3),
-                          atol=1e-5)
+    assert torch.allclose(data["cube_pose"][:, :3, 3], torch.tensor(CUBE_POS).expand(4, 3))
+    assert torch.allclose(
+        data["ball_pose_in_cube"][:, :3, 3], torch.tensor([-0.1, 0.25, 0.005]).expand(4, 3), atol=1e-5
+    )
     assert torch.allclose(data["cube_grasp_pose"][:, 2, 3], torch.full((4,), CUBE_POS[2] + 0.02))
     assert data["cube_body_scale"].shape == (4, 3)
     assert data["hand_pose"].shape == (4, 7)
@@ -243,6 +342,12 @@ def test_registration_bad_params(build) -> None:
     with pytest.raises(ConfigError, match="mode"):
         build(events=event(events.prepare_extra_attr, attrs=[{"name": "x", "entity_uids": "cube", "mode": "magic"}]))
     with pytest.raises(ConfigError) as err:
-        apply(build(events=event(events.register_entity_attrs, entity_cfg={"uid": "cube"}, attrs=["x"],
-                                 registration="not valid")), IDS)
+        apply(
+            build(
+                events=event(
+                    events.register_entity_attrs, entity_cfg={"uid": "cube"}, attrs=["x"], registration="not valid"
+                )
+            ),
+            IDS,
+        )
     assert err.value.path == "env.events.ev.params.registration"

@@ -21,10 +21,14 @@ IDS = [0, 3]
 
 
 def test_uniform_scale_of_a_box(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="cube"),
-                             scale_factor_range=[[1.5], [2.0]]),
-                observations={"s": ObservationCfg(func=obs.get_object_body_scale, mode="add", name="object/scale",
-                                                  params={"entity_cfg": E(uid="cube")})})
+    env = build(
+        events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="cube"), scale_factor_range=[[1.5], [2.0]]),
+        observations={
+            "s": ObservationCfg(
+                func=obs.get_object_body_scale, mode="add", name="object/scale", params={"entity_cfg": E(uid="cube")}
+            )
+        },
+    )
     cube = env.scene["cube"]
     geom, body = cube.geom_ids[0], cube.body_id
     size0, inertia0 = field(env, "geom_size")[:, geom], field(env, "body_inertia")[:, body]
@@ -42,8 +46,14 @@ def test_uniform_scale_of_a_box(build) -> None:
 
 
 def test_scaled_box_rests_on_the_ground_at_its_new_size(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="cube"),
-                             scale_factor_range=[[2.0, 2.0, 3.0], [2.0, 2.0, 3.0]], same_scale_all_axes=False))
+    env = build(
+        events=event(
+            rand.randomize_rigid_object_scale,
+            entity_cfg=E(uid="cube"),
+            scale_factor_range=[[2.0, 2.0, 3.0], [2.0, 2.0, 3.0]],
+            same_scale_all_axes=False,
+        )
+    )
     apply(env, IDS)
     for _ in range(30):
         env.step(torch.zeros(env.action_space.shape))
@@ -53,8 +63,14 @@ def test_scaled_box_rests_on_the_ground_at_its_new_size(build) -> None:
 
 
 def test_several_objects_with_a_shared_sample(build) -> None:
-    env = build(events=event(rand.randomize_rigid_objects_scale, entity_cfgs=[E(uid="cube"), E(uid="ball")],
-                             scale_factor_range=[0.5, 0.9], shared_sample=True))
+    env = build(
+        events=event(
+            rand.randomize_rigid_objects_scale,
+            entity_cfgs=[E(uid="cube"), E(uid="ball")],
+            scale_factor_range=[0.5, 0.9],
+            shared_sample=True,
+        )
+    )
     cube, ball = env.scene["cube"], env.scene["ball"]
     c0, b0 = field(env, "geom_size")[:, cube.geom_ids[0], 0], field(env, "geom_size")[:, ball.geom_ids[0], 0]
     apply(env, IDS)
@@ -68,11 +84,20 @@ def _mesh_box(tmp_path, uid: str = "box", z: float = 0.02) -> RigidObjectCfg:
 
 
 def test_mesh_object_takes_the_nearest_precompiled_scale(build, tmp_path) -> None:
-    env = build(rigid_object=[_mesh_box(tmp_path)],
-                events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="box"),
-                             scale_factor_range=[1.0, 3.0], mesh_scale_levels=4),
-                observations={"s": ObservationCfg(func=obs.get_object_body_scale, mode="add", name="object/scale",
-                                                  params={"entity_cfg": E(uid="box")})})
+    env = build(
+        rigid_object=[_mesh_box(tmp_path)],
+        events=event(
+            rand.randomize_rigid_object_scale,
+            entity_cfg=E(uid="box"),
+            scale_factor_range=[1.0, 3.0],
+            mesh_scale_levels=4,
+        ),
+        observations={
+            "s": ObservationCfg(
+                func=obs.get_object_body_scale, mode="add", name="object/scale", params={"entity_cfg": E(uid="box")}
+            )
+        },
+    )
     box = env.scene["box"]
     mass0, inertia0 = field(env, "body_mass")[:, box.body_id], field(env, "body_inertia")[:, box.body_id]
     apply(env, [0, 1, 2, 3])
@@ -90,10 +115,16 @@ def test_mesh_object_takes_the_nearest_precompiled_scale(build, tmp_path) -> Non
 
 
 def test_mesh_scale_per_axis_uses_a_grid(build, tmp_path) -> None:
-    env = build(rigid_object=[_mesh_box(tmp_path)],
-                events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="box"),
-                             scale_factor_range=[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]], same_scale_all_axes=False,
-                             mesh_scale_levels=8))
+    env = build(
+        rigid_object=[_mesh_box(tmp_path)],
+        events=event(
+            rand.randomize_rigid_object_scale,
+            entity_cfg=E(uid="box"),
+            scale_factor_range=[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]],
+            same_scale_all_axes=False,
+            mesh_scale_levels=8,
+        ),
+    )
     variants = env.scene.builder.records["box"].extra["variants"]
     assert len([v for v in variants.values() if v.get("factor")]) == 8  # 2 values per axis
     apply(env, [0, 1, 2, 3])
@@ -108,9 +139,14 @@ def test_mesh_scaling_and_mesh_swapping_do_not_combine(build, tmp_path) -> None:
     folder.mkdir()
     for k in range(2):
         write_box_obj(str(folder / f"m{k}.obj"), (0.02 + 0.01 * k,) * 3)
-    evs = {**event(events.replace_assets_from_group, entity_cfg=E(uid="box"), folder_path=str(folder)),
-           "scale": EventCfg(func=rand.randomize_rigid_object_scale, mode="test",
-                             params={"entity_cfg": E(uid="box"), "scale_factor_range": [1, 2]})}
+    evs = {
+        **event(events.replace_assets_from_group, entity_cfg=E(uid="box"), folder_path=str(folder)),
+        "scale": EventCfg(
+            func=rand.randomize_rigid_object_scale,
+            mode="test",
+            params={"entity_cfg": E(uid="box"), "scale_factor_range": [1, 2]},
+        ),
+    }
     with pytest.raises(ConfigError, match="also swaps meshes"):
         build(rigid_object=[_mesh_box(tmp_path)], events=evs)
 
@@ -118,5 +154,7 @@ def test_mesh_scaling_and_mesh_swapping_do_not_combine(build, tmp_path) -> None:
 @pytest.mark.parametrize("rng", [[2.0, 1.0], [0.0, 1.0], [[1, 1], [2, 2]]])
 def test_bad_ranges(build, rng) -> None:
     with pytest.raises(ConfigError, match="scale_factor_range"):
-        apply(build(events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="cube"), scale_factor_range=rng)),
-              IDS)
+        apply(
+            build(events=event(rand.randomize_rigid_object_scale, entity_cfg=E(uid="cube"), scale_factor_range=rng)),
+            IDS,
+        )

@@ -50,12 +50,20 @@ def test_write_model_defers_one_constants_update_for_the_written_envs(build, mon
     original = env.sim.batch.set_const
     env.sim.batch.set_const = lambda ids=None: (full.append(ids), original(ids))[1]
     update = FreeBodyConstants.update
-    monkeypatch.setattr(FreeBodyConstants, "update",
-                        lambda self, ids, fields=None: (closed.append(ids), update(self, ids, fields))[1])
+    monkeypatch.setattr(
+        FreeBodyConstants, "update", lambda self, ids, fields=None: (closed.append(ids), update(self, ids, fields))[1]
+    )
     body = env.scene["cube"].body_id
     before = field(env, "body_mass")[:, body]
-    write_model(env.sim, torch.tensor([1, 2]), [("body_mass", body, [2.0, 3.0]), ("body_inertia", body, 1e-3),
-                                                ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9)])
+    write_model(
+        env.sim,
+        torch.tensor([1, 2]),
+        [
+            ("body_mass", body, [2.0, 3.0]),
+            ("body_inertia", body, 1e-3),
+            ("geom_friction", (env.scene["cube"].geom_ids[0], 0), 0.9),
+        ],
+    )
     after = field(env, "body_mass")[:, body]
     assert after[1] == 2.0
     assert after[2] == 3.0

@@ -12,8 +12,9 @@ from embodichain_core.sim.cfg import ArticulationCfg
 import embodichain_functors.randomization as rand
 
 IDS = [1, 2]
-GRID = dict(position_range=[[0.2, -0.3], [0.8, 0.3]], reference_height=0.1, object_uid_list=["cube", "ball"],
-            grid_size=[2, 1])
+GRID = dict(
+    position_range=[[0.2, -0.3], [0.8, 0.3]], reference_height=0.1, object_uid_list=["cube", "ball"], grid_size=[2, 1]
+)
 
 
 def test_grid_cells_are_distinct_cell_centres(build) -> None:
@@ -45,15 +46,24 @@ def test_grid_rejects_too_few_cells(build) -> None:
 
 
 def _drawer() -> ArticulationCfg:
-    return ArticulationCfg(uid="shelf", init_pos=(-0.5, 0.0, 0.0), mjcf=(
-        '<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .05"/>'
-        '<body name="door" pos="0 0 .06"><joint name="hinge" axis="1 0 0"/><geom type="box" size=".05 .05 .01"/>'
-        '</body></body></worldbody></mujoco>'))
+    return ArticulationCfg(
+        uid="shelf",
+        init_pos=(-0.5, 0.0, 0.0),
+        mjcf=(
+            '<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .05"/>'
+            '<body name="door" pos="0 0 .06"><joint name="hinge" axis="1 0 0"/><geom type="box" size=".05 .05 .01"/>'
+            "</body></body></worldbody></mujoco>"
+        ),
+    )
 
 
 def test_anchor_height_moves_anchor_and_everything_on_it(build) -> None:
-    env = build(articulation=[_drawer()], events=event(
-        rand.randomize_anchor_height, anchor_uid="table", height_delta_range=[0.05, 0.1], exclude_uids=["cube"]))
+    env = build(
+        articulation=[_drawer()],
+        events=event(
+            rand.randomize_anchor_height, anchor_uid="table", height_delta_range=[0.05, 0.1], exclude_uids=["cube"]
+        ),
+    )
     poses = lambda uid: env.scene[uid].get_local_pose().clone()  # noqa: E731
     table0, ball0, cube0, shelf0 = poses("table"), poses("ball"), poses("cube"), poses("shelf")
     ids = apply(env, IDS)
@@ -78,12 +88,15 @@ def test_anchor_height_candidates(build) -> None:
     assert all(min(abs(v - c) for c in (-0.1, 0.2)) < 1e-6 for v in env.anchor_height_delta.tolist())
 
 
-@pytest.mark.parametrize("params, param", [
-    ({"anchor_uid": "nope", "height_delta_range": [0, 1]}, "anchor_uid"),
-    ({"anchor_uid": "table"}, "height_delta_range"),
-    ({"anchor_uid": "table", "height_delta_candidates": []}, "height_delta_candidates"),
-    ({"anchor_uid": "table", "height_delta_range": [0, 1], "include_groups": ["robots"]}, "include_groups"),
-])
+@pytest.mark.parametrize(
+    "params, param",
+    [
+        ({"anchor_uid": "nope", "height_delta_range": [0, 1]}, "anchor_uid"),
+        ({"anchor_uid": "table"}, "height_delta_range"),
+        ({"anchor_uid": "table", "height_delta_candidates": []}, "height_delta_candidates"),
+        ({"anchor_uid": "table", "height_delta_range": [0, 1], "include_groups": ["robots"]}, "include_groups"),
+    ],
+)
 def test_anchor_height_bad_params(build, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         build(events=event(rand.randomize_anchor_height, **params))

@@ -20,8 +20,11 @@ from embodichain_functors.catalogue import FUNCTORS, REGISTRATIONS, doc_lines_of
 
 REPO = Path(__file__).resolve().parents[3]
 #: pages whose code or module tables show names of the public modules
-PAGES = [REPO / "docs" / "functors.md", REPO / "docs" / "tutorial_modular_env.md",
-         REPO / "plugins" / "embodichain-functors" / "README.md"]
+PAGES = [
+    REPO / "docs" / "functors.md",
+    REPO / "docs" / "tutorial_modular_env.md",
+    REPO / "plugins" / "embodichain-functors" / "README.md",
+]
 #: public helpers (not functors) of the kind modules, importable since before the modules became packages
 HELPERS = {
     "embodichain_functors.events": ["resolve_uids", "resolve_dict", "get_pose"],
@@ -81,27 +84,41 @@ def documented_names(page: Path) -> list[tuple[str, str]]:
 def test_every_public_name_the_docs_show_imports() -> None:
     pairs = [(page, pair) for page in PAGES for pair in documented_names(page)]
     assert len(pairs) >= 15, f"only {len(pairs)} documented names found: the parsing broke"
-    missing = [f"{page.name}: {module}.{name}" for page, (module, name) in pairs
-               if not hasattr(importlib.import_module(module), name)]
+    missing = [
+        f"{page.name}: {module}.{name}"
+        for page, (module, name) in pairs
+        if not hasattr(importlib.import_module(module), name)
+    ]
     assert not missing, f"names the docs show that do not import: {missing}"
 
 
 def test_documented_names_parse_aliases_and_module_tables(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
-    page.write_text("```python\nimport embodichain_functors.events as ev\nev.replace_assets_from_group\n```\n"
-                    "| `embodichain_functors.rewards` | `success_reward`, penalties |\n")
-    assert documented_names(page) == [("embodichain_functors.events", "replace_assets_from_group"),
-                                      ("embodichain_functors.rewards", "success_reward")]
+    page.write_text(
+        "```python\nimport embodichain_functors.events as ev\nev.replace_assets_from_group\n```\n"
+        "| `embodichain_functors.rewards` | `success_reward`, penalties |\n"
+    )
+    assert documented_names(page) == [
+        ("embodichain_functors.events", "replace_assets_from_group"),
+        ("embodichain_functors.rewards", "success_reward"),
+    ]
 
 
 def test_doc_lines_are_read_from_the_source(tmp_path: Path) -> None:
     source = tmp_path / "mod.py"
     source.write_text(
         '@validated(check)\ndef a(env: Any,\n      x: int = 1) -> None:\n    """First line of a.\n\n    More.\n    """\n\n\n'
-        'def b(env):\n    return 1\n\n\n'
+        "def b(env):\n    return 1\n\n\n"
         "class C(Base):\n    '''\n    C, on the next line.\n    '''\n\n    def m(self):\n"
-        '        """Not the class."""\n')
-    assert doc_lines_of_file(source) == {"a": "First line of a.", "b": "", "C": "C, on the next line."}
+        '        """Not the class."""\n\n\n'
+        'def d(\n    env: Any,\n    x: int = 1,\n) -> None:\n    """D, after a signature closed at column 0."""\n'
+    )
+    assert doc_lines_of_file(source) == {
+        "a": "First line of a.",
+        "b": "",
+        "C": "C, on the next line.",
+        "d": "D, after a signature closed at column 0.",
+    }
 
 
 def test_source_files_of_packages_and_modules() -> None:
@@ -111,10 +128,15 @@ def test_source_files_of_packages_and_modules() -> None:
 
 
 def test_registering_imports_no_functor_module() -> None:
-    script = ("import sys\nfrom embodichain_core.plugins import functor_registry\n"
-              "assert functor_registry().entry('randomize_light').meta['description']\n"
-              "print(sorted(m for m in sys.modules if m.startswith('embodichain_functors')))\n")
+    script = (
+        "import sys\nfrom embodichain_core.plugins import functor_registry\n"
+        "assert functor_registry().entry('randomize_light').meta['description']\n"
+        "print(sorted(m for m in sys.modules if m.startswith('embodichain_functors')))\n"
+    )
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.split() == ["['embodichain_functors',", "'embodichain_functors.catalogue',",
-                                  "'embodichain_functors.plugin']"]
+    assert out.stdout.split() == [
+        "['embodichain_functors',",
+        "'embodichain_functors.catalogue',",
+        "'embodichain_functors.plugin']",
+    ]

@@ -20,12 +20,15 @@ def add(func, name: str, **params) -> ObservationCfg:
 
 
 def test_object_poses_velocity_and_scale(build) -> None:
-    env = build(observations={
-        "m": add(obs.get_rigid_object_pose, "object/cube", entity_cfg=E(uid="cube")),
-        "p": add(obs.get_rigid_object_pose, "object/cube7", entity_cfg=E(uid="cube"), to_matrix=False),
-        "a": add(obs.get_object_pose, "object/arm", entity_cfg=E(uid="arm"), to_matrix=False),
-        "v": add(obs.get_rigid_object_velocity, "object/cube_vel", entity_cfg=E(uid="cube")),
-        "s": add(obs.get_object_body_scale, "object/cube_scale", entity_cfg=E(uid="cube"))})
+    env = build(
+        observations={
+            "m": add(obs.get_rigid_object_pose, "object/cube", entity_cfg=E(uid="cube")),
+            "p": add(obs.get_rigid_object_pose, "object/cube7", entity_cfg=E(uid="cube"), to_matrix=False),
+            "a": add(obs.get_object_pose, "object/arm", entity_cfg=E(uid="arm"), to_matrix=False),
+            "v": add(obs.get_rigid_object_velocity, "object/cube_vel", entity_cfg=E(uid="cube")),
+            "s": add(obs.get_object_body_scale, "object/cube_scale", entity_cfg=E(uid="cube")),
+        }
+    )
     o, _ = env.reset()
     objs = o["object"]
     assert objs["cube"].shape == (4, 4, 4)
@@ -60,8 +63,13 @@ def test_missing_uid_is_a_config_error(build) -> None:
 
 
 def test_normalize_robot_joint_data_maps_limits(build) -> None:
-    env = build(observations={"n": ObservationCfg(func=obs.normalize_robot_joint_data, mode="modify",
-                                                  name="robot/qpos", params={"joint_ids": [0, 1, 2]})})
+    env = build(
+        observations={
+            "n": ObservationCfg(
+                func=obs.normalize_robot_joint_data, mode="modify", name="robot/qpos", params={"joint_ids": [0, 1, 2]}
+            )
+        }
+    )
     arm = env.scene["arm"]
     arm.set_qpos(torch.tensor([[-2.8, 0.0, 2.8]]).expand(4, 3), joint_ids=[0, 1, 2], target=False)
     q = env.get_obs()["robot"]["qpos"]
@@ -72,19 +80,34 @@ def test_normalize_robot_joint_data_maps_limits(build) -> None:
 def test_normalize_qvel_to_symmetric_range(build) -> None:
     from embodichain_core.sim.cfg import JointDrivePropertiesCfg
 
-    env = build(robot=RobotCfg(uid="arm", fpath=scene_cfg().robot.fpath, control_parts={"arm": ["joint[1-7]"]},
-                               drive_pros=JointDrivePropertiesCfg(max_velocity=2.0)),
-                observations={"n": ObservationCfg(func=obs.normalize_robot_joint_data, mode="modify",
-                                                  name="robot/qvel", params={"limit": "qvel_limits",
-                                                                             "range": [-1, 1]})})
+    env = build(
+        robot=RobotCfg(
+            uid="arm",
+            fpath=scene_cfg().robot.fpath,
+            control_parts={"arm": ["joint[1-7]"]},
+            drive_pros=JointDrivePropertiesCfg(max_velocity=2.0),
+        ),
+        observations={
+            "n": ObservationCfg(
+                func=obs.normalize_robot_joint_data,
+                mode="modify",
+                name="robot/qvel",
+                params={"limit": "qvel_limits", "range": [-1, 1]},
+            )
+        },
+    )
     env.scene["arm"].set_qvel(torch.full((4, 9), 1.0), target=False)
     assert torch.allclose(env.get_obs()["robot"]["qvel"], torch.full((4, 7), 0.5), atol=1e-5)
 
 
 def test_eef_pose_through_the_robots_fk(build) -> None:
-    env = build(robot=toy_ik_arm_cfg(), observations={
-        "ee": add(obs.get_robot_eef_pose, "robot/ee", part_name="arm"),
-        "pos": add(obs.get_robot_eef_pose, "robot/ee_pos", position_only=True)})
+    env = build(
+        robot=toy_ik_arm_cfg(),
+        observations={
+            "ee": add(obs.get_robot_eef_pose, "robot/ee", part_name="arm"),
+            "pos": add(obs.get_robot_eef_pose, "robot/ee_pos", position_only=True),
+        },
+    )
     env.scene["arm"].set_qpos(torch.tensor([0.1, 0.2, 0.3, 0.0]).expand(4, 4), joint_ids=[0, 1, 2, 3], target=False)
     o = env.get_obs()
     assert o["robot"]["ee"].shape == (4, 4, 4)
@@ -97,9 +120,16 @@ def test_eef_pose_needs_a_solver(build) -> None:
 
 
 def test_target_position(build) -> None:
-    env = build(observations={"g": add(obs.target_position, "task/goal", target_pose_key="goal_pose")},
-                events={"t": EventCfg(func=rand.randomize_target_pose, mode="reset", params={
-                    "position_range": [[0.1, 0.2, 0.3], [0.1, 0.2, 0.3]], "store_key": "goal_pose"})})
+    env = build(
+        observations={"g": add(obs.target_position, "task/goal", target_pose_key="goal_pose")},
+        events={
+            "t": EventCfg(
+                func=rand.randomize_target_pose,
+                mode="reset",
+                params={"position_range": [[0.1, 0.2, 0.3], [0.1, 0.2, 0.3]], "store_key": "goal_pose"},
+            )
+        },
+    )
     assert torch.equal(env.get_obs()["task"]["goal"], torch.zeros(4, 3))
     o, _ = env.reset()
     assert torch.allclose(o["task"]["goal"], torch.tensor([0.1, 0.2, 0.3]).expand(4, 3))
@@ -108,11 +138,17 @@ def test_target_position(build) -> None:
 
 
 def test_physics_attributes_cached_until_reset(build) -> None:
-    env = build(observations={"p": add(obs.get_rigid_object_physics_attributes, "object/phys", entity_cfg=E(uid="cube"))},
-                events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="cube"), mass_range=[3.0, 4.0]))
+    env = build(
+        observations={"p": add(obs.get_rigid_object_physics_attributes, "object/phys", entity_cfg=E(uid="cube"))},
+        events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="cube"), mass_range=[3.0, 4.0]),
+    )
     first = env.get_obs()["object"]["phys"]
-    assert {k: tuple(v.shape) for k, v in first.items()} == {"mass": (4,), "friction": (4,), "damping": (4, 6),
-                                                              "inertia": (4, 3)}
+    assert {k: tuple(v.shape) for k, v in first.items()} == {
+        "mass": (4,),
+        "friction": (4,),
+        "damping": (4, 6),
+        "inertia": (4, 3),
+    }
     apply(env, [0, 1, 2, 3])
     assert torch.equal(env.get_obs()["object"]["phys"]["mass"], first["mass"])  # cached
     first["mass"][:] = -1  # callers get clones
@@ -142,17 +178,32 @@ sensors = pytest.importorskip("embodichain_sensors.cfg", reason="needs embodicha
 
 
 def _cam(**kwargs):
-    return sensors.CameraCfg(uid="cam", width=64, height=48, intrinsics=(50.0, 50.0, 32.0, 24.0), enable_mask=True,
-                             extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.5, -0.5, 0.5), target=(0.5, 0, 0)),
-                             **kwargs)
+    return sensors.CameraCfg(
+        uid="cam",
+        width=64,
+        height=48,
+        intrinsics=(50.0, 50.0, 32.0, 24.0),
+        enable_mask=True,
+        extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.5, -0.5, 0.5), target=(0.5, 0, 0)),
+        **kwargs,
+    )
 
 
 def test_sensor_pose_in_robot_frame_and_intrinsics(build) -> None:
-    env = build(sensor=[_cam()], observations={
-        "pose": add(obs.get_sensor_pose_in_robot_frame, "sensor_info/pose", entity_cfg=E(uid="cam")),
-        "k": add(obs.get_sensor_intrinsics, "sensor_info/k", entity_cfg=E(uid="cam"))},
-        events={"root": EventCfg(func=rand.randomize_articulation_root_pose, mode="test", params={
-            "entity_cfg": E(uid="arm"), "position_range": [[0.1, 0, 0], [0.1, 0, 0]]})})
+    env = build(
+        sensor=[_cam()],
+        observations={
+            "pose": add(obs.get_sensor_pose_in_robot_frame, "sensor_info/pose", entity_cfg=E(uid="cam")),
+            "k": add(obs.get_sensor_intrinsics, "sensor_info/k", entity_cfg=E(uid="cam")),
+        },
+        events={
+            "root": EventCfg(
+                func=rand.randomize_articulation_root_pose,
+                mode="test",
+                params={"entity_cfg": E(uid="arm"), "position_range": [[0.1, 0, 0], [0.1, 0, 0]]},
+            )
+        },
+    )
     apply(env, [1])
     o = env.get_obs()["sensor_info"]
     assert torch.allclose(o["pose"][0, :3, 3], torch.tensor([0.5, -0.5, 0.5]), atol=1e-5)
@@ -163,20 +214,39 @@ def test_sensor_pose_in_robot_frame_and_intrinsics(build) -> None:
 
 
 def test_stereo_right_view(build) -> None:
-    stereo = sensors.StereoCameraCfg(uid="cam", width=32, height=24, intrinsics=(30, 30, 16, 12),
-                                     intrinsics_right=(31, 31, 16, 12), left_to_right_pos=(0.1, 0, 0),
-                                     extrinsics=sensors.CameraCfg.ExtrinsicsCfg(pos=(0, 0, 1)))
-    env = build(sensor=[stereo], observations={
-        "k": add(obs.get_sensor_intrinsics, "sensor_info/k", entity_cfg=E(uid="cam"), is_right=True),
-        "p": add(obs.get_sensor_pose_in_robot_frame, "sensor_info/p", entity_cfg=E(uid="cam"), is_right=True)})
+    stereo = sensors.StereoCameraCfg(
+        uid="cam",
+        width=32,
+        height=24,
+        intrinsics=(30, 30, 16, 12),
+        intrinsics_right=(31, 31, 16, 12),
+        left_to_right_pos=(0.1, 0, 0),
+        extrinsics=sensors.CameraCfg.ExtrinsicsCfg(pos=(0, 0, 1)),
+    )
+    env = build(
+        sensor=[stereo],
+        observations={
+            "k": add(obs.get_sensor_intrinsics, "sensor_info/k", entity_cfg=E(uid="cam"), is_right=True),
+            "p": add(obs.get_sensor_pose_in_robot_frame, "sensor_info/p", entity_cfg=E(uid="cam"), is_right=True),
+        },
+    )
     o = env.get_obs()["sensor_info"]
     assert (o["k"][:, 0, 0] == 31).all()
     assert torch.allclose(o["p"][:, 0, 3], torch.full((4,), 0.05), atol=1e-5)
 
 
 def test_semantic_mask_foreground_and_background(build) -> None:
-    env = build(sensor=[_cam()], observations={"sem": add(obs.compute_semantic_mask, "sensor/cam/semantic",
-                                                          entity_cfg=E(uid="cam"), foreground_uids=["cube", "ghost"])})
+    env = build(
+        sensor=[_cam()],
+        observations={
+            "sem": add(
+                obs.compute_semantic_mask,
+                "sensor/cam/semantic",
+                entity_cfg=E(uid="cam"),
+                foreground_uids=["cube", "ghost"],
+            )
+        },
+    )
     o = env.get_obs()
     sem, mask = o["sensor"]["cam"]["semantic"], o["sensor"]["cam"]["mask"]
     cam = env.scene.sensors["cam"]
@@ -189,15 +259,28 @@ def test_semantic_mask_foreground_and_background(build) -> None:
 
 
 def test_semantic_mask_robot_sides(build) -> None:
-    mjcf = ('<mujoco><worldbody><body name="torso"><geom type="box" size=".05 .05 .05"/>'
-            '<body name="left_arm" pos="0.5 0.1 0.1"><joint name="l" axis="0 0 1"/><geom type="box" size=".03 .03 .03"/>'
-            '</body><body name="right_arm" pos="0.5 -0.1 0.1"><joint name="r" axis="0 0 1"/>'
-            '<geom type="box" size=".03 .03 .03"/></body></body></worldbody></mujoco>')
-    cam = sensors.CameraCfg(uid="cam", width=64, height=48, intrinsics=(50.0, 50.0, 32.0, 24.0), enable_mask=True,
-                            extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.5, 0.0, 0.8), target=(0.5, 0.0, 0.0),
-                                                                      up=(1.0, 0.0, 0.0)))
-    env = build(robot=RobotCfg(uid="bot", mjcf=mjcf), control_parts=None, sensor=[cam], observations={
-        "sem": add(obs.compute_semantic_mask, "sensor/cam/semantic", entity_cfg=E(uid="cam"), foreground_uids=[])})
+    mjcf = (
+        '<mujoco><worldbody><body name="torso"><geom type="box" size=".05 .05 .05"/>'
+        '<body name="left_arm" pos="0.5 0.1 0.1"><joint name="l" axis="0 0 1"/><geom type="box" size=".03 .03 .03"/>'
+        '</body><body name="right_arm" pos="0.5 -0.1 0.1"><joint name="r" axis="0 0 1"/>'
+        '<geom type="box" size=".03 .03 .03"/></body></body></worldbody></mujoco>'
+    )
+    cam = sensors.CameraCfg(
+        uid="cam",
+        width=64,
+        height=48,
+        intrinsics=(50.0, 50.0, 32.0, 24.0),
+        enable_mask=True,
+        extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.5, 0.0, 0.8), target=(0.5, 0.0, 0.0), up=(1.0, 0.0, 0.0)),
+    )
+    env = build(
+        robot=RobotCfg(uid="bot", mjcf=mjcf),
+        control_parts=None,
+        sensor=[cam],
+        observations={
+            "sem": add(obs.compute_semantic_mask, "sensor/cam/semantic", entity_cfg=E(uid="cam"), foreground_uids=[])
+        },
+    )
     sem = env.get_obs()["sensor"]["cam"]["semantic"]
     left, right = sem[..., 2], sem[..., 3]
     assert left.any()

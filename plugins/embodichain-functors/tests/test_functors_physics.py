@@ -30,8 +30,9 @@ def test_rigid_object_mass_absolute_lands_in_chosen_envs(build) -> None:
 
 
 def test_rigid_object_mass_relative_adds_to_configured(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="cube"), mass_range=[0.5, 0.6],
-                             relative=True))
+    env = build(
+        events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="cube"), mass_range=[0.5, 0.6], relative=True)
+    )
     body = env.scene["cube"].body_id
     base = float(env.scene.model.body_mass[body])
     apply(env, IDS)
@@ -56,11 +57,17 @@ def test_mass_of_a_group_sets_every_member(build) -> None:
     from embodichain_core.sim.cfg import RigidObjectCfg, RigidObjectGroupCfg
     from embodichain_core.sim.shapes import CubeCfg
 
-    group = RigidObjectGroupCfg(uid="blocks", rigid_objects={
-        "a": RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, -0.3, 0.02)),
-        "b": RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, -0.4, 0.02))})
-    env = build(rigid_object_group=[group],
-                events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="blocks"), mass_range=[3.0, 4.0]))
+    group = RigidObjectGroupCfg(
+        uid="blocks",
+        rigid_objects={
+            "a": RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, -0.3, 0.02)),
+            "b": RigidObjectCfg(shape=CubeCfg(size=[0.04] * 3), init_pos=(0.3, -0.4, 0.02)),
+        },
+    )
+    env = build(
+        rigid_object_group=[group],
+        events=event(rand.randomize_rigid_object_mass, entity_cfg=E(uid="blocks"), mass_range=[3.0, 4.0]),
+    )
     apply(env, [2])
     for member in env.scene["blocks"].members:
         mass = member.get_mass()
@@ -69,8 +76,13 @@ def test_mass_of_a_group_sets_every_member(build) -> None:
 
 
 def test_center_of_mass_offset(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_center_of_mass, entity_cfg=E(uid="cube"),
-                             com_pos_offset_range=[[-0.01, -0.02, 0.0], [0.01, 0.02, 0.0]]))
+    env = build(
+        events=event(
+            rand.randomize_rigid_object_center_of_mass,
+            entity_cfg=E(uid="cube"),
+            com_pos_offset_range=[[-0.01, -0.02, 0.0], [0.01, 0.02, 0.0]],
+        )
+    )
     cube = env.scene["cube"]
     ids = apply(env, IDS)
     com = cube.get_com()
@@ -82,15 +94,25 @@ def test_center_of_mass_offset(build) -> None:
 
 
 def test_center_of_mass_skips_kinematic_with_warning(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_center_of_mass, entity_cfg=E(uid="table"),
-                             com_pos_offset_range=[[0, 0, 0], [0.01, 0.01, 0]]))
+    env = build(
+        events=event(
+            rand.randomize_rigid_object_center_of_mass,
+            entity_cfg=E(uid="table"),
+            com_pos_offset_range=[[0, 0, 0], [0.01, 0.01, 0]],
+        )
+    )
     with pytest.warns(RuntimeWarning, match="not dynamic"):
         apply(env, IDS)
 
 
 def test_articulation_mass_per_link_and_dict_ranges(build) -> None:
-    env = build(events=event(rand.randomize_articulation_mass, entity_cfg=E(uid="arm"),
-                             mass_range={"link[1-2]": [2.0, 2.5], "hand": [0.1, 0.2]}))
+    env = build(
+        events=event(
+            rand.randomize_articulation_mass,
+            entity_cfg=E(uid="arm"),
+            mass_range={"link[1-2]": [2.0, 2.5], "hand": [0.1, 0.2]},
+        )
+    )
     arm = env.scene["arm"]
     before = arm.get_mass()
     ids = apply(env, IDS)
@@ -108,8 +130,11 @@ def test_articulation_mass_per_link_and_dict_ranges(build) -> None:
 
 
 def test_articulation_mass_regex_selection(build) -> None:
-    env = build(events=event(rand.randomize_articulation_mass, entity_cfg=E(uid="arm"), mass_range=[0.3, 0.4],
-                             link_names=["finger_.*"]))
+    env = build(
+        events=event(
+            rand.randomize_articulation_mass, entity_cfg=E(uid="arm"), mass_range=[0.3, 0.4], link_names=["finger_.*"]
+        )
+    )
     arm = env.scene["arm"]
     apply(env, IDS)
     fingers = [arm.link_names.index(n) for n in ("finger_l", "finger_r")]
@@ -126,10 +151,14 @@ def test_friction(build) -> None:
 
 
 def test_joint_damping_and_stiffness_on_selected_joints(build) -> None:
-    events = {**event(rand.randomize_joint_damping, entity_cfg=E(uid="arm", joint_names=["joint[1-3]"]),
-                      damping_range=[1.0, 2.0]),
-              "stiff": event(rand.randomize_joint_stiffness, entity_cfg=E(uid="arm", joint_names=["joint7"]),
-                             stiffness_range=[5.0, 6.0])["ev"]}
+    events = {
+        **event(
+            rand.randomize_joint_damping, entity_cfg=E(uid="arm", joint_names=["joint[1-3]"]), damping_range=[1.0, 2.0]
+        ),
+        "stiff": event(
+            rand.randomize_joint_stiffness, entity_cfg=E(uid="arm", joint_names=["joint7"]), stiffness_range=[5.0, 6.0]
+        )["ev"],
+    }
     env = build(events=events)
     arm = env.scene["arm"]
     ids = apply(env, IDS)
@@ -144,8 +173,14 @@ def test_joint_damping_and_stiffness_on_selected_joints(build) -> None:
 
 
 def test_joint_drive_gains(build) -> None:
-    env = build(events=event(rand.randomize_joint_drive, entity_cfg=E(uid="arm", joint_names=["joint1"]),
-                             stiffness_range=[100.0, 200.0], damping_range=[10.0, 20.0]))
+    env = build(
+        events=event(
+            rand.randomize_joint_drive,
+            entity_cfg=E(uid="arm", joint_names=["joint1"]),
+            stiffness_range=[100.0, 200.0],
+            damping_range=[10.0, 20.0],
+        )
+    )
     arm = env.scene["arm"]
     gain = lambda act: field(env, "actuator_gainprm")[:, int(act), 0]  # noqa: E731
     kp0 = gain(arm.pos_act[0])
@@ -157,18 +192,32 @@ def test_joint_drive_gains(build) -> None:
     assert torch.equal(gain(arm.pos_act[1]), torch.full((4,), float(kp0[0]), dtype=gain(arm.pos_act[1]).dtype))
 
 
-@pytest.mark.parametrize("func, params, param", [
-    (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="cube"), "mass_range": [3.0, 1.0]}, "mass_range"),
-    (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="cube"), "mass_range": [-1.0, 1.0]}, "mass_range"),
-    (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="arm"), "mass_range": [1.0, 2.0]}, "entity_cfg"),
-    (rand.randomize_articulation_mass, {"entity_cfg": E(uid="arm"), "mass_range": {"nolink": [1, 2]}}, "mass_range"),
-    (rand.randomize_articulation_mass, {"entity_cfg": E(uid="cube"), "mass_range": [1, 2]}, "entity_cfg"),
-    (rand.randomize_rigid_object_friction, {"entity_cfg": E(uid="cube"), "friction_range": [-1, 1]}, "friction_range"),
-    (rand.randomize_joint_damping, {"entity_cfg": E(uid="arm"), "damping_range": [0, 1, 2]}, "damping_range"),
-    (rand.randomize_joint_drive, {"entity_cfg": E(uid="arm")}, "stiffness_range"),
-    (rand.randomize_rigid_object_center_of_mass, {"entity_cfg": E(uid="cube"),
-                                                  "com_pos_offset_range": [[0, 0], [1, 1]]}, "com_pos_offset_range"),
-])
+@pytest.mark.parametrize(
+    "func, params, param",
+    [
+        (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="cube"), "mass_range": [3.0, 1.0]}, "mass_range"),
+        (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="cube"), "mass_range": [-1.0, 1.0]}, "mass_range"),
+        (rand.randomize_rigid_object_mass, {"entity_cfg": E(uid="arm"), "mass_range": [1.0, 2.0]}, "entity_cfg"),
+        (
+            rand.randomize_articulation_mass,
+            {"entity_cfg": E(uid="arm"), "mass_range": {"nolink": [1, 2]}},
+            "mass_range",
+        ),
+        (rand.randomize_articulation_mass, {"entity_cfg": E(uid="cube"), "mass_range": [1, 2]}, "entity_cfg"),
+        (
+            rand.randomize_rigid_object_friction,
+            {"entity_cfg": E(uid="cube"), "friction_range": [-1, 1]},
+            "friction_range",
+        ),
+        (rand.randomize_joint_damping, {"entity_cfg": E(uid="arm"), "damping_range": [0, 1, 2]}, "damping_range"),
+        (rand.randomize_joint_drive, {"entity_cfg": E(uid="arm")}, "stiffness_range"),
+        (
+            rand.randomize_rigid_object_center_of_mass,
+            {"entity_cfg": E(uid="cube"), "com_pos_offset_range": [[0, 0], [1, 1]]},
+            "com_pos_offset_range",
+        ),
+    ],
+)
 def test_bad_params_name_functor_and_param(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         env = build(events=event(func, **params))

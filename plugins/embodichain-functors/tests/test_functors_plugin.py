@@ -71,8 +71,12 @@ def test_committed_catalogue_matches_the_registry() -> None:
 
 def test_visual_randomization_names() -> None:
     visual = {row[0] for row in FUNCTORS if row[0].startswith("randomize_") and row[3] == "randomization.visual"}
-    assert visual == {"randomize_light", "randomize_visual_material", "randomize_camera_extrinsics",
-                      "randomize_camera_intrinsics"}
+    assert visual == {
+        "randomize_light",
+        "randomize_visual_material",
+        "randomize_camera_extrinsics",
+        "randomize_camera_intrinsics",
+    }
     assert all(is_visual_randomization(n) for n in visual)
     assert not is_visual_randomization("set_rigid_object_visual_material")
     assert not is_visual_randomization("randomize_rigid_object_mass")
@@ -85,45 +89,81 @@ GYM_CONFIG = {
         "seed": 7,
         "control_parts": ["arm"],
         "events": {
-            "mass": {"func": "randomize_rigid_object_mass", "mode": "reset",
-                     "params": {"entity_cfg": {"uid": "cube"}, "mass_range": [0.5, 2.0]}},
-            "pose": {"func": "randomize_rigid_object_pose", "mode": "reset",
-                     "params": {"entity_cfg": {"uid": "cube"}, "position_range": [[-0.1, -0.1, 0], [0.1, 0.1, 0]]}},
-            "light": {"func": "randomize_light", "mode": "interval", "interval_step": 2,
-                      "params": {"entity_cfg": {"uid": "point"}, "intensity_range": [-5, 5]}},
-            "mat": {"func": "randomize_visual_material", "mode": "reset",
-                    "params": {"entity_cfg": {"uid": "table"}, "base_color_range": [[0, 0, 0], [1, 1, 1]]}},
-            "goal": {"func": "randomize_target_pose", "mode": "reset",
-                     "params": {"position_range": [[0.3, -0.2, 0.05], [0.6, 0.2, 0.05]], "store_key": "goal_pose"}},
+            "mass": {
+                "func": "randomize_rigid_object_mass",
+                "mode": "reset",
+                "params": {"entity_cfg": {"uid": "cube"}, "mass_range": [0.5, 2.0]},
+            },
+            "pose": {
+                "func": "randomize_rigid_object_pose",
+                "mode": "reset",
+                "params": {"entity_cfg": {"uid": "cube"}, "position_range": [[-0.1, -0.1, 0], [0.1, 0.1, 0]]},
+            },
+            "light": {
+                "func": "randomize_light",
+                "mode": "interval",
+                "interval_step": 2,
+                "params": {"entity_cfg": {"uid": "point"}, "intensity_range": [-5, 5]},
+            },
+            "mat": {
+                "func": "randomize_visual_material",
+                "mode": "reset",
+                "params": {"entity_cfg": {"uid": "table"}, "base_color_range": [[0, 0, 0], [1, 1, 1]]},
+            },
+            "goal": {
+                "func": "randomize_target_pose",
+                "mode": "reset",
+                "params": {"position_range": [[0.3, -0.2, 0.05], [0.6, 0.2, 0.05]], "store_key": "goal_pose"},
+            },
         },
         "observations": {
-            "cube": {"func": "get_rigid_object_pose", "mode": "add", "name": "object/cube",
-                     "params": {"entity_cfg": {"uid": "cube"}, "to_matrix": False}},
+            "cube": {
+                "func": "get_rigid_object_pose",
+                "mode": "add",
+                "name": "object/cube",
+                "params": {"entity_cfg": {"uid": "cube"}, "to_matrix": False},
+            },
             "norm": {"func": "normalize_robot_joint_data", "mode": "modify", "name": "robot/qpos"},
             "goal": {"func": "target_position", "mode": "add", "name": "task/goal"},
         },
         "rewards": {
-            "dist": {"func": "distance_to_target", "weight": 0.5,
-                     "params": {"source_entity_cfg": {"uid": "cube"}, "target_pose_key": "goal_pose"}},
+            "dist": {
+                "func": "distance_to_target",
+                "weight": 0.5,
+                "params": {"source_entity_cfg": {"uid": "cube"}, "target_pose_key": "goal_pose"},
+            },
             "smooth": {"func": "action_smoothness_penalty", "weight": 0.01},
         },
         "actions": {"arm": {"func": "DeltaQposTerm", "params": {"scale": 0.1}}},
     },
-    "robot": {"uid": "arm", "fpath": str(Path(importlib.util.find_spec("embodichain_core").origin).parent
-                                         / "demo" / "arm7.xml"),
-              "control_parts": {"arm": ["joint[1-7]"]}},
+    "robot": {
+        "uid": "arm",
+        "fpath": str(Path(importlib.util.find_spec("embodichain_core").origin).parent / "demo" / "arm7.xml"),
+        "control_parts": {"arm": ["joint[1-7]"]},
+    },
     "light": {"direct": [{"uid": "point", "init_pos": [0, 0, 2]}]},
-    "background": [{"uid": "table", "shape": {"shape_type": "Cube", "size": [0.4, 0.4, 0.4]},
-                    "body_type": "kinematic", "init_pos": [0, 0.8, 0.2]}],
-    "rigid_object": [{"uid": "cube", "shape": {"shape_type": "Cube", "size": [0.05, 0.05, 0.05]},
-                      "init_pos": [0.5, 0, 0.025]}],
+    "background": [
+        {
+            "uid": "table",
+            "shape": {"shape_type": "Cube", "size": [0.4, 0.4, 0.4]},
+            "body_type": "kinematic",
+            "init_pos": [0, 0.8, 0.2],
+        }
+    ],
+    "rigid_object": [
+        {"uid": "cube", "shape": {"shape_type": "Cube", "size": [0.05, 0.05, 0.05]}, "init_pos": [0.5, 0, 0.025]}
+    ],
 }
 
 
 def _state(env: EmbodiedEnv) -> list[np.ndarray]:
     cube = env.scene["cube"]
-    return [np.array(env.sim.model_field("body_mass")[:, cube.body_id]), cube.get_local_pose().numpy(),
-            np.array(env.sim.model_field("mat_rgba")), env.goal_pose.numpy()]
+    return [
+        np.array(env.sim.model_field("body_mass")[:, cube.body_id]),
+        cube.get_local_pose().numpy(),
+        np.array(env.sim.model_field("mat_rgba")),
+        env.goal_pose.numpy(),
+    ]
 
 
 def test_a_json_config_names_functors_and_draws_are_per_env_and_reproducible() -> None:

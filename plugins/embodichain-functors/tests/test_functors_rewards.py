@@ -23,21 +23,38 @@ def terms(env, action=None) -> dict:
 
 
 def test_distance_between_objects_linear_and_exponential(build) -> None:
-    env = build(rewards={
-        "lin": RewardCfg(func=rewards.distance_between_objects, params={
-            "source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="ball")}),
-        "exp": RewardCfg(func=rewards.distance_between_objects, params={
-            "source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="ball"), "exponential": True,
-            "sigma": 0.2})})
+    env = build(
+        rewards={
+            "lin": RewardCfg(
+                func=rewards.distance_between_objects,
+                params={"source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="ball")},
+            ),
+            "exp": RewardCfg(
+                func=rewards.distance_between_objects,
+                params={
+                    "source_entity_cfg": E(uid="cube"),
+                    "target_entity_cfg": E(uid="ball"),
+                    "exponential": True,
+                    "sigma": 0.2,
+                },
+            ),
+        }
+    )
     env.reset()
     t = terms(env)
     assert torch.allclose(t["lin"], torch.full((4,), -D_CUBE_BALL), atol=2e-3)
-    assert torch.allclose(t["exp"], torch.full((4,), math.exp(-D_CUBE_BALL ** 2 / 0.08)), atol=2e-3)
+    assert torch.allclose(t["exp"], torch.full((4,), math.exp(-(D_CUBE_BALL**2) / 0.08)), atol=2e-3)
 
 
 def test_distance_to_target_needs_the_key_and_supports_xy(build) -> None:
-    env = build(rewards={"d": RewardCfg(func=rewards.distance_to_target, params={
-        "source_entity_cfg": E(uid="cube"), "target_pose_key": "goal_pose", "use_xy_only": True})})
+    env = build(
+        rewards={
+            "d": RewardCfg(
+                func=rewards.distance_to_target,
+                params={"source_entity_cfg": E(uid="cube"), "target_pose_key": "goal_pose", "use_xy_only": True},
+            )
+        }
+    )
     env.reset()
     with pytest.raises(KeyError, match="goal_pose"):
         terms(env)
@@ -47,8 +64,14 @@ def test_distance_to_target_needs_the_key_and_supports_xy(build) -> None:
 
 
 def test_incremental_distance_state_is_cleared_on_reset(build) -> None:
-    env = build(rewards={"inc": RewardCfg(func=rewards.incremental_distance_to_target, params={
-        "source_entity_cfg": E(uid="cube"), "target_pose_key": "goal", "negative_weight": 2.0})})
+    env = build(
+        rewards={
+            "inc": RewardCfg(
+                func=rewards.incremental_distance_to_target,
+                params={"source_entity_cfg": E(uid="cube"), "target_pose_key": "goal", "negative_weight": 2.0},
+            )
+        }
+    )
     env.goal = torch.zeros(4, 3)
     env.reset()
     assert torch.equal(terms(env)["inc"], torch.zeros(4))  # first step
@@ -68,11 +91,14 @@ def test_incremental_distance_state_is_cleared_on_reset(build) -> None:
 
 
 def test_joint_velocity_and_limit_penalties(build) -> None:
-    env = build(rewards={
-        "v": RewardCfg(func=rewards.joint_velocity_penalty, params={"part_name": "arm"}),
-        "vj": RewardCfg(func=rewards.joint_velocity_penalty, params={"joint_ids": [0]}),
-        "lim": RewardCfg(func=rewards.joint_limit_penalty, params={"margin": 0.1, "joint_ids": list(range(7))}),
-        "all": RewardCfg(func=rewards.joint_limit_penalty)})
+    env = build(
+        rewards={
+            "v": RewardCfg(func=rewards.joint_velocity_penalty, params={"part_name": "arm"}),
+            "vj": RewardCfg(func=rewards.joint_velocity_penalty, params={"joint_ids": [0]}),
+            "lim": RewardCfg(func=rewards.joint_limit_penalty, params={"margin": 0.1, "joint_ids": list(range(7))}),
+            "all": RewardCfg(func=rewards.joint_limit_penalty),
+        }
+    )
     env.reset()
     t = terms(env)
     assert torch.allclose(t["lim"], torch.zeros(4), atol=1e-6)
@@ -114,8 +140,14 @@ def test_action_smoothness_with_dict_actions() -> None:
 
 
 def test_orientation_alignment(build) -> None:
-    env = build(rewards={"o": RewardCfg(func=rewards.orientation_alignment, params={
-        "source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="table")})})
+    env = build(
+        rewards={
+            "o": RewardCfg(
+                func=rewards.orientation_alignment,
+                params={"source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="table")},
+            )
+        }
+    )
     env.reset()
     cube = env.scene["cube"]
     pose = cube.get_local_pose()
@@ -130,14 +162,28 @@ def test_success_reward() -> None:
         num_envs = 3
 
     assert torch.equal(rewards.success_reward(Env(), None, None, {}), torch.zeros(3))
-    assert torch.equal(rewards.success_reward(Env(), None, None, {"success": torch.tensor([True, False, True])}),
-                       torch.tensor([1.0, 0.0, 1.0]))
+    assert torch.equal(
+        rewards.success_reward(Env(), None, None, {"success": torch.tensor([True, False, True])}),
+        torch.tensor([1.0, 0.0, 1.0]),
+    )
     assert torch.equal(rewards.success_reward(Env(), None, None, {"success": True}), torch.ones(3))
 
 
 def test_reaching_behind_object(build) -> None:
-    env = build(robot=toy_ik_arm_cfg(), rewards={"r": RewardCfg(func=rewards.reaching_behind_object, params={
-        "object_cfg": E(uid="cube"), "target_pose_key": "goal", "behind_offset": 0.1, "height_offset": 0.0})})
+    env = build(
+        robot=toy_ik_arm_cfg(),
+        rewards={
+            "r": RewardCfg(
+                func=rewards.reaching_behind_object,
+                params={
+                    "object_cfg": E(uid="cube"),
+                    "target_pose_key": "goal",
+                    "behind_offset": 0.1,
+                    "height_offset": 0.0,
+                },
+            )
+        },
+    )
     env.goal = torch.tensor([[1.0, 0.0, 0.025]]).expand(4, 3)
     env.reset()
     arm = env.scene["arm"]
@@ -150,12 +196,18 @@ def test_reaching_behind_object(build) -> None:
         env.reward_manager.compute(env.get_obs(), None, env.get_info(), torch.zeros(4))
 
 
-@pytest.mark.parametrize("func, params, param", [
-    (rewards.distance_between_objects, {"source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="ball"),
-                                        "sigma": 0.0}, "sigma"),
-    (rewards.joint_velocity_penalty, {"part_name": "leg"}, "part_name"),
-    (rewards.joint_limit_penalty, {"robot_uid": "cube"}, "robot_uid"),
-])
+@pytest.mark.parametrize(
+    "func, params, param",
+    [
+        (
+            rewards.distance_between_objects,
+            {"source_entity_cfg": E(uid="cube"), "target_entity_cfg": E(uid="ball"), "sigma": 0.0},
+            "sigma",
+        ),
+        (rewards.joint_velocity_penalty, {"part_name": "leg"}, "part_name"),
+        (rewards.joint_limit_penalty, {"robot_uid": "cube"}, "robot_uid"),
+    ],
+)
 def test_bad_params(build, func, params, param) -> None:
     # the functor's check_params runs when the reward manager is built
     with pytest.raises(ConfigError) as err:
@@ -166,7 +218,13 @@ def test_bad_params(build, func, params, param) -> None:
 
 def test_bad_class_params_at_build(build) -> None:
     with pytest.raises(ConfigError) as err:
-        build(rewards={"r": RewardCfg(func=rewards.incremental_distance_to_target, params={
-            "source_entity_cfg": E(uid="cube"), "tanh_scale": -1.0})})
+        build(
+            rewards={
+                "r": RewardCfg(
+                    func=rewards.incremental_distance_to_target,
+                    params={"source_entity_cfg": E(uid="cube"), "tanh_scale": -1.0},
+                )
+            }
+        )
     assert err.value.path == "env.rewards.r"
     assert "params.tanh_scale" in str(err.value)

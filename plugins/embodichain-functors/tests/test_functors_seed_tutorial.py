@@ -23,29 +23,73 @@ sensors = pytest.importorskip("embodichain_sensors.cfg", reason="renders with em
 def seed_cfg(get_data_path):
     fork, table = SceneEntityCfg(uid="fork"), SceneEntityCfg(uid="table")
     events_cfg = {
-        "replace_obj": EventCfg(func=events.replace_assets_from_group, mode="reset", params={
-            "entity_cfg": fork, "folder_path": get_data_path("TableWare/tableware/fork/")}),
-        "randomize_fork_mass": EventCfg(func=rand.randomize_rigid_object_mass, mode="reset", params={
-            "entity_cfg": fork, "mass_range": (0.1, 2.0)}),
-        "randomize_light": EventCfg(func=rand.randomize_light, mode="interval", interval_step=5, params={
-            "entity_cfg": SceneEntityCfg(uid="point"), "position_range": [[-0.5, -0.5, 2], [0.5, 0.5, 2]],
-            "color_range": [[0.6, 0.6, 0.6], [1, 1, 1]], "intensity_range": [10.0, 30.0]}),
-        "randomize_table_mat": EventCfg(func=rand.randomize_visual_material, mode="interval", interval_step=10, params={
-            "entity_cfg": table, "random_texture_prob": 0.5, "texture_path": get_data_path("CocoBackground/coco"),
-            "base_color_range": [[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]]}),
+        "replace_obj": EventCfg(
+            func=events.replace_assets_from_group,
+            mode="reset",
+            params={"entity_cfg": fork, "folder_path": get_data_path("TableWare/tableware/fork/")},
+        ),
+        "randomize_fork_mass": EventCfg(
+            func=rand.randomize_rigid_object_mass, mode="reset", params={"entity_cfg": fork, "mass_range": (0.1, 2.0)}
+        ),
+        "randomize_light": EventCfg(
+            func=rand.randomize_light,
+            mode="interval",
+            interval_step=5,
+            params={
+                "entity_cfg": SceneEntityCfg(uid="point"),
+                "position_range": [[-0.5, -0.5, 2], [0.5, 0.5, 2]],
+                "color_range": [[0.6, 0.6, 0.6], [1, 1, 1]],
+                "intensity_range": [10.0, 30.0],
+            },
+        ),
+        "randomize_table_mat": EventCfg(
+            func=rand.randomize_visual_material,
+            mode="interval",
+            interval_step=10,
+            params={
+                "entity_cfg": table,
+                "random_texture_prob": 0.5,
+                "texture_path": get_data_path("CocoBackground/coco"),
+                "base_color_range": [[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]],
+            },
+        ),
     }
-    cfg = scene_cfg(events=events_cfg, observations={"obj_pose": ObservationCfg(
-        func=obs.get_rigid_object_pose, mode="add", name="fork_pose", params={"entity_cfg": fork})})
+    cfg = scene_cfg(
+        events=events_cfg,
+        observations={
+            "obj_pose": ObservationCfg(
+                func=obs.get_rigid_object_pose, mode="add", name="fork_pose", params={"entity_cfg": fork}
+            )
+        },
+    )
     cfg.light.direct = [LightCfg(uid="point", light_type="point", intensity=20.0, init_pos=(0, 0, 2))]
-    cfg.background = [RigidObjectCfg(
-        uid="table", shape=MeshCfg(fpath=get_data_path("CircleTableSimple/circle_table_simple.ply"), compute_uv=True),
-        attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85), body_type="kinematic",
-        init_pos=(0.80, 0, 0.8), init_rot=(0, 90, 0))]
-    cfg.rigid_object = [RigidObjectCfg(uid="fork", shape=MeshCfg(fpath=get_data_path(
-        "TableWare/tableware/fork/standard_fork_scale.ply")), body_scale=(0.75, 0.75, 1.0), init_pos=(0.8, 0, 1.0))]
-    cfg.sensor = [sensors.CameraCfg(uid="cam", width=64, height=48, intrinsics=(50, 50, 32, 24),
-                                    extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.8, -0.6, 1.4),
-                                                                              target=(0.8, 0.0, 0.85)))]
+    cfg.background = [
+        RigidObjectCfg(
+            uid="table",
+            shape=MeshCfg(fpath=get_data_path("CircleTableSimple/circle_table_simple.ply"), compute_uv=True),
+            attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85),
+            body_type="kinematic",
+            init_pos=(0.80, 0, 0.8),
+            init_rot=(0, 90, 0),
+        )
+    ]
+    cfg.rigid_object = [
+        RigidObjectCfg(
+            uid="fork",
+            shape=MeshCfg(fpath=get_data_path("TableWare/tableware/fork/standard_fork_scale.ply")),
+            body_scale=(0.75, 0.75, 1.0),
+            init_pos=(0.8, 0, 1.0),
+        )
+    ]
+    cfg.sensor = [
+        sensors.CameraCfg(
+            uid="cam",
+            width=64,
+            height=48,
+            intrinsics=(50, 50, 32, 24),
+            extrinsics=sensors.CameraCfg.ExtrinsicsCfg(eye=(0.8, -0.6, 1.4), target=(0.8, 0.0, 0.85)),
+        )
+    ]
     return cfg
 
 

@@ -19,9 +19,14 @@ IDS = [0, 2]
 
 
 def test_rigid_object_pose_relative_position_and_rotation(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_pose, entity_cfg=E(uid="cube"),
-                             position_range=[[-0.1, -0.2, 0.0], [0.1, 0.2, 0.0]],
-                             rotation_range=[[0, 0, -90], [0, 0, 90]]))
+    env = build(
+        events=event(
+            rand.randomize_rigid_object_pose,
+            entity_cfg=E(uid="cube"),
+            position_range=[[-0.1, -0.2, 0.0], [0.1, 0.2, 0.0]],
+            rotation_range=[[0, 0, -90], [0, 0, 90]],
+        )
+    )
     cube = env.scene["cube"]
     before = cube.get_local_pose()
     cube.set_velocity(torch.ones(4, 6))
@@ -40,9 +45,15 @@ def test_rigid_object_pose_relative_position_and_rotation(build) -> None:
 
 
 def test_rigid_object_pose_absolute_and_physics_steps_only_in_chosen_envs(build) -> None:
-    env = build(events=event(rand.randomize_rigid_object_pose, entity_cfg=E(uid="cube"),
-                             position_range=[[0.3, 0.0, 0.3], [0.3, 0.0, 0.3]], relative_position=False,
-                             physics_update_step=10))
+    env = build(
+        events=event(
+            rand.randomize_rigid_object_pose,
+            entity_cfg=E(uid="cube"),
+            position_range=[[0.3, 0.0, 0.3], [0.3, 0.0, 0.3]],
+            relative_position=False,
+            physics_update_step=10,
+        )
+    )
     before = env.scene["cube"].get_local_pose()
     ids = apply(env, IDS)
     pose = env.scene["cube"].get_local_pose()
@@ -52,8 +63,11 @@ def test_rigid_object_pose_absolute_and_physics_steps_only_in_chosen_envs(build)
 
 
 def test_robot_qpos_relative_and_clamped(build) -> None:
-    env = build(events=event(rand.randomize_robot_qpos, entity_cfg=E(uid="arm", joint_names=["joint[1-3]"]),
-                             qpos_range=[-0.2, 0.2]))
+    env = build(
+        events=event(
+            rand.randomize_robot_qpos, entity_cfg=E(uid="arm", joint_names=["joint[1-3]"]), qpos_range=[-0.2, 0.2]
+        )
+    )
     arm = env.scene["arm"]
     before = arm.get_qpos()
     ids = apply(env, IDS)
@@ -66,8 +80,15 @@ def test_robot_qpos_relative_and_clamped(build) -> None:
 
 
 def test_robot_qpos_absolute_with_joint_ids(build) -> None:
-    env = build(events=event(rand.randomize_robot_qpos, entity_cfg=E(uid="arm"), qpos_range=[[2.0, -9], [2.5, -8]],
-                             relative_qpos=False, joint_ids=[0, 1]))
+    env = build(
+        events=event(
+            rand.randomize_robot_qpos,
+            entity_cfg=E(uid="arm"),
+            qpos_range=[[2.0, -9], [2.5, -8]],
+            relative_qpos=False,
+            joint_ids=[0, 1],
+        )
+    )
     ids = apply(env, IDS)
     q = env.scene["arm"].get_qpos()
     assert ((q[ids, 0] >= 2.0) & (q[ids, 0] <= 2.5)).all()
@@ -75,9 +96,15 @@ def test_robot_qpos_absolute_with_joint_ids(build) -> None:
 
 
 def test_robot_eef_pose_goes_through_ik_for_chosen_envs(build) -> None:
-    env = build(robot=toy_ik_arm_cfg(), events=event(
-        rand.randomize_robot_eef_pose, entity_cfg=E(uid="arm", control_parts=["arm"]),
-        position_range=[[0.05, 0.05, 0.05], [0.1, 0.1, 0.1]], rotation_range=[[0, 0, 10], [0, 0, 20]]))
+    env = build(
+        robot=toy_ik_arm_cfg(),
+        events=event(
+            rand.randomize_robot_eef_pose,
+            entity_cfg=E(uid="arm", control_parts=["arm"]),
+            position_range=[[0.05, 0.05, 0.05], [0.1, 0.1, 0.1]],
+            rotation_range=[[0, 0, 10], [0, 0, 20]],
+        ),
+    )
     arm, solver = env.scene["arm"], env.scene["arm"].solvers["arm"]
     before = arm.get_qpos()
     ids = apply(env, IDS)
@@ -92,9 +119,14 @@ def test_robot_eef_pose_goes_through_ik_for_chosen_envs(build) -> None:
 
 
 def test_robot_eef_pose_keeps_joints_where_ik_fails(build) -> None:
-    env = build(robot=toy_ik_arm_cfg(), events=event(
-        rand.randomize_robot_eef_pose, entity_cfg=E(uid="arm", control_parts=["arm"]),
-        position_range=[[5.0, 0, 0], [5.0, 0, 0]]))
+    env = build(
+        robot=toy_ik_arm_cfg(),
+        events=event(
+            rand.randomize_robot_eef_pose,
+            entity_cfg=E(uid="arm", control_parts=["arm"]),
+            position_range=[[5.0, 0, 0], [5.0, 0, 0]],
+        ),
+    )
     before = env.scene["arm"].get_qpos()
     apply(env, IDS)
     assert torch.equal(env.scene["arm"].get_qpos(), before)
@@ -102,32 +134,53 @@ def test_robot_eef_pose_keeps_joints_where_ik_fails(build) -> None:
 
 def test_robot_eef_pose_needs_a_solver(build) -> None:
     with pytest.raises(ConfigError, match="randomize_robot_eef_pose.*solver") as err:
-        build(events=event(rand.randomize_robot_eef_pose, entity_cfg=E(uid="arm"),
-                           position_range=[[0, 0, 0], [0.1, 0.1, 0.1]]))
+        build(
+            events=event(
+                rand.randomize_robot_eef_pose, entity_cfg=E(uid="arm"), position_range=[[0, 0, 0], [0.1, 0.1, 0.1]]
+            )
+        )
     assert err.value.path == "env.events.ev.params.entity_cfg"
 
 
 def test_fixed_base_root_pose_moves_the_robot_per_env(build) -> None:
-    env = build(events=event(rand.randomize_articulation_root_pose, entity_cfg=E(uid="arm"),
-                             position_range=[[0.1, 0.2, 0.0], [0.2, 0.3, 0.0]], rotation_range=[[0, 0, 30], [0, 0, 30]]))
+    env = build(
+        events=event(
+            rand.randomize_articulation_root_pose,
+            entity_cfg=E(uid="arm"),
+            position_range=[[0.1, 0.2, 0.0], [0.2, 0.3, 0.0]],
+            rotation_range=[[0, 0, 30], [0, 0, 30]],
+        )
+    )
     arm = env.scene["arm"]
     ids = apply(env, IDS)
     apply(env, IDS)  # relative to the configured pose: no drift
     root = arm.get_local_pose()
     assert ((root[ids, 0] >= 0.1 - 1e-6) & (root[ids, 0] <= 0.2 + 1e-6)).all()
-    assert torch.allclose(quat_to_euler_xyz(root[ids, 3:].double())[:, 2], torch.full((2,), 30.0, dtype=torch.float64), atol=1e-3)
+    assert torch.allclose(
+        quat_to_euler_xyz(root[ids, 3:].double())[:, 2], torch.full((2,), 30.0, dtype=torch.float64), atol=1e-3
+    )
     assert torch.allclose(root[others(IDS)], torch.tensor([0.0, 0, 0, 1, 0, 0, 0]).expand(2, 7))
     hand = arm.get_link_pose("hand")
     assert not torch.allclose(hand[0, :3], hand[1, :3])  # the whole arm moved in env 0
 
 
 def test_floating_root_pose(build) -> None:
-    drawer = ArticulationCfg(uid="box", fix_base=False, init_pos=(0.0, -0.5, 0.1), mjcf=(
-        '<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .05" mass="1"/>'
-        '<body name="lid" pos="0 0 .06"><joint name="hinge" axis="1 0 0"/><geom type="box" size=".05 .05 .01" mass=".1"/>'
-        '</body></body></worldbody></mujoco>'))
-    env = build(articulation=[drawer], events=event(
-        rand.randomize_articulation_root_pose, entity_cfg=E(uid="box"), position_range=[[0, 0, 0.2], [0, 0, 0.3]]))
+    drawer = ArticulationCfg(
+        uid="box",
+        fix_base=False,
+        init_pos=(0.0, -0.5, 0.1),
+        mjcf=(
+            '<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .05" mass="1"/>'
+            '<body name="lid" pos="0 0 .06"><joint name="hinge" axis="1 0 0"/><geom type="box" size=".05 .05 .01" mass=".1"/>'
+            "</body></body></worldbody></mujoco>"
+        ),
+    )
+    env = build(
+        articulation=[drawer],
+        events=event(
+            rand.randomize_articulation_root_pose, entity_cfg=E(uid="box"), position_range=[[0, 0, 0.2], [0, 0, 0.3]]
+        ),
+    )
     ids = apply(env, IDS)
     root = env.scene["box"].get_local_pose()
     assert ((root[ids, 2] >= 0.3 - 1e-5) & (root[ids, 2] <= 0.4 + 1e-5)).all()
@@ -135,8 +188,14 @@ def test_floating_root_pose(build) -> None:
 
 
 def test_target_pose_created_and_written_per_env(build) -> None:
-    env = build(events=event(rand.randomize_target_pose, position_range=[[0.3, -0.2, 0.05], [0.6, 0.2, 0.05]],
-                             rotation_range=[[0, 0, -45], [0, 0, 45]], store_key="goal_pose"))
+    env = build(
+        events=event(
+            rand.randomize_target_pose,
+            position_range=[[0.3, -0.2, 0.05], [0.6, 0.2, 0.05]],
+            rotation_range=[[0, 0, -45], [0, 0, 45]],
+            store_key="goal_pose",
+        )
+    )
     assert getattr(env, "goal_pose", None) is None
     ids = apply(env, IDS)
     goal = env.goal_pose
@@ -147,8 +206,14 @@ def test_target_pose_created_and_written_per_env(build) -> None:
 
 
 def test_target_pose_relative_to_a_reference_entity(build) -> None:
-    env = build(events=event(rand.randomize_target_pose, position_range=[[0, 0, 0.1], [0, 0, 0.1]],
-                             relative_position=True, reference_entity_cfg=E(uid="cube")))
+    env = build(
+        events=event(
+            rand.randomize_target_pose,
+            position_range=[[0, 0, 0.1], [0, 0, 0.1]],
+            relative_position=True,
+            reference_entity_cfg=E(uid="cube"),
+        )
+    )
     apply(env, [1])
     assert torch.allclose(env.target_pose[1, :3, 3], torch.tensor(CUBE_POS) + torch.tensor([0, 0, 0.1]), atol=1e-5)
 
@@ -168,15 +233,21 @@ def test_get_random_pose_is_reproducible() -> None:
     assert torch.equal(c[:, :3], a[[4, 1], :3])  # row i draws from env env_ids[i]'s stream
 
 
-@pytest.mark.parametrize("func, params, param", [
-    (rand.randomize_rigid_object_pose, {"entity_cfg": E(uid="cube"), "position_range": [[0, 0], [1, 1]]},
-     "position_range"),
-    (rand.randomize_rigid_object_pose, {"entity_cfg": E(uid="arm")}, "entity_cfg"),
-    (rand.randomize_robot_qpos, {"entity_cfg": E(uid="arm"), "qpos_range": [[0, 0], [1, 1]]}, "qpos_range"),
-    (rand.randomize_robot_qpos, {"entity_cfg": E(uid="arm"), "qpos_range": [0, 1], "joint_ids": [42]}, "joint_ids"),
-    (rand.randomize_target_pose, {"store_key": "not an identifier"}, "store_key"),
-    (rand.randomize_articulation_root_pose, {"entity_cfg": E(uid="cube")}, "entity_cfg"),
-])
+@pytest.mark.parametrize(
+    "func, params, param",
+    [
+        (
+            rand.randomize_rigid_object_pose,
+            {"entity_cfg": E(uid="cube"), "position_range": [[0, 0], [1, 1]]},
+            "position_range",
+        ),
+        (rand.randomize_rigid_object_pose, {"entity_cfg": E(uid="arm")}, "entity_cfg"),
+        (rand.randomize_robot_qpos, {"entity_cfg": E(uid="arm"), "qpos_range": [[0, 0], [1, 1]]}, "qpos_range"),
+        (rand.randomize_robot_qpos, {"entity_cfg": E(uid="arm"), "qpos_range": [0, 1], "joint_ids": [42]}, "joint_ids"),
+        (rand.randomize_target_pose, {"store_key": "not an identifier"}, "store_key"),
+        (rand.randomize_articulation_root_pose, {"entity_cfg": E(uid="cube")}, "entity_cfg"),
+    ],
+)
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
         apply(build(events=event(func, **params)), IDS)

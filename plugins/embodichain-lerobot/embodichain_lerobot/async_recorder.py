@@ -66,7 +66,7 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
 
     def _raise_worker_errors(self, final: bool = False) -> None:
         with self._lock:
-            new = self._errors[self._reported:] if not final else self._errors
+            new = self._errors[self._reported :] if not final else self._errors
             self._reported = len(self._errors)
         if not new:
             return

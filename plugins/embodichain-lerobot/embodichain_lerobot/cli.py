@@ -39,15 +39,23 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="episodes, frames, features, fps and tasks of a dataset")
     info.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     info.add_argument("--json", action="store_true", help="print the summary as JSON")
-    info.add_argument("--episodes", action="store_true",
-                      help="list every episode (default: the first 20): length, success, env id, episode seed")
+    info.add_argument(
+        "--episodes",
+        action="store_true",
+        help="list every episode (default: the first 20): length, success, env id, episode seed",
+    )
     prev = sub.add_parser("preview", help="camera contact sheet (or mp4) and state/action plot of an episode")
     prev.add_argument("path", metavar="PATH", help="dataset folder (holds meta/info.json)")
     prev.add_argument("--episode", type=int, required=True, metavar="N", help="episode index")
-    prev.add_argument("--out", default="dataset_previews", metavar="DIR",
-                      help="output folder (default: ./dataset_previews)")
-    prev.add_argument("--format", choices=("png", "mp4"), default="png",
-                      help="camera preview: a contact-sheet PNG (default) or an mp4 of every frame")
+    prev.add_argument(
+        "--out", default="dataset_previews", metavar="DIR", help="output folder (default: ./dataset_previews)"
+    )
+    prev.add_argument(
+        "--format",
+        choices=("png", "mp4"),
+        default="png",
+        help="camera preview: a contact-sheet PNG (default) or an mp4 of every frame",
+    )
     prev.add_argument("--frames", type=int, default=8, metavar="K", help="frames in the contact sheet (default 8)")
     return parser
 

@@ -115,8 +115,10 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
         raise ConfigError("vcodec", f"must be one of {VIDEO_CODECS}, got {p.vcodec!r}")
     p.depth_format = str(params.get("depth_format", p.depth_format))
     if p.depth_format not in DEPTH_FORMATS:
-        raise ConfigError("depth_format", f"must be one of {DEPTH_FORMATS}, got {p.depth_format!r}."
-                                          + did_you_mean(p.depth_format, DEPTH_FORMATS))
+        raise ConfigError(
+            "depth_format",
+            f"must be one of {DEPTH_FORMATS}, got {p.depth_format!r}." + did_you_mean(p.depth_format, DEPTH_FORMATS),
+        )
     p.streaming_encoding = params.get("streaming_encoding", True)
     if not isinstance(p.streaming_encoding, bool):
         raise ConfigError("streaming_encoding", f"must be true or false, got {p.streaming_encoding!r}")
@@ -140,7 +142,8 @@ def dataset_fps(control_frequency: float) -> int:
         raise ValueError(
             f"LeRobot datasets need an integer fps, but the env control frequency is {freq:.6g} Hz "
             "(1 / (physics_dt * sim_steps_per_control)); choose sim_steps_per_control or "
-            "target_control_frequency so that it is a whole number of Hz")
+            "target_control_frequency so that it is a whole number of Hz"
+        )
     return int(fps)
 
 

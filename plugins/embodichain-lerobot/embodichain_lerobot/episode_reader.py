@@ -62,8 +62,9 @@ class EpisodeFiles:
             import pyarrow.compute as pc
             import pyarrow.parquet as pq
 
-            path = self.root / self.info["data_path"].format(chunk_index=int(self.meta["data/chunk_index"]),
-                                                             file_index=int(self.meta["data/file_index"]))
+            path = self.root / self.info["data_path"].format(
+                chunk_index=int(self.meta["data/chunk_index"]), file_index=int(self.meta["data/file_index"])
+            )
             table = pq.read_table(path, columns=["episode_index", *missing])
             table = table.filter(pc.equal(table["episode_index"], self.episode))
             self._table.update({n: table[n].to_pylist() for n in missing})
@@ -85,9 +86,11 @@ class EpisodeFiles:
         import av
 
         prefix = f"videos/{name}/"
-        path = self.root / self.info["video_path"].format(video_key=name,
-                                                          chunk_index=int(self.meta[prefix + "chunk_index"]),
-                                                          file_index=int(self.meta[prefix + "file_index"]))
+        path = self.root / self.info["video_path"].format(
+            video_key=name,
+            chunk_index=int(self.meta[prefix + "chunk_index"]),
+            file_index=int(self.meta[prefix + "file_index"]),
+        )
         start = float(self.meta[prefix + "from_timestamp"])
         wanted, out = set(int(i) for i in indices), {}
         with av.open(str(path)) as container:

@@ -52,8 +52,9 @@ class Episode:
     def nbytes(self) -> int:
         """Raw size of the episode's frames (its observation rows and step values)."""
         row = self.env_id
-        return sum(sum(arr[row].nbytes for arr in snap.values()) + step.action[row].nbytes + 16
-                   for snap, step in self.steps)
+        return sum(
+            sum(arr[row].nbytes for arr in snap.values()) + step.action[row].nbytes + 16 for snap, step in self.steps
+        )
 
     @property
     def success(self) -> bool:
@@ -76,9 +77,15 @@ class Episode:
 
 
 def _annotations(t: int, last: int, step: StepData, row: int) -> dict[str, np.ndarray]:
-    values = {"episode_step": t, "segment_id": 0, "segment_step": t, "segment_start": t == 0,
-              "segment_end": t == last, "terminated": bool(step.terminated[row]),
-              "truncated": bool(step.truncated[row])}
+    values = {
+        "episode_step": t,
+        "segment_id": 0,
+        "segment_step": t,
+        "segment_start": t == 0,
+        "segment_end": t == last,
+        "terminated": bool(step.terminated[row]),
+        "truncated": bool(step.truncated[row]),
+    }
     return {f"annotation.{k}": np.array([int(v)], dtype=np.int64) for k, v in values.items()}
 
 

@@ -40,15 +40,26 @@ success rate, mean return and mean length; `--json` writes the same, per episode
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``eval-policy`` argument parser."""
-    p = argparse.ArgumentParser(prog=PROG, description="Evaluate a trained LeRobot policy in a task.",
-                                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog=PROG,
+        description="Evaluate a trained LeRobot policy in a task.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     add = p.add_argument
-    add("--policy", required=True, metavar="DIR",
-        help="required: the lerobot-train pretrained_model folder (or its output_dir: "
-             "checkpoints/last is used)")
+    add(
+        "--policy",
+        required=True,
+        metavar="DIR",
+        help="required: the lerobot-train pretrained_model folder (or its output_dir: checkpoints/last is used)",
+    )
     where = p.add_mutually_exclusive_group(required=True)
-    where.add_argument("--task", metavar="ID", help="gym task id, with the config the task ships (this or --gym_config)")
-    where.add_argument("--gym_config", metavar="FILE", help="JSON/YAML gym config file, EmbodiChain layout (this or --task)")
+    where.add_argument(
+        "--task", metavar="ID", help="gym task id, with the config the task ships (this or --gym_config)"
+    )
+    where.add_argument(
+        "--gym_config", metavar="FILE", help="JSON/YAML gym config file, EmbodiChain layout (this or --task)"
+    )
     add("--episodes", type=int, required=True, metavar="N", help="required: the number of episodes to evaluate")
     add("--num_envs", type=int, metavar="K", help="parallel envs (default: the config's, at most N)")
     add("--seed", type=int, metavar="S", help="reset seed of the env and torch seed (default: the config's)")
@@ -56,8 +67,12 @@ def build_parser() -> argparse.ArgumentParser:
     add("--headless", action="store_true", help="run without a viewer window")
     add("--json", metavar="FILE", help="write the results as JSON")
     add("--max_steps", type=int, metavar="N", help="episode step limit, max_episode_steps (default: the config's)")
-    add("--instruction", metavar="TEXT", help="language instruction given to the policy as 'task' (default: "
-        "the instruction.lang of the config's LeRobot recorder, if any)")
+    add(
+        "--instruction",
+        metavar="TEXT",
+        help="language instruction given to the policy as 'task' (default: "
+        "the instruction.lang of the config's LeRobot recorder, if any)",
+    )
     add("--policy_device", metavar="DEVICE", help="device of the policy (default: its own, if available)")
     add("--quiet", action="store_true", help="no progress bar and no episode table")
     return p
@@ -75,8 +90,9 @@ def _plan(args: argparse.Namespace) -> Any:
         given["seed"] = args.seed
     if args.headless:
         given["headless"] = True
-    ns = argparse.Namespace(task=args.task, gym_config=args.gym_config or "", max_steps=args.max_steps,
-                            quiet=True, **given)
+    ns = argparse.Namespace(
+        task=args.task, gym_config=args.gym_config or "", max_steps=args.max_steps, quiet=True, **given
+    )
     setattr(ns, GIVEN_ATTR, set(given))
     plan = run_env.prepare(ns)
     if args.instruction is None:
@@ -157,14 +173,16 @@ def _evaluate(env: Any, loaded: Any, args: argparse.Namespace) -> Any:
     successes = 0
 
     with tqdm(total=args.episodes, unit="ep", desc="eval-policy", disable=args.quiet, file=sys.stderr) as bar:
+
         def progress(episode: Any) -> None:
             nonlocal successes
             successes += bool(episode.success)
             bar.set_postfix(success=f"{successes}/{bar.n + 1}", refresh=False)
             bar.update(1)
 
-        return evaluate(env, loaded, args.episodes, seed=args.seed, video_dir=video, progress=progress,
-                        instruction=args.instruction)
+        return evaluate(
+            env, loaded, args.episodes, seed=args.seed, video_dir=video, progress=progress, instruction=args.instruction
+        )
 
 
 def print_report(result: Any, policy: Path, task_id: str) -> None:
@@ -174,8 +192,10 @@ def print_report(result: Any, policy: Path, task_id: str) -> None:
     print(f"{'episode':>7}  {'env':>3}  {'success':<7}  {'return':>10}  {'length':>6}  end")
     for e in result.episodes:
         end = "terminated" if e.terminated else "truncated"
-        print(f"{e.episode:>7}  {e.env_id:>3}  {'yes' if e.success else 'no':<7}  {e.episode_return:>10.3f}  {e.length:>6}  {end}"
-              + (f"  {e.video}" if e.video else ""))
+        print(
+            f"{e.episode:>7}  {e.env_id:>3}  {'yes' if e.success else 'no':<7}  {e.episode_return:>10.3f}  {e.length:>6}  {end}"
+            + (f"  {e.video}" if e.video else "")
+        )
     print(f"episodes      {len(result.episodes)}")
     print(f"success rate  {result.success_rate:.3f}")
     print(f"mean return   {result.mean_return:.3f}")
@@ -185,8 +205,14 @@ def print_report(result: Any, policy: Path, task_id: str) -> None:
 
 def write_json(result: Any, path: Path, policy: Path, task_id: str, args: argparse.Namespace) -> None:
     """The results, with what was evaluated, as JSON at ``path``."""
-    data = {"policy": str(policy), "task": task_id, "gym_config": args.gym_config, "seed": args.seed,
-            "instruction": args.instruction, **result.to_dict()}
+    data = {
+        "policy": str(policy),
+        "task": task_id,
+        "gym_config": args.gym_config,
+        "seed": args.seed,
+        "instruction": args.instruction,
+        **result.to_dict(),
+    }
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     if not args.quiet:

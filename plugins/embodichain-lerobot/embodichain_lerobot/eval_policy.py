@@ -62,10 +62,15 @@ class EvalResult:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary with the per-episode results."""
-        return {"num_episodes": len(self.episodes), "success_rate": self.success_rate,
-                "mean_return": self.mean_return, "mean_length": self.mean_length,
-                "env_steps": self.env_steps, "seconds": round(self.seconds, 3),
-                "episodes": [asdict(e) for e in self.episodes]}
+        return {
+            "num_episodes": len(self.episodes),
+            "success_rate": self.success_rate,
+            "mean_return": self.mean_return,
+            "mean_length": self.mean_length,
+            "env_steps": self.env_steps,
+            "seconds": round(self.seconds, 3),
+            "episodes": [asdict(e) for e in self.episodes],
+        }
 
 
 class _Rollout:
@@ -89,8 +94,9 @@ class _Rollout:
         """Close env ``i``'s episode; its result when it counts. Env ``i`` starts the next one."""
         result = None
         if self.index[i] < self.episodes:
-            result = EpisodeResult(self.index[i], i, success, float(self.returns[i]), int(self.lengths[i]),
-                                   terminated, truncated)
+            result = EpisodeResult(
+                self.index[i], i, success, float(self.returns[i]), int(self.lengths[i]), terminated, truncated
+            )
             if self.video_dir is not None:
                 result.video = str(self._write_video(self.index[i], self.frames[i], fps))
         self.index[i], self.started = self.started, self.started + 1
@@ -119,13 +125,21 @@ def _check_action_dim(env: Any, loaded: LoadedPolicy) -> None:
     space = space.spaces["qpos"] if hasattr(space, "spaces") and "qpos" in space.spaces else space
     env_dim = int(space.shape[-1]) if getattr(space, "shape", None) else None
     if env_dim is not None and env_dim != loaded.action_dim:
-        raise ConfigError("policy", f"the policy's action has {loaded.action_dim} values, the env's action "
-                                    f"{env_dim} (action space {space})")
+        raise ConfigError(
+            "policy",
+            f"the policy's action has {loaded.action_dim} values, the env's action {env_dim} (action space {space})",
+        )
 
 
-def evaluate(env: Any, loaded: LoadedPolicy, episodes: int, seed: Optional[int] = None,
-             video_dir: Optional[Path] = None, progress: Optional[Callable[[EpisodeResult], None]] = None,
-             instruction: Optional[str] = None) -> EvalResult:
+def evaluate(
+    env: Any,
+    loaded: LoadedPolicy,
+    episodes: int,
+    seed: Optional[int] = None,
+    video_dir: Optional[Path] = None,
+    progress: Optional[Callable[[EpisodeResult], None]] = None,
+    instruction: Optional[str] = None,
+) -> EvalResult:
     """Run ``episodes`` episodes of the policy in ``env`` (all its ``num_envs`` envs).
 
     Args:
@@ -163,8 +177,17 @@ def evaluate(env: Any, loaded: LoadedPolicy, episodes: int, seed: Optional[int] 
     return result
 
 
-def _step(env: Any, obs: Any, loaded: LoadedPolicy, mapper: ObservationMapper, runner: PerEnvPolicy,
-          state: _Rollout, result: EvalResult, fps: int, progress: Optional[Callable] = None) -> Any:
+def _step(
+    env: Any,
+    obs: Any,
+    loaded: LoadedPolicy,
+    mapper: ObservationMapper,
+    runner: PerEnvPolicy,
+    state: _Rollout,
+    result: EvalResult,
+    fps: int,
+    progress: Optional[Callable] = None,
+) -> Any:
     """One batched step; finished episodes go to ``result``. Returns the next observation."""
     n = mapper.num_envs
     state.add_frames(mapper.frames(obs) if state.video_dir is not None else {}, range(n))

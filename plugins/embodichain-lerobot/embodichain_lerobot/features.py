@@ -36,8 +36,7 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_lerobot.packing import pack_depth, pack_mask
 
 ROBOT_KEYS = {"robot/qpos": "observation.state", "robot/qvel": "observation.qvel", "robot/qf": "observation.qf"}
-ANNOTATIONS = ("episode_step", "segment_id", "segment_step", "segment_start", "segment_end",
-               "terminated", "truncated")
+ANNOTATIONS = ("episode_step", "segment_id", "segment_step", "segment_start", "segment_end", "terminated", "truncated")
 #: Per-frame fields every recorded dataset has besides the observations and the action.
 FIXED_FEATURES: dict[str, dict] = {
     "next.reward": {"dtype": "float32", "shape": (1,), "names": None},
@@ -95,8 +94,11 @@ class Source:
         """The lerobot feature dict (depth and masks are always lossless PNG images)."""
         if self.kind in IMAGE_KINDS:
             video = use_videos and self.kind == "image"
-            return {"dtype": "video" if video else "image", "shape": self.shape,
-                    "names": ["height", "width", "channels"]}
+            return {
+                "dtype": "video" if video else "image",
+                "shape": self.shape,
+                "names": ["height", "width", "channels"],
+            }
         return {"dtype": self.dtype, "shape": self.shape, "names": self.names}
 
 
@@ -122,8 +124,11 @@ def _camera_source(key: str, uid: str, stream: str, value: Any, depth_format: st
     base, _, side = stream.partition("_")
     group = _CAMERA_STREAMS.get(base)
     if group is None or side not in ("", "right"):
-        warnings.warn(f"LeRobot recorder: camera stream {key!r} is not recorded (only colour, depth "
-                      "and mask are)", RuntimeWarning, stacklevel=4)
+        warnings.warn(
+            f"LeRobot recorder: camera stream {key!r} is not recorded (only colour, depth and mask are)",
+            RuntimeWarning,
+            stacklevel=4,
+        )
         return None
     name = f"observation.{group}.{uid}" + ("_right" if side else "")
     if group != "images" and depth_format == "raw":
@@ -186,8 +191,11 @@ class FeatureSpec:
         for s in self.sources:
             if s.name in RESERVED or s.name in seen:
                 other = seen.get(s.name, "a built-in feature")
-                raise ConfigError("observations", f"observation {s.key!r} would be recorded as {s.name!r}, "
-                                                  f"which is already used by {other}; rename the observation")
+                raise ConfigError(
+                    "observations",
+                    f"observation {s.key!r} would be recorded as {s.name!r}, "
+                    f"which is already used by {other}; rename the observation",
+                )
             seen[s.name] = repr(s.key)
 
     def set_action(self, action: np.ndarray) -> None:

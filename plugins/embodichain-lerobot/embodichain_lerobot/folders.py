@@ -74,8 +74,7 @@ def folder_status(root: str | Path) -> FolderStatus:
             readable = False
     has_marker = (root / MARKER).is_file()
     owner = marker_owner(root) if has_marker else None
-    return FolderStatus(root, episodes, readable, has_marker, owner,
-                        unfinished=has_marker or (root / STAGING).exists())
+    return FolderStatus(root, episodes, readable, has_marker, owner, unfinished=has_marker or (root / STAGING).exists())
 
 
 def looks_like_recording(root: Path) -> bool:
@@ -88,14 +87,18 @@ def incomplete_message(status: FolderStatus) -> str:
     root = status.root
     if status.owner is not None:
         who = f"process {status.owner.get('pid', '?')} on {status.owner.get('host', '?')}"
-        return (f"{root} is being recorded by {who} (started {status.owner.get('started', '?')}) and holds no "
-                "saved episode yet; wait for its first episode")
+        return (
+            f"{root} is being recorded by {who} (started {status.owner.get('started', '?')}) and holds no "
+            "saved episode yet; wait for its first episode"
+        )
     if not status.readable:
         return f"{root} is not a readable dataset: its meta/info.json cannot be parsed"
     what = "meta/info.json counts 0 episodes" if (root / "meta" / "info.json").is_file() else "no meta/info.json"
-    return (f"{root} is an incomplete recording, not a dataset ({what}): the recording stopped before its "
-            "first episode was saved, so it holds no episode. Delete the folder; the recorder also removes "
-            "such folders when it runs again with the same save_path")
+    return (
+        f"{root} is an incomplete recording, not a dataset ({what}): the recording stopped before its "
+        "first episode was saved, so it holds no episode. Delete the folder; the recorder also removes "
+        "such folders when it runs again with the same save_path"
+    )
 
 
 def clean_incomplete(save_path: str | Path, prefix: str) -> list[Path]:
@@ -115,7 +118,10 @@ def clean_incomplete(save_path: str | Path, prefix: str) -> list[Path]:
     for path in sorted(p for p in base.iterdir() if pattern.match(p.name) and p.is_dir()):
         if folder_status(path).removable:
             shutil.rmtree(path, ignore_errors=True)
-            log.warning("removed incomplete dataset folder %s: a recording stopped before its first "
-                        "episode was saved there (it held no episode)", path)
+            log.warning(
+                "removed incomplete dataset folder %s: a recording stopped before its first "
+                "episode was saved there (it held no episode)",
+                path,
+            )
             removed.append(path)
     return removed

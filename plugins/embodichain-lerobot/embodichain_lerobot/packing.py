@@ -76,8 +76,10 @@ def pack_mask(mask: np.ndarray) -> np.ndarray:
     """
     ids = _batch_maps(mask).astype(np.int64) + 1
     if ids.size and (ids.min() < 0 or ids.max() > 0xFFFF):
-        raise ValueError(f"mask ids must be in -1..65534 to be stored as 16-bit values, got "
-                         f"{int(ids.min()) - 1}..{int(ids.max()) - 1}")
+        raise ValueError(
+            f"mask ids must be in -1..65534 to be stored as 16-bit values, got "
+            f"{int(ids.min()) - 1}..{int(ids.max()) - 1}"
+        )
     return pack_u16(ids)
 
 

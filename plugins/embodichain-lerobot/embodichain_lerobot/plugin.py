@@ -9,10 +9,14 @@ from embodichain_core.plugins import hookimpl
 
 #: registered name -> (target, one-line description)
 FUNCTORS: dict[str, tuple[str, str]] = {
-    "LeRobotRecorder": ("embodichain_lerobot.recorder:LeRobotRecorder",
-                        "Record committed episodes as a LeRobot dataset (lerobot 0.4.x)"),
-    "AsyncLeRobotRecorder": ("embodichain_lerobot.async_recorder:AsyncLeRobotRecorder",
-                             "LeRobotRecorder that writes and encodes on a worker thread"),
+    "LeRobotRecorder": (
+        "embodichain_lerobot.recorder:LeRobotRecorder",
+        "Record committed episodes as a LeRobot dataset (lerobot 0.4.x)",
+    ),
+    "AsyncLeRobotRecorder": (
+        "embodichain_lerobot.async_recorder:AsyncLeRobotRecorder",
+        "LeRobotRecorder that writes and encodes on a worker thread",
+    ),
 }
 
 
@@ -26,7 +30,13 @@ def embodichain_register_functors(register: Any) -> None:
 @hookimpl
 def embodichain_register_commands(register: Any) -> None:
     """Register ``embodichain dataset`` and ``embodichain eval-policy``."""
-    register("dataset", "embodichain_lerobot.cli:main",
-             help="Inspect LeRobot datasets: 'info PATH', 'preview PATH --episode N'")
-    register("eval-policy", "embodichain_lerobot.eval_cli:main",
-             help="Evaluate a trained LeRobot policy (lerobot-train folder) in a task")
+    register(
+        "dataset",
+        "embodichain_lerobot.cli:main",
+        help="Inspect LeRobot datasets: 'info PATH', 'preview PATH --episode N'",
+    )
+    register(
+        "eval-policy",
+        "embodichain_lerobot.eval_cli:main",
+        help="Evaluate a trained LeRobot policy (lerobot-train folder) in a task",
+    )

@@ -25,8 +25,10 @@ __all__ = ["ObservationMapper", "policy_inputs"]
 
 def policy_inputs(config: Any) -> dict[str, tuple[str, tuple[int, ...]]]:
     """``{feature name: (type, shape)}`` of a policy config's observation inputs."""
-    return {name: (str(getattr(ft.type, "value", ft.type)), tuple(int(s) for s in ft.shape))
-            for name, ft in (config.input_features or {}).items()}
+    return {
+        name: (str(getattr(ft.type, "value", ft.type)), tuple(int(s) for s in ft.shape))
+        for name, ft in (config.input_features or {}).items()
+    }
 
 
 def _expected_shape(source: Source) -> tuple[int, ...]:
@@ -78,10 +80,13 @@ class ObservationMapper:
             elif (kind == "VISUAL") != (by_name[name].kind in IMAGE_KINDS):
                 problems.append(f"{name} is {kind} for the policy, {by_name[name].kind} in the env")
         if problems:
-            raise ConfigError("policy", "the policy's inputs do not match the env's observations: "
-                                        + "; ".join(problems)
-                                        + f". Policy inputs: {_describe({k: v[1] for k, v in wanted.items()})}. "
-                                        + f"Env features (the recorder's names): {_describe(env_shapes)}")
+            raise ConfigError(
+                "policy",
+                "the policy's inputs do not match the env's observations: "
+                + "; ".join(problems)
+                + f". Policy inputs: {_describe({k: v[1] for k, v in wanted.items()})}. "
+                + f"Env features (the recorder's names): {_describe(env_shapes)}",
+            )
         self.sources = [by_name[name] for name in wanted]
         self.cameras = [s for s in self.spec.sources if s.kind == "image"]
 

@@ -64,12 +64,17 @@ def find_pretrained_dir(path: str | Path) -> Path:
         if (candidate / "config.json").is_file():
             missing = [f for f in REQUIRED_FILES if not (candidate / f).is_file()]
             if missing:
-                raise ConfigError("policy", f"{candidate} is not a complete LeRobot pretrained-model folder: "
-                                            f"missing {', '.join(missing)}")
+                raise ConfigError(
+                    "policy",
+                    f"{candidate} is not a complete LeRobot pretrained-model folder: missing {', '.join(missing)}",
+                )
             return candidate
     what = "does not exist" if not root.exists() else "holds no config.json"
-    raise ConfigError("policy", f"{root} {what}; give the pretrained_model folder lerobot-train writes "
-                                "(<output_dir>/checkpoints/last/pretrained_model) or its output_dir")
+    raise ConfigError(
+        "policy",
+        f"{root} {what}; give the pretrained_model folder lerobot-train writes "
+        "(<output_dir>/checkpoints/last/pretrained_model) or its output_dir",
+    )
 
 
 def load_policy(path: str | Path, device: Optional[str] = None) -> LoadedPolicy:
@@ -93,6 +98,6 @@ def load_policy(path: str | Path, device: Optional[str] = None) -> LoadedPolicy:
     policy = get_policy_class(cfg.type).from_pretrained(folder, config=cfg)
     policy.eval()
     pre, post = make_pre_post_processors(
-        cfg, pretrained_path=str(folder),
-        preprocessor_overrides={"device_processor": {"device": str(cfg.device)}})
+        cfg, pretrained_path=str(folder), preprocessor_overrides={"device_processor": {"device": str(cfg.device)}}
+    )
     return LoadedPolicy(folder, policy, pre, post)

@@ -63,6 +63,7 @@ def _wrap(state: dict[str, Any], m: int, shared: set) -> dict[str, Any]:
     A tensor is batched when its first dim is ``m``, unless its path is in ``shared`` (a
     tensor of the fresh state, or one found not batched before, which is then added).
     """
+
     def leaf(t: Any, path: tuple) -> Any:
         if isinstance(t, torch.Tensor) and t.ndim and t.shape[0] == m and path not in shared:
             return _Row(t)
@@ -74,7 +75,7 @@ def _wrap(state: dict[str, Any], m: int, shared: set) -> dict[str, Any]:
 
 def _row(wrapped: Any, i: int) -> Any:
     """Slot ``i``'s state in a wrapped group state."""
-    return _map(wrapped, lambda x, _: _Row(x.t[i:i + 1]) if isinstance(x, _Row) else x)
+    return _map(wrapped, lambda x, _: _Row(x.t[i : i + 1]) if isinstance(x, _Row) else x)
 
 
 def _merge(values: list[Any]) -> Any:
@@ -163,7 +164,8 @@ class PerEnvPolicy:
         self._fresh = {k: copy.deepcopy(getattr(policy, k)) for k in self.keys}
         self._shared = _tensor_paths(self._fresh)  # constants such as ensemble weights
         self._groups: list[tuple[list[int], dict[str, Any]]] = [
-            (list(range(self.num_envs)), copy.deepcopy(self._fresh))]
+            (list(range(self.num_envs)), copy.deepcopy(self._fresh))
+        ]
 
     def state_of(self, env_id: int) -> dict[str, Any]:
         """The rollout state of env ``env_id``, as the policy would hold it for a batch of one."""
@@ -203,8 +205,9 @@ class PerEnvPolicy:
             buckets.setdefault(_signature(wrapped), []).append((ids, wrapped))
         if len(buckets) == len(self._groups):
             return
-        self._groups = [(sum((ids for ids, _ in members), []), _merge([w for _, w in members]))
-                        for members in buckets.values()]
+        self._groups = [
+            (sum((ids for ids, _ in members), []), _merge([w for _, w in members])) for members in buckets.values()
+        ]
 
     @torch.inference_mode()
     def select_action(self, batch: dict[str, Any]) -> torch.Tensor:

@@ -65,8 +65,9 @@ def collect_streams(ep: EpisodeFiles, indices: Sequence[int]) -> dict[str, list[
     for name in preview_streams(ep.features):
         if ep.features[name]["dtype"] not in ("image", "video"):  # raw depth (depth_format "raw")
             cells = ep.columns([name])[name]
-            out[name] = _normalised([np.asarray(cells[i], np.float32).reshape(ep.features[name]["shape"][:2])
-                                     for i in indices])
+            out[name] = _normalised(
+                [np.asarray(cells[i], np.float32).reshape(ep.features[name]["shape"][:2]) for i in indices]
+            )
             continue
         frames = ep.camera_frames(name, indices)
         if name.startswith("observation.depth."):
@@ -108,8 +109,10 @@ def write_mp4(streams: dict[str, list[np.ndarray]], fps: int, path: Path) -> Pat
     """All streams side by side per frame, encoded with PyAV (H.264, else MPEG-4)."""
     import av
 
-    frames = [np.concatenate([np.asarray(_tile(s[t])) for s in streams.values()], axis=1)
-              for t in range(len(next(iter(streams.values()))))]
+    frames = [
+        np.concatenate([np.asarray(_tile(s[t])) for s in streams.values()], axis=1)
+        for t in range(len(next(iter(streams.values()))))
+    ]
     h, w = frames[0].shape[:2]
     with av.open(str(path), mode="w") as container:
         codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
@@ -175,16 +178,19 @@ def _plot_with_pillow(t: np.ndarray, series: dict[str, np.ndarray], path: Path) 
         draw.text((5, y0 + 5), key, fill="black")
         span, tmax = (hi - lo) or 1.0, float(t[-1]) if len(t) > 1 else 1.0
         for i in range(values.shape[1]):
-            pts = [(40 + (width - 60) * float(x) / tmax, y0 + height - 20 - (height - 40) * (float(v) - lo) / span)
-                   for x, v in zip(t, values[:, i])]
+            pts = [
+                (40 + (width - 60) * float(x) / tmax, y0 + height - 20 - (height - 40) * (float(v) - lo) / span)
+                for x, v in zip(t, values[:, i])
+            ]
             if len(pts) > 1:
                 draw.line(pts, fill=palette[i % len(palette)], width=2)
     img.save(path)
     return path
 
 
-def preview_episode(path: str | Path, episode: int, out_dir: str | Path, fmt: str = "png",
-                    num_frames: int = 8) -> list[Path]:
+def preview_episode(
+    path: str | Path, episode: int, out_dir: str | Path, fmt: str = "png", num_frames: int = 8
+) -> list[Path]:
     """Write the camera preview (``fmt``: ``png`` or ``mp4``) and the state/action plot.
 
     The episode's files are read directly (:class:`~embodichain_lerobot.episode_reader.EpisodeFiles`),

@@ -126,12 +126,19 @@ def dataset_summary(path: str | os.PathLike) -> dict:
     total = int(info.get("total_episodes", 0))
     sidecar = read_sidecar(root, total)
     seeds = [r.get("episode_seed") for r in sidecar]
-    features = {name: {"dtype": ft["dtype"], "shape": list(ft["shape"]), "names": ft.get("names")}
-                for name, ft in info.get("features", {}).items()}
+    features = {
+        name: {"dtype": ft["dtype"], "shape": list(ft["shape"]), "names": ft.get("names")}
+        for name, ft in info.get("features", {}).items()
+    }
     return {
-        "path": str(root), "codebase_version": info.get("codebase_version"), "robot_type": info.get("robot_type"),
-        "fps": info.get("fps"), "episodes": total, "frames": int(info.get("total_frames", 0)),
-        "tasks": _tasks(root), "features": features,
+        "path": str(root),
+        "codebase_version": info.get("codebase_version"),
+        "robot_type": info.get("robot_type"),
+        "fps": info.get("fps"),
+        "episodes": total,
+        "frames": int(info.get("total_frames", 0)),
+        "tasks": _tasks(root),
+        "features": features,
         "cameras": [n for n, f in features.items() if f["dtype"] in ("image", "video")],
         "episode_lengths": _episode_lengths(root, total),
         "successes": sum(1 for r in sidecar if r.get("success")) if sidecar else None,
@@ -144,7 +151,9 @@ def dataset_summary(path: str | os.PathLike) -> dict:
 def format_summary(summary: dict) -> str:
     """Human-readable lines of :func:`dataset_summary`."""
     lengths = summary["episode_lengths"]
-    span = f" (length min {min(lengths)}, mean {sum(lengths) / len(lengths):.1f}, max {max(lengths)})" if lengths else ""
+    span = (
+        f" (length min {min(lengths)}, mean {sum(lengths) / len(lengths):.1f}, max {max(lengths)})" if lengths else ""
+    )
     lines = [
         f"dataset   {summary['path']}",
         f"format    LeRobot {summary['codebase_version']}, robot_type {summary['robot_type']}, {summary['fps']} fps",
@@ -160,8 +169,10 @@ def format_summary(summary: dict) -> str:
         shown = ", ".join(str(s) for s in known[:3]) + (", ..." if len(known) > 3 else "")
         lines.append(f"seeds     {len(known)}/{summary['episodes']} episodes have an episode_seed ({shown})")
     if summary["unfinished"]:
-        lines.append(f"note      the recording was not finalized ({STAGING}/ or the recording marker is left): "
-                     "the run stopped early or is still running; every episode listed here is complete")
+        lines.append(
+            f"note      the recording was not finalized ({STAGING}/ or the recording marker is left): "
+            "the run stopped early or is still running; every episode listed here is complete"
+        )
     lines.append(f"features  {len(summary['features'])}:")
     width = max((len(n) for n in summary["features"]), default=0)
     for name, ft in summary["features"].items():
@@ -184,8 +195,9 @@ def format_episodes(summary: dict, limit: Optional[int] = None) -> str:
         record = by_index.get(index, {})
         success = {True: "yes", False: "no", None: "-"}.get(record.get("success"), "-")
         seed = record.get("episode_seed")
-        lines.append(f"{index:>7}  {length:>6}  {success:<7}  {record.get('env_id', '-'):>3}  "
-                     f"{'-' if seed is None else seed}")
+        lines.append(
+            f"{index:>7}  {length:>6}  {success:<7}  {record.get('env_id', '-'):>3}  {'-' if seed is None else seed}"
+        )
     if limit is not None and len(lengths) > limit:
         lines.append(f"    ... {len(lengths) - limit} more episode(s) (--episodes lists every one)")
     return "\n".join(lines)

@@ -149,24 +149,40 @@ class LeRobotRecorder(DatasetFunctor):
         spec = self._ensure_spec(obs)
         self._buffers.start(spec.snapshot(obs), env_id_list(env_ids, self.num_envs))
 
-    def record_step(self, obs: Any, action: Any, reward: Any, terminated: Any, truncated: Any,
-                    info: dict) -> None:
+    def record_step(self, obs: Any, action: Any, reward: Any, terminated: Any, truncated: Any, info: dict) -> None:
         """Buffer one frame per env (the observation it acted on, the action, reward, flags)."""
         if self._finalized:
             return
         spec, n = self._ensure_spec(obs), self.num_envs
         act = action_array(action, n)
         spec.set_action(act)
-        step = StepData(act, _per_env(reward, n, np.float32), _per_env(terminated, n, bool),
-                        _per_env(truncated, n, bool), _per_env((info or {}).get("success"), n, bool))
+        step = StepData(
+            act,
+            _per_env(reward, n, np.float32),
+            _per_env(terminated, n, bool),
+            _per_env(truncated, n, bool),
+            _per_env((info or {}).get("success"), n, bool),
+        )
         self._buffers.add(spec.snapshot(obs), step)
 
-    def __call__(self, env: Any, env_ids: Any, save_path: Any = None, robot_meta: Any = None,
-                 instruction: Any = None, extra: Any = None, use_videos: bool = False,
-                 vcodec: str = "libsvtav1", image_writer_threads: Optional[int] = None,
-                 image_writer_processes: int = 0, max_pending_episodes: int = 64,
-                 min_free_mb: int = DEFAULT_MIN_FREE_MB, streaming_encoding: bool = True,
-                 encoder_threads: Optional[int] = None, depth_format: str = "png16") -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        save_path: Any = None,
+        robot_meta: Any = None,
+        instruction: Any = None,
+        extra: Any = None,
+        use_videos: bool = False,
+        vcodec: str = "libsvtav1",
+        image_writer_threads: Optional[int] = None,
+        image_writer_processes: int = 0,
+        max_pending_episodes: int = 64,
+        min_free_mb: int = DEFAULT_MIN_FREE_MB,
+        streaming_encoding: bool = True,
+        encoder_threads: Optional[int] = None,
+        depth_format: str = "png16",
+    ) -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
 
         Each episode keeps its seed, ``env.episode_seeds[i]`` now (before the next episode draws its seed).
@@ -196,8 +212,12 @@ class LeRobotRecorder(DatasetFunctor):
 
     def _write_now(self, episode: Episode) -> None:
         where = self._writer.root if self._writer is not None else self.params.save_path
-        ensure_space(where, episode.nbytes(), self.params.min_free_mb,
-                     f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}")
+        ensure_space(
+            where,
+            episode.nbytes(),
+            self.params.min_free_mb,
+            f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}",
+        )
         writer = self._ensure_writer()
         task = self.params.task
         subtask = writer.subtask_index(task)
@@ -216,9 +236,17 @@ class LeRobotRecorder(DatasetFunctor):
             threads = 2 if self._spec.image_features(p.use_videos) else 0
         try:
             self._writer = DatasetWriter(
-                root, self.fps, self._spec.features(p.use_videos), robot_type_of(p, self._robot_uid),
-                p.use_videos, p.vcodec, threads, p.image_writer_processes,
-                streaming_encoding=p.streaming_encoding, encoder_threads=p.encoder_threads)
+                root,
+                self.fps,
+                self._spec.features(p.use_videos),
+                robot_type_of(p, self._robot_uid),
+                p.use_videos,
+                p.vcodec,
+                threads,
+                p.image_writer_processes,
+                streaming_encoding=p.streaming_encoding,
+                encoder_threads=p.encoder_threads,
+            )
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
             raise
@@ -227,8 +255,12 @@ class LeRobotRecorder(DatasetFunctor):
     def _episode_record(self, episode: Episode, subtask: int) -> dict:
         task, n = self.params.task, len(episode)
         return {
-            "env_id": episode.env_id, "success": episode.success, "total_time": n * self.step_dt,
-            "instruction": self.params.instruction, "robot_meta": self.params.robot_meta, "extra": self.params.extra,
+            "env_id": episode.env_id,
+            "success": episode.success,
+            "total_time": n * self.step_dt,
+            "instruction": self.params.instruction,
+            "robot_meta": self.params.robot_meta,
+            "extra": self.params.extra,
             "segments": [{"name": "legacy", "start": 0, "end": n, "instruction": task, "subtask_index": subtask}],
             **({"episode_seed": episode.seed} if episode.seed is not None else {}),
         }
@@ -246,6 +278,12 @@ class LeRobotRecorder(DatasetFunctor):
         dropped = self._buffers.drop(range(self.num_envs))
         path = self._writer.finalize() if self._writer is not None else None
         self._path = str(path) if path is not None else None
-        log.info("%s: saved %d episode(s), %d frame(s) to %s (dropped %d live frame(s))", type(self).__name__,
-                 self.saved_episodes, self.saved_frames, self._path, dropped)
+        log.info(
+            "%s: saved %d episode(s), %d frame(s) to %s (dropped %d live frame(s))",
+            type(self).__name__,
+            self.saved_episodes,
+            self.saved_frames,
+            self._path,
+            dropped,
+        )
         return self._path

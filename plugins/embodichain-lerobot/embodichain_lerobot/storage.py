@@ -38,8 +38,10 @@ MARKER = ".embodichain_recording"
 DEFAULT_MIN_FREE_MB = 256
 _MB = 2**20
 _FULL_ERRNOS = {errno.ENOSPC, errno.EDQUOT}
-_HOW = ("set the recorder's params.save_path (or EMBODICHAIN_DEFAULT_DATASET_ROOT when save_path is not "
-        "given) to a writable folder with enough space, or pass --filter_dataset_saving to record nothing")
+_HOW = (
+    "set the recorder's params.save_path (or EMBODICHAIN_DEFAULT_DATASET_ROOT when save_path is not "
+    "given) to a writable folder with enough space, or pass --filter_dataset_saving to record nothing"
+)
 
 
 class DiskFullError(OSError):
@@ -52,8 +54,9 @@ def is_disk_full(err: BaseException) -> bool:
     current: BaseException | None = err
     while current is not None and id(current) not in seen:
         seen.add(id(current))
-        if isinstance(current, OSError) and (current.errno in _FULL_ERRNOS
-                                             or "No space left on device" in str(current)):
+        if isinstance(current, OSError) and (
+            current.errno in _FULL_ERRNOS or "No space left on device" in str(current)
+        ):
             return True
         current = current.__cause__ or current.__context__
     return False
@@ -93,13 +96,15 @@ def check_output_dir(save_path: str | os.PathLike, min_free_mb: int, key: str) -
         os.unlink(probe)
     except OSError as err:
         where = "" if base == path else f" (it would be created in {base})"
-        raise ConfigError(key, f"dataset folder {path} is not writable{where}: {err.strerror or err}; "
-                               f"{_HOW}") from err
+        raise ConfigError(key, f"dataset folder {path} is not writable{where}: {err.strerror or err}; {_HOW}") from err
     free = free_mb(base)
     if free < min_free_mb:
-        raise ConfigError(key, f"only {free:.0f} MB free on the filesystem of the dataset folder {path}; the "
-                               f"recorder needs at least {min_free_mb} MB (its params.min_free_mb); free space, "
-                               f"lower min_free_mb, or {_HOW}")
+        raise ConfigError(
+            key,
+            f"only {free:.0f} MB free on the filesystem of the dataset folder {path}; the "
+            f"recorder needs at least {min_free_mb} MB (its params.min_free_mb); free space, "
+            f"lower min_free_mb, or {_HOW}",
+        )
     return path
 
 
@@ -115,9 +120,12 @@ def ensure_space(path: str | os.PathLike, episode_bytes: int, min_free_mb: int, 
     need = max(min_free_mb * _MB, 2 * episode_bytes) / _MB
     free = free_mb(path)
     if free < need:
-        raise DiskFullError(errno.ENOSPC, f"not enough disk space to save {what}: {free:.0f} MB free on the "
-                                          f"filesystem of {path}, {need:.0f} MB needed (min_free_mb or twice "
-                                          f"the episode's raw size); free space or {_HOW}")
+        raise DiskFullError(
+            errno.ENOSPC,
+            f"not enough disk space to save {what}: {free:.0f} MB free on the "
+            f"filesystem of {path}, {need:.0f} MB needed (min_free_mb or twice "
+            f"the episode's raw size); free space or {_HOW}",
+        )
 
 
 class RecordingLock:
@@ -138,8 +146,12 @@ class RecordingLock:
                 fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:  # a filesystem without flock (some network mounts): liveness unknown
             locked = False
-        owner = {"pid": os.getpid(), "host": socket.gethostname(), "locked": locked,
-                 "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        owner = {
+            "pid": os.getpid(),
+            "host": socket.gethostname(),
+            "locked": locked,
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
         os.write(self._fd, json.dumps(owner).encode())
         os.replace(tmp, self.path)
 

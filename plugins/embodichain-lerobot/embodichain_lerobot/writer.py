@@ -83,8 +83,10 @@ def deferred_sigint() -> Iterator[None]:
 
     Only in the main thread with Python's default handler installed; elsewhere a no-op.
     """
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    ):
         yield
         return
     pending: list[int] = []
@@ -129,9 +131,19 @@ class DatasetWriter:
         encoder_threads: threads per video encoder (``None``: the codec decides).
     """
 
-    def __init__(self, root: Path, fps: int, features: dict, robot_type: Optional[str], use_videos: bool,
-                 vcodec: str = "libsvtav1", image_writer_threads: int = 0, image_writer_processes: int = 0,
-                 streaming_encoding: bool = True, encoder_threads: Optional[int] = None):
+    def __init__(
+        self,
+        root: Path,
+        fps: int,
+        features: dict,
+        robot_type: Optional[str],
+        use_videos: bool,
+        vcodec: str = "libsvtav1",
+        image_writer_threads: int = 0,
+        image_writer_processes: int = 0,
+        streaming_encoding: bool = True,
+        encoder_threads: Optional[int] = None,
+    ):
         wait_lerobot()
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -141,10 +153,19 @@ class DatasetWriter:
         self._lock = RecordingLock(self.root)
         try:
             self.dataset = LeRobotDataset.create(
-                repo_id=self.repo_id, fps=fps, features=features, root=self.staging, robot_type=robot_type,
-                use_videos=use_videos, vcodec=resolve_vcodec(vcodec) if use_videos else "libsvtav1",
-                image_writer_threads=image_writer_threads, image_writer_processes=image_writer_processes,
-                streaming_encoding=streaming_encoding, encoder_queue_maxsize=0, encoder_threads=encoder_threads)
+                repo_id=self.repo_id,
+                fps=fps,
+                features=features,
+                root=self.staging,
+                robot_type=robot_type,
+                use_videos=use_videos,
+                vcodec=resolve_vcodec(vcodec) if use_videos else "libsvtav1",
+                image_writer_threads=image_writer_threads,
+                image_writer_processes=image_writer_processes,
+                streaming_encoding=streaming_encoding,
+                encoder_queue_maxsize=0,
+                encoder_threads=encoder_threads,
+            )
             atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
         except BaseException:
             self._lock.release()
@@ -202,8 +223,10 @@ class DatasetWriter:
         if self._finalized:
             raise RuntimeError(f"dataset {self.root} is finalized; no more episodes can be written")
         if self._broken is not None:
-            raise RuntimeError(f"dataset {self.root} stopped accepting episodes after an earlier failed save "
-                               f"({self._broken!r}); the episodes saved before it are intact")
+            raise RuntimeError(
+                f"dataset {self.root} stopped accepting episodes after an earlier failed save "
+                f"({self._broken!r}); the episodes saved before it are intact"
+            )
 
     def _save_and_publish(self, line: dict) -> None:
         from lerobot.utils.utils import SuppressProgressBars
@@ -228,13 +251,17 @@ class DatasetWriter:
                 raise RuntimeError(
                     f"video {path.relative_to(self.staging)} of episode {self.num_episodes} has {frames} frames "
                     f"but the episode has {length}: the video encoder lost frames, so the episode is not saved; "
-                    "set the recorder's params.streaming_encoding to false to encode after each episode instead")
+                    "set the recorder's params.streaming_encoding to false to encode after each episode instead"
+                )
 
     def _disk_full_error(self, err: BaseException) -> DiskFullError:
         n = self.num_episodes
-        return DiskFullError(errno.ENOSPC, f"no space left on device while saving episode {n} to {self.root} "
-                                           f"({err}); the {n} episode(s) saved before it are intact; free disk "
-                                           "space or choose another params.save_path")
+        return DiskFullError(
+            errno.ENOSPC,
+            f"no space left on device while saving episode {n} to {self.root} "
+            f"({err}); the {n} episode(s) saved before it are intact; free disk "
+            "space or choose another params.save_path",
+        )
 
     def _continue_in_new_files(self) -> None:
         """Close lerobot's writers; its next episode starts new files (lerobot's resume path)."""

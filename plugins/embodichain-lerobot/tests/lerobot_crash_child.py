@@ -76,8 +76,9 @@ def _files(info_path) -> int:
 def main(mode: str, save_path: str, func: str, camera: bool) -> None:
     _install_fault(mode)
     sensors = [stereo_camera(64, 48)] if camera and have_sensors() else []
-    env = __import__("lerobot_helpers").ScriptedEnv(arm_cfg(2, dataset=recorder_cfg(save_path, func=func),
-                                                            sensors=sensors, max_episode_steps=10_000))
+    env = __import__("lerobot_helpers").ScriptedEnv(
+        arm_cfg(2, dataset=recorder_cfg(save_path, func=func), sensors=sensors, max_episode_steps=10_000)
+    )
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
     saved, step = 0, 0

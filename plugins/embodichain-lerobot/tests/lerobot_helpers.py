@@ -37,34 +37,48 @@ class ScriptedEnv(EmbodiedEnv):
         return self.success_flags.clone(), self.fail_flags.clone(), {}
 
 
-def stereo_camera(width: int = 32, height: int = 24, uid: str = "head", depth: bool = True,
-                  mask: bool = True) -> Any:
+def stereo_camera(width: int = 32, height: int = 24, uid: str = "head", depth: bool = True, mask: bool = True) -> Any:
     """A stereo camera looking at the arm (needs embodichain-sensors)."""
     from embodichain_sensors.cfg import StereoCameraCfg
 
-    return StereoCameraCfg(uid=uid, width=width, height=height, enable_depth=depth, enable_mask=mask,
-                           intrinsics=(width, width, width / 2, height / 2),
-                           extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=(1.4, 0.0, 1.1), target=(0.2, 0.0, 0.3)))
+    return StereoCameraCfg(
+        uid=uid,
+        width=width,
+        height=height,
+        enable_depth=depth,
+        enable_mask=mask,
+        intrinsics=(width, width, width / 2, height / 2),
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=(1.4, 0.0, 1.1), target=(0.2, 0.0, 0.3)),
+    )
 
 
-def recorder_cfg(save_path: Any, func: str = "LeRobotRecorder", save_failed: bool = False,
-                 **params: Any) -> dict:
+def recorder_cfg(save_path: Any, func: str = "LeRobotRecorder", save_failed: bool = False, **params: Any) -> dict:
     """A ``dataset`` section with one recorder named ``rec``."""
-    base = {"save_path": str(save_path), "robot_meta": {"robot_type": "Arm7"},
-            "instruction": {"lang": TASK}, "extra": {"scene_type": "Table Top"}}
+    base = {
+        "save_path": str(save_path),
+        "robot_meta": {"robot_type": "Arm7"},
+        "instruction": {"lang": TASK},
+        "extra": {"scene_type": "Table Top"},
+    }
     return {"rec": DatasetFunctorCfg(func=func, params={**base, **params}, save_failed_episodes=save_failed)}
 
 
-def arm_cfg(num_envs: int = 1, dataset: Optional[dict] = None, sensors: Optional[list] = None,
-            **overrides: Any) -> EmbodiedEnvCfg:
+def arm_cfg(
+    num_envs: int = 1, dataset: Optional[dict] = None, sensors: Optional[list] = None, **overrides: Any
+) -> EmbodiedEnvCfg:
     """The 7-DoF arm (7 active joints) and a cube; 25 Hz control."""
     cfg = EmbodiedEnvCfg(
-        num_envs=num_envs, seed=0, verbose=False, max_episode_steps=40,
+        num_envs=num_envs,
+        seed=0,
+        verbose=False,
+        max_episode_steps=40,
         robot=RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf(), control_parts={"arm": ["joint[1-7]"]}),
         control_parts=["arm"],
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.5, 0, 0.05))],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="point", init_pos=(0.0, 0.0, 2.0))]),
-        sensor=list(sensors or []), dataset=dataset)
+        sensor=list(sensors or []),
+        dataset=dataset,
+    )
     for key, value in overrides.items():
         setattr(cfg, key, value)
     return cfg
@@ -151,4 +165,3 @@ def have_sensors() -> bool:
 
 def datasets_under(root: Any) -> list[Path]:
     return sorted(p for p in Path(root).iterdir() if p.is_dir())
-

@@ -55,8 +55,9 @@ class _Gate:
         monkeypatch.setattr(LeRobotRecorder, "_write_now", gated)
 
 
-def test_commits_do_not_wait_for_writing_and_finalize_drains(make_env: Any, tmp_path: Path,
-                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+def test_commits_do_not_wait_for_writing_and_finalize_drains(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     gate = _Gate(monkeypatch)
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
     rec = env.dataset_manager.get_functor("rec")
@@ -74,8 +75,9 @@ def test_commits_do_not_wait_for_writing_and_finalize_drains(make_env: Any, tmp_
         rec(env, torch.tensor([0]))
 
 
-def test_episodes_are_copies_unaffected_by_later_steps(make_env: Any, tmp_path: Path,
-                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+def test_episodes_are_copies_unaffected_by_later_steps(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     gate = _Gate(monkeypatch)
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
     obs = reset(env)
@@ -89,8 +91,9 @@ def test_episodes_are_copies_unaffected_by_later_steps(make_env: Any, tmp_path: 
     assert len(ds) == 2
 
 
-def test_worker_errors_surface_at_the_next_call_and_at_finalize(make_env: Any, tmp_path: Path,
-                                                                monkeypatch: pytest.MonkeyPatch) -> None:
+def test_worker_errors_surface_at_the_next_call_and_at_finalize(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     def broken(rec: Any, episode: Any) -> None:
         raise OSError("disk full")
 
@@ -109,8 +112,12 @@ def test_worker_errors_surface_at_the_next_call_and_at_finalize(make_env: Any, t
 
 
 def test_construction_only_params_are_accepted(make_env: Any, tmp_path: Path) -> None:
-    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", max_pending_episodes=2,
-                                                   image_writer_threads=2)))
+    env = make_env(
+        arm_cfg(
+            1,
+            dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", max_pending_episodes=2, image_writer_threads=2),
+        )
+    )
     rec = env.dataset_manager.get_functor("rec")
     assert rec.params.max_pending_episodes == 2
     assert rec.params.image_writer_threads == 2

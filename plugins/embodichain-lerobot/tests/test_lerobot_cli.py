@@ -40,21 +40,25 @@ def test_plugin_registers_the_recorders_and_the_command() -> None:
 
 
 def test_core_and_plugin_loading_import_no_lerobot() -> None:
-    code = ("import sys, embodichain_core.envs, embodichain_core.managers, embodichain_lerobot\n"
-            "from embodichain_core.plugins import load_plugins; load_plugins()\n"
-            "assert not [m for m in sys.modules if m.split('.')[0] == 'lerobot'], 'lerobot imported'\n")
+    code = (
+        "import sys, embodichain_core.envs, embodichain_core.managers, embodichain_lerobot\n"
+        "from embodichain_core.plugins import load_plugins; load_plugins()\n"
+        "assert not [m for m in sys.modules if m.split('.')[0] == 'lerobot'], 'lerobot imported'\n"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
 def test_building_an_env_with_a_recorder_imports_no_lerobot(tmp_path: Path) -> None:
-    code = ("import sys\n"
-            "from lerobot_helpers import ScriptedEnv, arm_cfg, recorder_cfg, reset, run_script\n"
-            f"env = ScriptedEnv(arm_cfg(1, dataset=recorder_cfg({str(tmp_path)!r})))\n"
-            "assert 'lerobot.datasets.lerobot_dataset' not in sys.modules, 'imported during the build'\n"
-            "reset(env)\n"
-            "run_script(env, [['s']])\n"
-            "assert env.dataset_manager.get_functor('rec').saved_episodes == 1\n"
-            "env.close()\n")
+    code = (
+        "import sys\n"
+        "from lerobot_helpers import ScriptedEnv, arm_cfg, recorder_cfg, reset, run_script\n"
+        f"env = ScriptedEnv(arm_cfg(1, dataset=recorder_cfg({str(tmp_path)!r})))\n"
+        "assert 'lerobot.datasets.lerobot_dataset' not in sys.modules, 'imported during the build'\n"
+        "reset(env)\n"
+        "run_script(env, [['s']])\n"
+        "assert env.dataset_manager.get_functor('rec').saved_episodes == 1\n"
+        "env.close()\n"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).parent)
 
 
@@ -98,10 +102,13 @@ def test_info_lists_at_most_20_episodes_without_the_flag(dataset: Path) -> None:
 
 
 @pytest.mark.parametrize("fmt", ["png", "mp4"])
-def test_preview_writes_cameras_and_a_state_action_plot(dataset: Path, tmp_path: Path, fmt: str,
-                                                        capsys: pytest.CaptureFixture) -> None:
-    assert embodichain(["dataset", "preview", str(dataset), "--episode", "1", "--out", str(tmp_path),
-                        "--format", fmt]) == 0
+def test_preview_writes_cameras_and_a_state_action_plot(
+    dataset: Path, tmp_path: Path, fmt: str, capsys: pytest.CaptureFixture
+) -> None:
+    assert (
+        embodichain(["dataset", "preview", str(dataset), "--episode", "1", "--out", str(tmp_path), "--format", fmt])
+        == 0
+    )
     written = [Path(line) for line in capsys.readouterr().out.split()]
     assert all(p.is_file() and p.stat().st_size > 0 for p in written)
     assert any(p.name.endswith("_ep001_state_action.png") for p in written)
@@ -112,8 +119,9 @@ def test_preview_writes_cameras_and_a_state_action_plot(dataset: Path, tmp_path:
             assert Image.open(cams).size[0] > 2 * 96  # the sampled frames side by side
 
 
-def test_plot_without_matplotlib_is_a_simple_png(dataset: Path, tmp_path: Path,
-                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+def test_plot_without_matplotlib_is_a_simple_png(
+    dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     from embodichain_lerobot.reading import load_dataset
 
@@ -121,13 +129,17 @@ def test_plot_without_matplotlib_is_a_simple_png(dataset: Path, tmp_path: Path,
     assert Image.open(path).size == (900, 520)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["preview", "{ds}", "--episode", "5"], "episode 5 is out of range: the dataset has 2 episode(s)"),
-    (["info", "{tmp}"], "is not a LeRobot dataset (no meta/info.json)"),
-    (["preview", "{tmp}", "--episode", "0"], "is not a LeRobot dataset"),
-])
-def test_errors_exit_2_with_a_message(dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
-                                      argv: list, message: str) -> None:
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["preview", "{ds}", "--episode", "5"], "episode 5 is out of range: the dataset has 2 episode(s)"),
+        (["info", "{tmp}"], "is not a LeRobot dataset (no meta/info.json)"),
+        (["preview", "{tmp}", "--episode", "0"], "is not a LeRobot dataset"),
+    ],
+)
+def test_errors_exit_2_with_a_message(
+    dataset: Path, tmp_path: Path, capsys: pytest.CaptureFixture, argv: list, message: str
+) -> None:
     argv = [a.format(ds=dataset, tmp=tmp_path) for a in argv]
     assert embodichain(["dataset", *argv]) == 2
     assert message in capsys.readouterr().err
@@ -146,4 +158,3 @@ def test_a_killed_recording_is_reported(dataset: Path, tmp_path: Path, capsys: p
     (copy / ".embodichain_staging").mkdir()
     assert embodichain(["dataset", "info", str(copy)]) == 0
     assert "the recording was not finalized" in capsys.readouterr().out
-

@@ -23,8 +23,12 @@ class Recording:
     """The child recording process (see ``lerobot_crash_child.py``)."""
 
     def __init__(self, mode: str, save_path: Path, func: str = "LeRobotRecorder", camera: bool = False):
-        self.proc = subprocess.Popen([sys.executable, str(CHILD), mode, str(save_path), func, str(int(camera))],
-                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        self.proc = subprocess.Popen(
+            [sys.executable, str(CHILD), mode, str(save_path), func, str(int(camera))],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
         self.committed = 0
 
     def wait_for(self, n: int, timeout: float = 120) -> None:
@@ -102,8 +106,9 @@ def test_ctrl_c_finalizes_with_every_committed_episode(tmp_path: Path) -> None:
     assert not (path / ".embodichain_staging").exists()
 
 
-def test_ctrl_c_during_a_save_lands_after_the_episode_is_saved(make_env, tmp_path: Path,
-                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+def test_ctrl_c_during_a_save_lands_after_the_episode_is_saved(
+    make_env, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from lerobot_helpers import arm_cfg, recorder_cfg, reset, run_script
 
     from embodichain_lerobot.writer import DatasetWriter
@@ -131,8 +136,8 @@ def test_ctrl_c_during_a_save_lands_after_the_episode_is_saved(make_env, tmp_pat
 
 @pytest.mark.parametrize("mode", ["die_in_create", "die_in_first_save", "die_in_first_publish"])
 def test_a_kill_before_the_first_episode_is_saved_leaves_an_incomplete_folder(
-        make_env, tmp_path: Path, mode: str, caplog: pytest.LogCaptureFixture,
-        capsys: pytest.CaptureFixture) -> None:
+    make_env, tmp_path: Path, mode: str, caplog: pytest.LogCaptureFixture, capsys: pytest.CaptureFixture
+) -> None:
     import logging
 
     from lerobot_helpers import arm_cfg, recorder_cfg, reset, run_script

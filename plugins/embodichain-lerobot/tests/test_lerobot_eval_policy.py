@@ -23,9 +23,20 @@ from embodichain_core.envs import EmbodiedEnv  # noqa: E402
 from embodichain_lerobot import eval_cli  # noqa: E402
 from embodichain_lerobot.policy_state import PerEnvPolicy  # noqa: E402
 
-TINY_ACT = dict(chunk_size=4, n_action_steps=3, dim_model=16, n_heads=2, dim_feedforward=32, n_encoder_layers=1,
-                n_decoder_layers=1, n_vae_encoder_layers=1, latent_dim=4, pretrained_backbone_weights=None,
-                device="cpu", push_to_hub=False)
+TINY_ACT = dict(
+    chunk_size=4,
+    n_action_steps=3,
+    dim_model=16,
+    n_heads=2,
+    dim_feedforward=32,
+    n_encoder_layers=1,
+    n_decoder_layers=1,
+    n_vae_encoder_layers=1,
+    latent_dim=4,
+    pretrained_backbone_weights=None,
+    device="cpu",
+    push_to_hub=False,
+)
 
 
 @pytest.fixture(autouse=True)
@@ -37,19 +48,40 @@ def one_torch_thread() -> Any:
     torch.set_num_threads(threads)
 
 
-def write_config(path: Path, task: str, save_path: Path, width: int = 16, height: int = 12,
-                 depth: bool = False) -> Path:
+def write_config(
+    path: Path, task: str, save_path: Path, width: int = 16, height: int = 12, depth: bool = False
+) -> Path:
     """2 envs, the arm and one small camera ``head``; a LeRobot recorder."""
-    dataset = {"lerobot": {"func": "LeRobotRecorder", "params": {
-        "save_path": str(save_path), "robot_meta": {"robot_type": "arm7"},
-        "instruction": {"lang": "reach forward"}, "extra": {"scene_type": "empty", "task_description": "reach"}}}}
-    camera = {"sensor_type": "Camera", "uid": "head", "width": width, "height": height,
-              "intrinsics": [width, width, width / 2, height / 2],
-              "extrinsics": {"eye": [1.4, 0.0, 1.1], "target": [0.2, 0.0, 0.3]}, "enable_depth": depth}
-    data = {"id": task, "num_envs": 2, "max_episode_steps": 6, "max_episodes": 3, "demo_max_attempts": 3,
-            "env": {"seed": 0, "verbose": False, "control_parts": ["arm"], "dataset": dataset},
-            "robot": {"uid": "arm", "mjcf": seven_dof_arm_mjcf(), "control_parts": {"arm": ["joint[1-7]"]}},
-            "sensor": [camera]}
+    dataset = {
+        "lerobot": {
+            "func": "LeRobotRecorder",
+            "params": {
+                "save_path": str(save_path),
+                "robot_meta": {"robot_type": "arm7"},
+                "instruction": {"lang": "reach forward"},
+                "extra": {"scene_type": "empty", "task_description": "reach"},
+            },
+        }
+    }
+    camera = {
+        "sensor_type": "Camera",
+        "uid": "head",
+        "width": width,
+        "height": height,
+        "intrinsics": [width, width, width / 2, height / 2],
+        "extrinsics": {"eye": [1.4, 0.0, 1.1], "target": [0.2, 0.0, 0.3]},
+        "enable_depth": depth,
+    }
+    data = {
+        "id": task,
+        "num_envs": 2,
+        "max_episode_steps": 6,
+        "max_episodes": 3,
+        "demo_max_attempts": 3,
+        "env": {"seed": 0, "verbose": False, "control_parts": ["arm"], "dataset": dataset},
+        "robot": {"uid": "arm", "mjcf": seven_dof_arm_mjcf(), "control_parts": {"arm": ["joint[1-7]"]}},
+        "sensor": [camera],
+    }
     path.write_text(json.dumps(data))
     return path
 
@@ -64,8 +96,17 @@ def train_act(dataset: Path, out: Path) -> Path:
 
     cfg = TrainPipelineConfig(
         dataset=DatasetConfig(repo_id=f"local/{dataset.name}", root=str(dataset), video_backend="pyav"),
-        policy=ACTConfig(**TINY_ACT), output_dir=out, steps=2, batch_size=2, save_freq=2, num_workers=0,
-        log_freq=1, eval_freq=0, seed=0, wandb=WandBConfig(enable=False))
+        policy=ACTConfig(**TINY_ACT),
+        output_dir=out,
+        steps=2,
+        batch_size=2,
+        save_freq=2,
+        num_workers=0,
+        log_freq=1,
+        eval_freq=0,
+        seed=0,
+        wandb=WandBConfig(enable=False),
+    )
     train(cfg)
     return out / "checkpoints" / "last" / "pretrained_model"
 
@@ -81,14 +122,31 @@ def trained(tmp_path: Path, task_id: str) -> tuple[Path, Path]:
     return config, train_act(dataset, root / "act")
 
 
-def test_eval_policy_runs_a_trained_act_end_to_end(trained: tuple[Path, Path], tmp_path: Path,
-                                                   capsys: pytest.CaptureFixture) -> None:
+def test_eval_policy_runs_a_trained_act_end_to_end(
+    trained: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     config, policy = trained
     assert sorted(p.name for p in policy.iterdir()) >= ["config.json", "model.safetensors"]
     out = tmp_path / "eval.json"
-    code = eval_cli.main(["--policy", str(policy.parents[2]), "--gym_config", str(config), "--episodes", "3",
-                          "--num_envs", "2", "--seed", "1", "--headless", "--json", str(out),
-                          "--video", str(tmp_path / "videos")])
+    code = eval_cli.main(
+        [
+            "--policy",
+            str(policy.parents[2]),
+            "--gym_config",
+            str(config),
+            "--episodes",
+            "3",
+            "--num_envs",
+            "2",
+            "--seed",
+            "1",
+            "--headless",
+            "--json",
+            str(out),
+            "--video",
+            str(tmp_path / "videos"),
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     report = json.loads(out.read_text())
     assert report["num_episodes"] == 3
@@ -112,9 +170,11 @@ def save_policy(path: Path, state: int = 7, camera: str = "head", image: tuple =
     from lerobot.policies.factory import make_pre_post_processors
 
     policy = tiny_act(inputs={"observation.state": (state,), f"observation.images.{camera}": image}, action=7)
-    stats = {"observation.state": {"mean": torch.zeros(state), "std": torch.ones(state)},
-             f"observation.images.{camera}": {"mean": torch.zeros(3, 1, 1), "std": torch.ones(3, 1, 1)},
-             "action": {"mean": torch.zeros(7), "std": torch.ones(7)}}
+    stats = {
+        "observation.state": {"mean": torch.zeros(state), "std": torch.ones(state)},
+        f"observation.images.{camera}": {"mean": torch.zeros(3, 1, 1), "std": torch.ones(3, 1, 1)},
+        "action": {"mean": torch.zeros(7), "std": torch.ones(7)},
+    }
     pre, post = make_pre_post_processors(policy.config, dataset_stats=stats)
     for part in (policy, pre, post):
         part.save_pretrained(path)
@@ -122,7 +182,8 @@ def save_policy(path: Path, state: int = 7, camera: str = "head", image: tuple =
 
 
 def test_a_policy_whose_inputs_the_env_lacks_is_one_error_listing_both(
-        task_id: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    task_id: str, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     config = write_config(tmp_path / "gen.json", task_id, tmp_path / "unused")
     bad = save_policy(tmp_path / "bad", state=9, camera="wrist")
     code = eval_cli.main(["--policy", str(bad), "--gym_config", str(config), "--episodes", "1", "--quiet"])
@@ -165,23 +226,64 @@ def test_results_per_episode_as_the_envs_finish_them(quick_win: str, tmp_path: P
     config = write_config(tmp_path / "win.json", quick_win, tmp_path / "unused")
     policy = save_policy(tmp_path / "policy")
     out = tmp_path / "eval.json"
-    assert eval_cli.main(["--policy", str(policy), "--gym_config", str(config), "--episodes", "3", "--quiet",
-                          "--max_steps", "4", "--json", str(out)]) == 0
+    assert (
+        eval_cli.main(
+            [
+                "--policy",
+                str(policy),
+                "--gym_config",
+                str(config),
+                "--episodes",
+                "3",
+                "--quiet",
+                "--max_steps",
+                "4",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     report = json.loads(out.read_text())
-    rows = [(e["episode"], e["env_id"], e["success"], e["length"], e["episode_return"], e["terminated"], e["truncated"])
-            for e in report["episodes"]]
+    rows = [
+        (e["episode"], e["env_id"], e["success"], e["length"], e["episode_return"], e["terminated"], e["truncated"])
+        for e in report["episodes"]
+    ]
     # env 0 finishes episode 0 at step 2 and starts episode 2; env 1 times out at step 4
-    assert rows == [(0, 0, True, 2, 2.0, True, False), (1, 1, False, 4, 4.0, False, True),
-                    (2, 0, True, 2, 2.0, True, False)]
+    assert rows == [
+        (0, 0, True, 2, 2.0, True, False),
+        (1, 1, False, 4, 4.0, False, True),
+        (2, 0, True, 2, 2.0, True, False),
+    ]
     assert report["success_rate"] == pytest.approx(2 / 3)
     assert report["mean_length"] == pytest.approx(8 / 3)
     assert report["mean_return"] == pytest.approx(8 / 3)
     assert report["env_steps"] == 8
-    assert eval_cli.main(["--policy", str(policy), "--gym_config", str(config), "--episodes", "1", "--quiet",
-                          "--num_envs", "4", "--json", str(out)]) == 0
+    assert (
+        eval_cli.main(
+            [
+                "--policy",
+                str(policy),
+                "--gym_config",
+                str(config),
+                "--episodes",
+                "1",
+                "--quiet",
+                "--num_envs",
+                "4",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert json.loads(out.read_text())["env_steps"] == 2  # --num_envs is at most --episodes
-    assert eval_cli.main(["--policy", str(policy), "--gym_config", str(config), "--episodes", "1", "--quiet",
-                          "--json", str(out)]) == 0
+    assert (
+        eval_cli.main(
+            ["--policy", str(policy), "--gym_config", str(config), "--episodes", "1", "--quiet", "--json", str(out)]
+        )
+        == 0
+    )
     assert json.loads(out.read_text())["env_steps"] == 2  # so is the config's num_envs (2)
 
 
@@ -200,7 +302,9 @@ def test_depth_inputs_follow_the_recorders_depth_format(task_id: str, tmp_path: 
     try:
         obs, _ = env.reset(seed=0)
         depth = obs["sensor"]["head"]["depth"]
-        image = SimpleNamespace(input_features={"observation.depth.head": PolicyFeature(FeatureType.VISUAL, (3, 12, 16))})
+        image = SimpleNamespace(
+            input_features={"observation.depth.head": PolicyFeature(FeatureType.VISUAL, (3, 12, 16))}
+        )
         mapped = ObservationMapper(obs, env.unwrapped, image, instruction="reach")(obs)
         assert mapped["task"] == ["reach", "reach"]
         packed = mapped["observation.depth.head"]
@@ -230,6 +334,7 @@ def test_a_folder_that_is_no_policy_is_a_config_error(tmp_path: Path, capsys: py
 
 # -- per-env policy state ----------------------------------------------------------------------------
 
+
 def tiny_act(inputs: Any = None, action: int = 3, **overrides: Any) -> Any:
     """A tiny ACT (random weights, no backbone download)."""
     from lerobot.configs.types import FeatureType, PolicyFeature
@@ -238,24 +343,32 @@ def tiny_act(inputs: Any = None, action: int = 3, **overrides: Any) -> Any:
 
     torch.manual_seed(0)
     inputs = inputs or {"observation.state": (5,), "observation.images.head": (3, 8, 8)}
-    features = {k: PolicyFeature(FeatureType.VISUAL if len(v) == 3 else FeatureType.STATE, tuple(v))
-                for k, v in inputs.items()}
+    features = {
+        k: PolicyFeature(FeatureType.VISUAL if len(v) == 3 else FeatureType.STATE, tuple(v)) for k, v in inputs.items()
+    }
     kwargs = {**TINY_ACT, "chunk_size": 6, "n_action_steps": 4, **overrides}
-    return ACTPolicy(ACTConfig(input_features=features, output_features={
-        "action": PolicyFeature(FeatureType.ACTION, (action,))}, **kwargs)).eval()
+    return ACTPolicy(
+        ACTConfig(
+            input_features=features, output_features={"action": PolicyFeature(FeatureType.ACTION, (action,))}, **kwargs
+        )
+    ).eval()
 
 
 def batch(t: int, n: int = 3) -> dict[str, torch.Tensor]:
     g = torch.Generator().manual_seed(t)
-    return {"observation.state": torch.randn(n, 5, generator=g),
-            "observation.images.head": torch.rand(n, 3, 8, 8, generator=g)}
+    return {
+        "observation.state": torch.randn(n, 5, generator=g),
+        "observation.images.head": torch.rand(n, 3, 8, 8, generator=g),
+    }
 
 
 # ACT's queue re-plans every 4 steps: env 1 (reset at step 2) stays off the others' beat. The
 # ensembler's state stops growing after chunk_size steps: then all envs batch together again.
-@pytest.mark.parametrize("overrides, groups", [
-    ({}, [[0, 2], [1]]), ({"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}, [[0, 1, 2]])],
-    ids=["action_queue", "temporal_ensemble"])
+@pytest.mark.parametrize(
+    "overrides, groups",
+    [({}, [[0, 2], [1]]), ({"n_action_steps": 1, "temporal_ensemble_coeff": 0.01}, [[0, 1, 2]])],
+    ids=["action_queue", "temporal_ensemble"],
+)
 def test_per_env_state_resets_one_env_and_keeps_the_others(overrides: dict, groups: list) -> None:
     policy = tiny_act(**overrides)
     together, alone = copy.deepcopy(policy), copy.deepcopy(policy)
@@ -282,17 +395,33 @@ def test_per_env_state_restarts_one_envs_observation_history() -> None:
     from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
 
     torch.manual_seed(0)
-    inputs = {"observation.state": PolicyFeature(FeatureType.STATE, (5,)),
-              "observation.images.head": PolicyFeature(FeatureType.VISUAL, (3, 32, 32))}
-    policy = DiffusionPolicy(DiffusionConfig(
-        input_features=inputs, output_features={"action": PolicyFeature(FeatureType.ACTION, (3,))}, device="cpu",
-        crop_shape=None, pretrained_backbone_weights=None, down_dims=(8, 16), num_inference_steps=2, n_obs_steps=2,
-        horizon=8, n_action_steps=4, diffusion_step_embed_dim=8, spatial_softmax_num_keypoints=4)).eval()
+    inputs = {
+        "observation.state": PolicyFeature(FeatureType.STATE, (5,)),
+        "observation.images.head": PolicyFeature(FeatureType.VISUAL, (3, 32, 32)),
+    }
+    policy = DiffusionPolicy(
+        DiffusionConfig(
+            input_features=inputs,
+            output_features={"action": PolicyFeature(FeatureType.ACTION, (3,))},
+            device="cpu",
+            crop_shape=None,
+            pretrained_backbone_weights=None,
+            down_dims=(8, 16),
+            num_inference_steps=2,
+            n_obs_steps=2,
+            horizon=8,
+            n_action_steps=4,
+            diffusion_step_embed_dim=8,
+            spatial_softmax_num_keypoints=4,
+        )
+    ).eval()
     runner = PerEnvPolicy(policy, 3)
 
     def obs(t: int) -> dict[str, torch.Tensor]:
-        return {"observation.state": torch.full((3, 5), float(t)),
-                "observation.images.head": torch.rand(3, 3, 32, 32, generator=torch.Generator().manual_seed(t))}
+        return {
+            "observation.state": torch.full((3, 5), float(t)),
+            "observation.images.head": torch.rand(3, 3, 32, 32, generator=torch.Generator().manual_seed(t)),
+        }
 
     def history(env: int) -> list[float]:
         return [float(row[0, 0]) for row in runner.state_of(env)["_queues"]["observation.state"]]

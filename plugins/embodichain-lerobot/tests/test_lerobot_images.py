@@ -26,13 +26,14 @@ from lerobot_helpers import (  # noqa: E402
     stereo_camera,
 )
 
-SCRIPTS = {1: [["."], ["s"], ["."], ["."], ["s"]],
-           3: [[".", ".", "."], ["s", ".", "f"], [".", "s", "."], [".", ".", "s"], ["s", ".", "."]]}
+SCRIPTS = {
+    1: [["."], ["s"], ["."], ["."], ["s"]],
+    3: [[".", ".", "."], ["s", ".", "f"], [".", "s", "."], [".", ".", "s"], ["s", ".", "."]],
+}
 
 
 def record(make_env: Any, tmp_path: Path, num_envs: int, width: int = 32, height: int = 24, **params: Any):
-    env = make_env(arm_cfg(num_envs, dataset=recorder_cfg(tmp_path, **params),
-                           sensors=[stereo_camera(width, height)]))
+    env = make_env(arm_cfg(num_envs, dataset=recorder_cfg(tmp_path, **params), sensors=[stereo_camera(width, height)]))
     log: list = []
     reset(env)
     run_script(env, SCRIPTS[num_envs], log)
@@ -49,8 +50,11 @@ def _hwc(value: Any) -> np.ndarray:
 def test_stereo_images_depth_and_masks_round_trip(make_env: Any, tmp_path: Path, num_envs: int) -> None:
     ds, expected = record(make_env, tmp_path, num_envs)
     f = ds.features
-    assert f["observation.images.head"] == {"dtype": "image", "shape": (24, 32, 3),
-                                            "names": ["height", "width", "channels"]}
+    assert f["observation.images.head"] == {
+        "dtype": "image",
+        "shape": (24, 32, 3),
+        "names": ["height", "width", "channels"],
+    }
     assert f["observation.images.head_right"]["shape"] == (24, 32, 3)
     assert f["observation.depth.head"]["dtype"] == "image"
     assert f["observation.depth.head"]["shape"] == (24, 32, 3)
@@ -86,8 +90,13 @@ def test_raw_depth_format_keeps_float_depth_and_int_masks(make_env: Any, tmp_pat
 def test_unsupported_camera_streams_are_skipped_with_a_warning(make_env: Any, tmp_path: Path) -> None:
     from embodichain_sensors.cfg import CameraCfg
 
-    cam = CameraCfg(uid="wrist", width=16, height=12, enable_normal=True,
-                    extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.0, 0.0, 1.0), target=(0.0, 0.0, 0.3)))
+    cam = CameraCfg(
+        uid="wrist",
+        width=16,
+        height=12,
+        enable_normal=True,
+        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.0, 0.0, 1.0), target=(0.0, 0.0, 0.3)),
+    )
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path), sensors=[cam]))
     with pytest.warns(RuntimeWarning, match="sensor/wrist/normal"):
         reset(env)

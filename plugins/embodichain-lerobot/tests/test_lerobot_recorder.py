@@ -31,8 +31,17 @@ from embodichain_core.managers import ObservationCfg
 
 SCRIPT_1 = [["."], ["."], ["."], ["s"], ["."], ["f"], ["."], ["."], ["s"], ["."], ["."]]
 SCRIPT_3 = [
-    [".", ".", "."], [".", "s", "."], ["s", ".", "."], [".", ".", "f"], [".", ".", "."],
-    [".", "s", "s"], ["f", ".", "."], [".", ".", "."], ["s", ".", "."], [".", ".", "s"], [".", ".", "."],
+    [".", ".", "."],
+    [".", "s", "."],
+    ["s", ".", "."],
+    [".", ".", "f"],
+    [".", ".", "."],
+    [".", "s", "s"],
+    ["f", ".", "."],
+    [".", ".", "."],
+    ["s", ".", "."],
+    [".", ".", "s"],
+    [".", ".", "."],
 ]
 
 
@@ -163,8 +172,10 @@ def _cube_pose(env: Any, obs: Any) -> torch.Tensor:
 
 
 def test_extra_observations_and_dict_actions_are_recorded(make_env: Any, tmp_path: Path) -> None:
-    observations = {"tag": ObservationCfg(func=_row_ids, mode="add", name="row_tag"),
-                    "pose": ObservationCfg(func=_cube_pose, mode="add", name="object/cube/pose")}
+    observations = {
+        "tag": ObservationCfg(func=_row_ids, mode="add", name="row_tag"),
+        "pose": ObservationCfg(func=_cube_pose, mode="add", name="object/cube/pose"),
+    }
     env = make_env(arm_cfg(2, dataset=recorder_cfg(tmp_path), observations=observations))
     reset(env)
     for t in range(3):

@@ -19,14 +19,15 @@ pytest.importorskip("embodichain_sensors")
 from lerobot_helpers import arm_cfg, datasets_under, recorder_cfg, reset, run_script, stereo_camera  # noqa: E402
 
 SCRIPT = [["."], ["."], ["."], ["s"], ["."], ["."], ["s"]]  # two episodes: 4 and 3 frames
-needs_ffmpeg = pytest.mark.skipif(ctypes.util.find_library("avcodec") is None,
-                                  reason="no FFmpeg shared libraries: scripts/setup_env.sh installs them")
+needs_ffmpeg = pytest.mark.skipif(
+    ctypes.util.find_library("avcodec") is None, reason="no FFmpeg shared libraries: scripts/setup_env.sh installs them"
+)
 
 
-def record(make_env: Any, tmp_path: Path, width: int = 64, height: int = 48, log: Any = None,
-           **params: Any) -> Path:
-    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, use_videos=True, **params),
-                           sensors=[stereo_camera(width, height)]))
+def record(make_env: Any, tmp_path: Path, width: int = 64, height: int = 48, log: Any = None, **params: Any) -> Path:
+    env = make_env(
+        arm_cfg(1, dataset=recorder_cfg(tmp_path, use_videos=True, **params), sensors=[stereo_camera(width, height)])
+    )
     reset(env)
     run_script(env, SCRIPT, log)
     env.close()
@@ -61,8 +62,9 @@ def test_streaming_off_encodes_after_the_episode(make_env: Any, tmp_path: Path) 
     assert ds[6]["observation.images.head_right"].shape == (3, 48, 64)
 
 
-def test_a_video_with_lost_frames_stops_the_recording(make_env: Any, tmp_path: Path,
-                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_video_with_lost_frames_stops_the_recording(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from lerobot.datasets.video_utils import StreamingVideoEncoder
 
     from embodichain_lerobot.reading import load_dataset
@@ -117,10 +119,22 @@ def test_lerobot_visualization_logs_an_episode(make_env: Any, tmp_path: Path) ->
 def test_lerobot_train_runs_act_on_a_fresh_recording(make_env: Any, tmp_path: Path) -> None:
     root = record(make_env, tmp_path / "data")
     train = Path(sys.executable).with_name("lerobot-train")
-    cmd = [str(train), f"--dataset.repo_id=local/{root.name}", f"--dataset.root={root}", "--policy.type=act",
-           "--policy.pretrained_backbone_weights=null", "--policy.device=cpu", "--policy.push_to_hub=false",
-           "--steps=2", "--batch_size=2", "--num_workers=0", "--save_checkpoint=false", "--wandb.enable=false",
-           "--log_freq=1", f"--output_dir={tmp_path / 'train'}"]
+    cmd = [
+        str(train),
+        f"--dataset.repo_id=local/{root.name}",
+        f"--dataset.root={root}",
+        "--policy.type=act",
+        "--policy.pretrained_backbone_weights=null",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--steps=2",
+        "--batch_size=2",
+        "--num_workers=0",
+        "--save_checkpoint=false",
+        "--wandb.enable=false",
+        "--log_freq=1",
+        f"--output_dir={tmp_path / 'train'}",
+    ]
     env = {**os.environ, "HF_HUB_OFFLINE": "1", "HF_DATASETS_OFFLINE": "1"}
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
@@ -147,11 +161,17 @@ def test_batched_image_embedding_writes_what_lerobot_writes(tmp_path: Path) -> N
     assert _embed_images_batched(plain) is plain  # nothing to embed: no map at all
 
 
-@pytest.mark.parametrize("params, message", [
-    ({"depth_format": "png"}, r"params\.depth_format: must be one of \('png16', 'raw'\), got 'png'\. Did you mean 'png16'\?"),
-    ({"streaming_encoding": "yes"}, r"params\.streaming_encoding: must be true or false, got 'yes'"),
-    ({"encoder_threads": -1}, r"params\.encoder_threads: must be an int >= 0, got -1"),
-])
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        (
+            {"depth_format": "png"},
+            r"params\.depth_format: must be one of \('png16', 'raw'\), got 'png'\. Did you mean 'png16'\?",
+        ),
+        ({"streaming_encoding": "yes"}, r"params\.streaming_encoding: must be true or false, got 'yes'"),
+        ({"encoder_threads": -1}, r"params\.encoder_threads: must be an int >= 0, got -1"),
+    ],
+)
 def test_bad_encoding_params_name_their_key(params: dict, message: str) -> None:
     from embodichain_core.config.errors import ConfigError
     from embodichain_lerobot.recorder import LeRobotRecorder

@@ -30,19 +30,34 @@ class DemoPush(EmbodiedEnv):
 
 
 def write_config(path: Path, task: str, save_path: Path, func: str) -> Path:
-    dataset = {"lerobot": {"func": func, "params": {
-        "save_path": str(save_path), "robot_meta": {"robot_type": "arm7"},
-        "instruction": {"lang": "reach forward"}, "extra": {"scene_type": "empty", "task_description": "reach"}}}}
-    data = {"id": task, "num_envs": 2, "max_episode_steps": 10, "max_episodes": 4, "demo_max_attempts": 3,
-            "env": {"seed": 0, "verbose": False, "control_parts": ["arm"], "dataset": dataset},
-            "robot": {"uid": "arm", "mjcf": seven_dof_arm_mjcf(), "control_parts": {"arm": ["joint[1-7]"]}}}
+    dataset = {
+        "lerobot": {
+            "func": func,
+            "params": {
+                "save_path": str(save_path),
+                "robot_meta": {"robot_type": "arm7"},
+                "instruction": {"lang": "reach forward"},
+                "extra": {"scene_type": "empty", "task_description": "reach"},
+            },
+        }
+    }
+    data = {
+        "id": task,
+        "num_envs": 2,
+        "max_episode_steps": 10,
+        "max_episodes": 4,
+        "demo_max_attempts": 3,
+        "env": {"seed": 0, "verbose": False, "control_parts": ["arm"], "dataset": dataset},
+        "robot": {"uid": "arm", "mjcf": seven_dof_arm_mjcf(), "control_parts": {"arm": ["joint[1-7]"]}},
+    }
     path.write_text(json.dumps(data))
     return path
 
 
 @pytest.mark.parametrize("func", ["LeRobotRecorder", "AsyncLeRobotRecorder"])
-def test_data_generation_records_the_successful_demos(tmp_path: Path, task_id: str, func: str,
-                                                      capsys: pytest.CaptureFixture) -> None:
+def test_data_generation_records_the_successful_demos(
+    tmp_path: Path, task_id: str, func: str, capsys: pytest.CaptureFixture
+) -> None:
     config = write_config(tmp_path / "gen.json", task_id, tmp_path / "data", func)
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 0
     out = capsys.readouterr().out

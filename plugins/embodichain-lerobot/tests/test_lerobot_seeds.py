@@ -55,9 +55,9 @@ def test_every_episode_records_its_seed(make_env: Callable, tmp_path: Path, caps
     assert [r["episode_seed"] for r in summary["episode_records"]] == summary["episode_seeds"]
 
 
-def test_an_env_without_episode_seeds_records_none(make_env: Callable, tmp_path: Path,
-                                                   monkeypatch: pytest.MonkeyPatch,
-                                                   capsys: pytest.CaptureFixture) -> None:
+def test_an_env_without_episode_seeds_records_none(
+    make_env: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
     monkeypatch.setattr(ScriptedEnv, "episode_seeds", None, raising=False)  # an env from before the seeds
     path, seen = record(make_env, tmp_path, [["s", "s"]])
     assert seen == []

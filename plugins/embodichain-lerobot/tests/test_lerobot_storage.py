@@ -51,8 +51,9 @@ def run(config: Path, capsys: pytest.CaptureFixture) -> tuple[int, str, str]:
     return code, captured.out, captured.err
 
 
-def test_a_read_only_dataset_folder_fails_before_the_build(tmp_path: Path, task_id: str, read_only_dir: Path,
-                                                           capsys: pytest.CaptureFixture) -> None:
+def test_a_read_only_dataset_folder_fails_before_the_build(
+    tmp_path: Path, task_id: str, read_only_dir: Path, capsys: pytest.CaptureFixture
+) -> None:
     save_path = read_only_dir / "datasets"
     code, out, err = run(write_config(tmp_path / "c.json", task_id, save_path, "LeRobotRecorder"), capsys)
     assert code == 2
@@ -63,9 +64,9 @@ def test_a_read_only_dataset_folder_fails_before_the_build(tmp_path: Path, task_
     assert list(read_only_dir.iterdir()) == []
 
 
-def test_too_little_free_space_fails_before_the_build(tmp_path: Path, task_id: str,
-                                                      monkeypatch: pytest.MonkeyPatch,
-                                                      capsys: pytest.CaptureFixture) -> None:
+def test_too_little_free_space_fails_before_the_build(
+    tmp_path: Path, task_id: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
     monkeypatch.setattr(storage, "free_mb", lambda path: 40.0)
     code, _, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", "LeRobotRecorder"), capsys)
     assert code == 2
@@ -99,9 +100,9 @@ def fail_third_save(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 @pytest.mark.parametrize("func", ["LeRobotRecorder", "AsyncLeRobotRecorder"])
-def test_a_disk_full_mid_run_keeps_the_saved_episodes(tmp_path: Path, task_id: str, func: str,
-                                                      monkeypatch: pytest.MonkeyPatch,
-                                                      capsys: pytest.CaptureFixture) -> None:
+def test_a_disk_full_mid_run_keeps_the_saved_episodes(
+    tmp_path: Path, task_id: str, func: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
     fail_third_save(monkeypatch)
     code, out, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", func), capsys)
     path = tmp_path / "data" / "arm7_empty_reach_000"
@@ -132,12 +133,16 @@ def full_while_adding_frames(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(LeRobotDataset, "add_frame", add_frame)
 
 
-@pytest.mark.parametrize("fault, message", [
-    ("low_space", "not enough disk space to save episode 2 .* 100 MB free"),
-    ("add_frame", "no space left on device while saving episode 2 .* the 2 episode.s. saved before it are intact"),
-])
-def test_a_full_disk_stops_between_episodes(make_env: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                            fault: str, message: str) -> None:
+@pytest.mark.parametrize(
+    "fault, message",
+    [
+        ("low_space", "not enough disk space to save episode 2 .* 100 MB free"),
+        ("add_frame", "no space left on device while saving episode 2 .* the 2 episode.s. saved before it are intact"),
+    ],
+)
+def test_a_full_disk_stops_between_episodes(
+    make_env: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fault: str, message: str
+) -> None:
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path)))
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
@@ -155,8 +160,9 @@ def test_a_full_disk_stops_between_episodes(make_env: Callable, tmp_path: Path, 
     assert load(path).num_episodes == 2
 
 
-def test_a_failed_publish_leaves_no_metadata_line_behind(make_env: Callable, tmp_path: Path,
-                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_failed_publish_leaves_no_metadata_line_behind(
+    make_env: Callable, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from embodichain_lerobot import writer
     from embodichain_lerobot.reading import dataset_summary, read_sidecar
 

@@ -28,24 +28,33 @@ EXIT_ERROR, EXIT_CONFIG, EXIT_INTERRUPTED = 1, 2, 130
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``generate`` argument parser."""
-    p = argparse.ArgumentParser(prog=PROG, description="Generate scripted demo episodes on Ray workers into "
-                                                       "one merged LeRobot dataset.")
+    p = argparse.ArgumentParser(
+        prog=PROG, description="Generate scripted demo episodes on Ray workers into one merged LeRobot dataset."
+    )
     p.add_argument("task", nargs="?", metavar="TASK_ID", help="gym task id (or a .json/.yaml config file)")
     p.add_argument("--gym_config", metavar="FILE", help="JSON/YAML gym config with a LeRobotRecorder")
     p.add_argument("--episodes", type=int, required=True, metavar="N", help="episodes to save")
     p.add_argument("--workers", type=int, default=1, metavar="W", help="Ray worker actors (default 1)")
     p.add_argument("--num_envs", type=int, default=1, metavar="K", help="parallel envs per worker (default 1)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="run seed: episode k uses derive_seed(S, k)")
-    p.add_argument("--output", metavar="DIR", help="merged dataset folder, must not exist "
-                                                   "(default outputs/generated/<task>_s<S>_n<N>)")
-    p.add_argument("--shards", metavar="DIR", help="shard folder (default <output>.shards; shared storage "
-                                                   "on a cluster)")
+    p.add_argument(
+        "--output",
+        metavar="DIR",
+        help="merged dataset folder, must not exist (default outputs/generated/<task>_s<S>_n<N>)",
+    )
+    p.add_argument(
+        "--shards", metavar="DIR", help="shard folder (default <output>.shards; shared storage on a cluster)"
+    )
     p.add_argument("--ray-address", dest="ray_address", metavar="ADDR", help="join this Ray cluster")
     p.add_argument("--max-restarts", dest="max_restarts", type=int, default=3, help="restarts per worker")
     p.add_argument("--keep-shards", dest="keep_shards", action="store_true", help="keep the shards after merging")
-    p.add_argument("--merge-only", dest="merge_only", action="store_true",
-                   help="start no worker: merge the episodes of this run (same config, --seed, --episodes) "
-                        "that --shards holds, e.g. after a failed merge")
+    p.add_argument(
+        "--merge-only",
+        dest="merge_only",
+        action="store_true",
+        help="start no worker: merge the episodes of this run (same config, --seed, --episodes) "
+        "that --shards holds, e.g. after a failed merge",
+    )
     p.add_argument("--headless", action="store_true", help="no viewer (workers are always headless)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
@@ -64,11 +73,21 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
     config = args.gym_config
     if config and Path(config).is_file():  # workers may start in another folder
         config = str(Path(config).absolute())
-    return GenerateSpec(task=args.task, gym_config=config, episodes=args.episodes,
-                        workers=args.workers, num_envs=args.num_envs, seed=args.seed,
-                        output=output.absolute(), shards=shards.absolute(), ray_address=args.ray_address,
-                        max_restarts=args.max_restarts, keep_shards=args.keep_shards, merge_only=args.merge_only,
-                        show_bar=not args.quiet and sys.stderr.isatty())
+    return GenerateSpec(
+        task=args.task,
+        gym_config=config,
+        episodes=args.episodes,
+        workers=args.workers,
+        num_envs=args.num_envs,
+        seed=args.seed,
+        output=output.absolute(),
+        shards=shards.absolute(),
+        ray_address=args.ray_address,
+        max_restarts=args.max_restarts,
+        keep_shards=args.keep_shards,
+        merge_only=args.merge_only,
+        show_bar=not args.quiet and sys.stderr.isatty(),
+    )
 
 
 def main(argv: Sequence[str] | None = None, on_start: Callable[[list], None] | None = None) -> int:

@@ -72,8 +72,14 @@ def init_ray(spec: GenerateSpec) -> None:
         ray.init(address=spec.ray_address, log_to_driver=False, logging_level=logging.ERROR)
         return
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a private instance: no token file in ~/.ray
-    ray.init(num_cpus=spec.workers, include_dashboard=False, object_store_memory=80 * 2**20,
-             log_to_driver=False, logging_level=logging.ERROR, configure_logging=True)
+    ray.init(
+        num_cpus=spec.workers,
+        include_dashboard=False,
+        object_store_memory=80 * 2**20,
+        log_to_driver=False,
+        logging_level=logging.ERROR,
+        configure_logging=True,
+    )
 
 
 def start_workers(spec: GenerateSpec) -> list:
@@ -86,8 +92,10 @@ def start_workers(spec: GenerateSpec) -> list:
 
     cpus = int(ray.cluster_resources().get("CPU", 0))
     if cpus < spec.workers:
-        raise RuntimeError(f"the Ray cluster has {cpus} CPU(s) for {spec.workers} worker(s) of 1 CPU each; "
-                           "lower --workers or add machines")
+        raise RuntimeError(
+            f"the Ray cluster has {cpus} CPU(s) for {spec.workers} worker(s) of 1 CPU each; "
+            "lower --workers or add machines"
+        )
 
     from embodichain_ray.worker import EpisodeWorker
 
@@ -135,8 +143,7 @@ class Scheduler:
                 elif not self.state.workers[worker].dead:
                     self._probe(worker)
             if not self.inflight and self.queue:
-                raise RuntimeError(f"every worker died ({self.state.error}); {len(self.queue)} episode(s) "
-                                   "were not run")
+                raise RuntimeError(f"every worker died ({self.state.error}); {len(self.queue)} episode(s) were not run")
 
     def _collect(self, ref: Any, worker: int, batch: list | None) -> bool:
         """Take a finished call's result; ``False`` when the worker is down (its batch re-queued)."""

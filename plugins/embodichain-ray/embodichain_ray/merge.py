@@ -56,8 +56,12 @@ def plain_nd_arrays() -> Any:
     import pyarrow as pa
     from datasets.features import features as hf
 
-    kinds = [hf.Array2DExtensionType((1, 2), "int64"), hf.Array3DExtensionType((1, 2, 3), "int64"),
-             hf.Array4DExtensionType((1, 2, 3, 4), "int64"), hf.Array5DExtensionType((1, 2, 3, 4, 5), "int64")]
+    kinds = [
+        hf.Array2DExtensionType((1, 2), "int64"),
+        hf.Array3DExtensionType((1, 2, 3), "int64"),
+        hf.Array4DExtensionType((1, 2, 3, 4), "int64"),
+        hf.Array5DExtensionType((1, 2, 3, 4, 5), "int64"),
+    ]
     removed = []
     for kind in kinds:
         try:
@@ -98,13 +102,16 @@ class EpisodeView:
         self.episodes = {key: [value] for key, value in row.items()}
         self.total_episodes, self.from_index = 1, int(row["dataset_from_index"])
         self.total_frames = int(row["dataset_to_index"]) - self.from_index
-        path = meta.root / DEFAULT_EPISODES_PATH.format(chunk_index=row["meta/episodes/chunk_index"],
-                                                        file_index=row["meta/episodes/file_index"])
+        path = meta.root / DEFAULT_EPISODES_PATH.format(
+            chunk_index=row["meta/episodes/chunk_index"], file_index=row["meta/episodes/file_index"]
+        )
         frame = pd.read_parquet(path)
         if len(frame) != 1:
-            raise ValueError(f"{path} holds {len(frame)} episodes; a one-episode view needs the recorder's "
-                             "one-file-per-episode layout")
-        stats = {k[len("stats/"):]: _array(v) for k, v in frame.iloc[0].items() if k.startswith("stats/")}
+            raise ValueError(
+                f"{path} holds {len(frame)} episodes; a one-episode view needs the recorder's "
+                "one-file-per-episode layout"
+            )
+        stats = {k[len("stats/") :]: _array(v) for k, v in frame.iloc[0].items() if k.startswith("stats/")}
         self.stats = unflatten_dict(stats)
 
 
@@ -116,9 +123,16 @@ def _new_destination(metas: Sequence[Any], root: Path, repo_id: str) -> Any:
 
     fps, robot_type, features = validate_all_metadata(list(metas))
     videos = [k for k in features if features[k]["dtype"] == "video"]
-    dst = LeRobotDatasetMetadata.create(repo_id=repo_id, fps=fps, robot_type=robot_type, features=features,
-                                        root=root, use_videos=bool(videos), data_files_size_in_mb=DATA_MB,
-                                        video_files_size_in_mb=VIDEO_MB)
+    dst = LeRobotDatasetMetadata.create(
+        repo_id=repo_id,
+        fps=fps,
+        robot_type=robot_type,
+        features=features,
+        root=root,
+        use_videos=bool(videos),
+        data_files_size_in_mb=DATA_MB,
+        video_files_size_in_mb=VIDEO_MB,
+    )
     tasks = pd.concat([m.tasks for m in metas]).index.unique()
     dst.tasks = pd.DataFrame({"task_index": range(len(tasks))}, index=tasks)
     dst.episodes = {}
@@ -133,8 +147,9 @@ def _next_files(data_idx: dict, meta_idx: dict, videos_idx: dict) -> None:
         idx["chunk"], idx["file"] = update_chunk_file_indices(idx["chunk"], idx["file"], DEFAULT_CHUNK_SIZE)
 
 
-def _merge_views(episodes: Sequence[ShardEpisode], root: Path, metas: dict[Path, tuple[Any, dict[int, int]]],
-                 per_file: int) -> None:
+def _merge_views(
+    episodes: Sequence[ShardEpisode], root: Path, metas: dict[Path, tuple[Any, dict[int, int]]], per_file: int
+) -> None:
     """Copy ``episodes`` (in order) into a new dataset at ``root`` with lerobot's aggregation steps."""
     from lerobot.datasets import aggregate as agg
     from lerobot.datasets.utils import DEFAULT_CHUNK_SIZE

@@ -83,8 +83,11 @@ def _check_demo(task_id: str) -> None:
     entry = gym.registry[task_id].entry_point
     creator = gym.envs.registration.load_env_creator(entry) if isinstance(entry, str) else entry
     if not callable(getattr(creator, "create_demo_action_list", None)):
-        raise ConfigError("id", f"task {task_id!r} has no scripted demo (create_demo_action_list): "
-                                "embodichain generate records scripted demos only")
+        raise ConfigError(
+            "id",
+            f"task {task_id!r} has no scripted demo (create_demo_action_list): "
+            "embodichain generate records scripted demos only",
+        )
 
 
 def _recorder(cfg: Any) -> tuple[str, Any]:
@@ -98,11 +101,17 @@ def _recorder(cfg: Any) -> tuple[str, Any]:
     others: list[tuple[str, Any]] = []
     for name, fcfg in iter_section(getattr(cfg, "dataset", None), DatasetFunctorCfg, "env.dataset"):
         func = resolve_func(fcfg.func, "dataset", f"env.dataset.{name}")
-        exact = inspect.isclass(func) and func.__module__ == LeRobotRecorder.__module__ and \
-            func.__name__ == LeRobotRecorder.__name__
+        exact = (
+            inspect.isclass(func)
+            and func.__module__ == LeRobotRecorder.__module__
+            and func.__name__ == LeRobotRecorder.__name__
+        )
         (found if exact else others).append((name, fcfg))
     if len(found) != 1 or others:
         names = ", ".join(n for n, _ in found + others) or "none"
-        raise ConfigError("env.dataset", f"embodichain generate needs exactly one dataset functor, a "
-                                         f"LeRobotRecorder (the workers record shards with it); found: {names}")
+        raise ConfigError(
+            "env.dataset",
+            f"embodichain generate needs exactly one dataset functor, a "
+            f"LeRobotRecorder (the workers record shards with it); found: {names}",
+        )
     return found[0]

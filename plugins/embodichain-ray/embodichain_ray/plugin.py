@@ -11,5 +11,8 @@ from embodichain_core.plugins import hookimpl
 @hookimpl
 def embodichain_register_commands(register: Any) -> None:
     """Register ``embodichain generate``."""
-    register("generate", "embodichain_ray.cli:main",
-             help="Generate N scripted episodes on Ray workers into one merged LeRobot dataset")
+    register(
+        "generate",
+        "embodichain_ray.cli:main",
+        help="Generate N scripted episodes on Ray workers into one merged LeRobot dataset",
+    )

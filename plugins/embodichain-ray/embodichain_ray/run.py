@@ -24,8 +24,7 @@ from embodichain_ray.plan import GeneratePlan
 from embodichain_ray.spec import GenerateSpec, seed_table
 
 
-def generate(spec: GenerateSpec, plan: GeneratePlan, prog: str,
-             on_start: Callable[[list], None] | None = None) -> int:
+def generate(spec: GenerateSpec, plan: GeneratePlan, prog: str, on_start: Callable[[list], None] | None = None) -> int:
     """Run the workers, merge their shards into ``spec.output`` and print the summary.
 
     Returns:
@@ -36,8 +35,9 @@ def generate(spec: GenerateSpec, plan: GeneratePlan, prog: str,
     return state.code
 
 
-def execute(spec: GenerateSpec, plan: GeneratePlan, prog: str,
-            on_start: Callable[[list], None] | None = None) -> RunState:
+def execute(
+    spec: GenerateSpec, plan: GeneratePlan, prog: str, on_start: Callable[[list], None] | None = None
+) -> RunState:
     """:func:`generate` without the summary: the run's :class:`RunState` (its ``code`` set).
 
     ``on_start(actors)`` is called once the worker actors exist (the tests kill one from it).
@@ -59,8 +59,9 @@ def execute(spec: GenerateSpec, plan: GeneratePlan, prog: str,
     return state
 
 
-def _run_workers(spec: GenerateSpec, plan: GeneratePlan, prog: str, state: RunState,
-                 on_start: Callable[[list], None] | None) -> int:
+def _run_workers(
+    spec: GenerateSpec, plan: GeneratePlan, prog: str, state: RunState, on_start: Callable[[list], None] | None
+) -> int:
     """Start Ray and the workers, run every episode, end the workers and Ray; the exit code so far."""
     import ray
     from tqdm import tqdm
@@ -116,15 +117,21 @@ def print_summary(spec: GenerateSpec, plan: GeneratePlan, state: RunState) -> No
     speed = state.env_steps / state.run_s if state.run_s > 0 else 0.0
     lines = [
         f"generate summary: {plan.run.task_id}",
-        (f"  episodes     {merged}/{spec.episodes} merged ({spec.workers} worker(s) x {spec.num_envs} env(s), "
-         f"seed {spec.seed})"),
-        (f"  env steps    {state.env_steps} ({speed:.1f} env-steps/s overall, {state.busy_steps_per_s:.1f} "
-         "while the workers ran)"),
+        (
+            f"  episodes     {merged}/{spec.episodes} merged ({spec.workers} worker(s) x {spec.num_envs} env(s), "
+            f"seed {spec.seed})"
+        ),
+        (
+            f"  env steps    {state.env_steps} ({speed:.1f} env-steps/s overall, {state.busy_steps_per_s:.1f} "
+            "while the workers ran)"
+        ),
         f"  wall time    {state.run_s + merge_s:.2f} s (workers {state.run_s:.2f} s, merge {merge_s:.2f} s)",
     ]
     if state.failed:
         shown = ", ".join(f"{k}" for k in sorted(state.failed)[:10])
-        lines.append(f"  failed       {len(state.failed)} episode(s) failed all {plan.max_attempts} attempt(s): {shown}")
+        lines.append(
+            f"  failed       {len(state.failed)} episode(s) failed all {plan.max_attempts} attempt(s): {shown}"
+        )
     lines.append("  worker  episodes  failures  env-steps/s  restarts")
     for w, ws in enumerate(state.workers):
         lines.append(f"  {w:>6}  {ws.episodes:>8}  {ws.failures:>8}  {ws.steps_per_s:>11.1f}  {ws.restarts:>8}")

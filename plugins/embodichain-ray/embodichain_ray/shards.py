@@ -111,8 +111,12 @@ def write_sidecars(output: Path, ordered: Iterable[ShardEpisode]) -> None:
     ordered = list(ordered)
     lines = []
     for p, ep in enumerate(ordered):
-        origin = {"episode": ep.episode, "attempt": ep.attempt, "shard": f"{ep.root.parent.name}/{ep.root.name}",
-                  "shard_episode_index": ep.index}
+        origin = {
+            "episode": ep.episode,
+            "attempt": ep.attempt,
+            "shard": f"{ep.root.parent.name}/{ep.root.name}",
+            "shard_episode_index": ep.index,
+        }
         lines.append(json.dumps({**ep.record, "lerobot_episode_index": p, "generate": origin}))
     (output / SIDECAR).write_text("".join(line + "\n" for line in lines), encoding="utf-8")
     roots = sorted({ep.root for ep in ordered})
@@ -120,8 +124,10 @@ def write_sidecars(output: Path, ordered: Iterable[ShardEpisode]) -> None:
     first = tables[0][1] if tables else None
     for root, table in tables:
         if table != first:
-            raise ValueError(f"shard {root} numbers its subtasks {table}, shard {roots[0]} {first}: "
-                             "their subtask_index columns would collide in the merge")
+            raise ValueError(
+                f"shard {root} numbers its subtasks {table}, shard {roots[0]} {first}: "
+                "their subtask_index columns would collide in the merge"
+            )
     if roots and (roots[0] / SUBTASKS).is_file():
         shutil.copyfile(roots[0] / SUBTASKS, output / SUBTASKS)
 

@@ -92,7 +92,7 @@ class EpisodeWorker:
         result = BatchResult(pid=os.getpid())
         pending = [(k, 0) for k in episodes]  # (episode, attempt), in order
         while pending:
-            slots, pending = pending[:self.num_envs], pending[self.num_envs:]
+            slots, pending = pending[: self.num_envs], pending[self.num_envs :]
             success = self._round(slots, result)
             retry = []
             for (k, a), ok in zip(slots, success):

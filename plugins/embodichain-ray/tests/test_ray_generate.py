@@ -21,8 +21,20 @@ from embodichain_core.cli import run_env
 
 
 def _generate(config: str, out: Path, workers: int, *extra: str, **kw: Any) -> int:
-    argv = ["--gym_config", config, "--episodes", "6", "--workers", str(workers), "--seed", "3",
-            "--output", str(out), "--quiet", *extra]
+    argv = [
+        "--gym_config",
+        config,
+        "--episodes",
+        "6",
+        "--workers",
+        str(workers),
+        "--seed",
+        "3",
+        "--output",
+        str(out),
+        "--quiet",
+        *extra,
+    ]
     return cli.main(argv, **kw)
 
 
@@ -35,8 +47,9 @@ def test_the_command_is_registered() -> None:
     assert entry.target == "embodichain_ray.cli:main"
 
 
-def test_two_workers_merge_six_loadable_episodes_in_episode_order(tmp_path: Path, tiny_config: Any,
-                                                                 capsys: Any) -> None:
+def test_two_workers_merge_six_loadable_episodes_in_episode_order(
+    tmp_path: Path, tiny_config: Any, capsys: Any
+) -> None:
     out = tmp_path / "merged"
     assert _generate(tiny_config(), out, 2) == 0
     summary = capsys.readouterr().out
@@ -53,8 +66,9 @@ def test_two_workers_merge_six_loadable_episodes_in_episode_order(tmp_path: Path
     assert not out.with_name(out.name + ".shards").exists()  # merged: the shards are removed
 
 
-def test_an_invalid_config_fails_like_run_env_before_any_worker_starts(tmp_path: Path, tiny_config: Any,
-                                                                      capsys: Any) -> None:
+def test_an_invalid_config_fails_like_run_env_before_any_worker_starts(
+    tmp_path: Path, tiny_config: Any, capsys: Any
+) -> None:
     import ray
 
     data = json.loads(Path(tiny_config()).read_text())
@@ -119,8 +133,9 @@ def _kill_after_first_episode(shards: Path, killed: list) -> Any:
 
 
 @pytest.mark.slow
-def test_a_worker_killed_mid_run_still_yields_six_loadable_episodes(tmp_path: Path, tiny_config: Any,
-                                                                    capsys: Any) -> None:
+def test_a_worker_killed_mid_run_still_yields_six_loadable_episodes(
+    tmp_path: Path, tiny_config: Any, capsys: Any
+) -> None:
     out, killed = tmp_path / "merged", []
     shards = out.with_name("merged.shards")
     hook = _kill_after_first_episode(shards, killed)

@@ -17,8 +17,16 @@ from embodichain_core.envs.episode_rng import derive_seed
 
 
 def _spec(tmp_path: Path, config: str, **kw: Any) -> GenerateSpec:
-    base = {"task": None, "gym_config": config, "episodes": 6, "workers": 1, "num_envs": 1, "seed": 7,
-            "output": tmp_path / "out", "shards": tmp_path / "shards"}
+    base = {
+        "task": None,
+        "gym_config": config,
+        "episodes": 6,
+        "workers": 1,
+        "num_envs": 1,
+        "seed": 7,
+        "output": tmp_path / "out",
+        "shards": tmp_path / "shards",
+    }
     return GenerateSpec(**{**base, **kw})
 
 
@@ -102,12 +110,14 @@ def test_the_merge_starts_new_files_every_per_file_episodes(tmp_path: Path, tiny
     for i in (0, 15, 29):  # frames of episodes 0, 1 (a new file) and 2
         for key in ("observation.state", "action", "episode_index", "index"):
             assert np.array_equal(a[i][key].numpy(), b[i][key].numpy()), (i, key)
-        assert np.allclose(a[i]["observation.images.eye_in_head"].numpy(),
-                           b[i]["observation.images.eye_in_head"].numpy(), atol=1e-6)
+        assert np.allclose(
+            a[i]["observation.images.eye_in_head"].numpy(), b[i]["observation.images.eye_in_head"].numpy(), atol=1e-6
+        )
 
 
-def test_merge_only_merges_what_the_shards_hold_without_starting_ray(tmp_path: Path, tiny_config: Any,
-                                                                     capsys: Any) -> None:
+def test_merge_only_merges_what_the_shards_hold_without_starting_ray(
+    tmp_path: Path, tiny_config: Any, capsys: Any
+) -> None:
     import sys
 
     from embodichain_ray import cli

@@ -15,8 +15,12 @@ __all__ = ["RslRlVecEnv", "Sb3VecEnv", "SingleEnvView", "ObsFlattener"]
 
 
 def __getattr__(name: str):  # noqa: ANN202 - module-level lazy import
-    modules = {"RslRlVecEnv": "rsl_rl_env", "Sb3VecEnv": "sb3_env", "SingleEnvView": "single_env",
-               "ObsFlattener": "flatten"}
+    modules = {
+        "RslRlVecEnv": "rsl_rl_env",
+        "Sb3VecEnv": "sb3_env",
+        "SingleEnvView": "single_env",
+        "ObsFlattener": "flatten",
+    }
     if name not in modules:
         raise AttributeError(f"module 'embodichain_rl' has no attribute {name!r}")
     import importlib

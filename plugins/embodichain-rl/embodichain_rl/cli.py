@@ -25,8 +25,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, default=0, help="env and torch seed (default 0)")
     parser.add_argument("--out", default="outputs/train_rl", help="output directory (default outputs/train_rl)")
     parser.add_argument("--max_episode_steps", type=int, default=0, help="episode limit; 0 keeps the task's")
-    parser.add_argument("--play", metavar="CHECKPOINT", help="run this checkpoint (model_*.pt or *.zip) instead "
-                                                            "of training, and write an mp4")
+    parser.add_argument(
+        "--play",
+        metavar="CHECKPOINT",
+        help="run this checkpoint (model_*.pt or *.zip) instead of training, and write an mp4",
+    )
     parser.add_argument("--video", help="mp4 path for --play (default: play.mp4 next to the checkpoint)")
     parser.add_argument("--episodes", type=int, default=1, help="episodes for --play (default 1)")
     return parser
@@ -50,8 +53,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         from embodichain_rl import train_rsl_rl as trainer
     else:
         from embodichain_rl import train_sb3 as trainer  # type: ignore[no-redef]
-    checkpoint = trainer.train(args.task, args.num_envs, args.steps, args.seed, out,
-                               max_episode_steps=args.max_episode_steps)
-    print(f"checkpoint: {checkpoint}; curve: {out / 'curve.csv'}; "
-          f"play it: embodichain train-rl --play {checkpoint}")
+    checkpoint = trainer.train(
+        args.task, args.num_envs, args.steps, args.seed, out, max_episode_steps=args.max_episode_steps
+    )
+    print(f"checkpoint: {checkpoint}; curve: {out / 'curve.csv'}; play it: embodichain train-rl --play {checkpoint}")
     return 0

@@ -37,12 +37,23 @@ def _video_camera(width: int, height: int) -> Any:
     from embodichain_sensors import CameraCfg
 
     focal = 0.9 * width
-    return CameraCfg(uid=VIDEO_CAMERA, width=width, height=height, intrinsics=(focal, focal, width / 2, height / 2),
-                     extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.25, 0.75, 1.05), target=(0.45, 0.0, 0.42)))
+    return CameraCfg(
+        uid=VIDEO_CAMERA,
+        width=width,
+        height=height,
+        intrinsics=(focal, focal, width / 2, height / 2),
+        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.25, 0.75, 1.05), target=(0.45, 0.0, 0.42)),
+    )
 
 
-def make_env(task_id: str, num_envs: int, seed: int | None = 0, max_episode_steps: int = 0,
-             video: bool = False, video_size: tuple[int, int] = (320, 240)) -> Any:
+def make_env(
+    task_id: str,
+    num_envs: int,
+    seed: int | None = 0,
+    max_episode_steps: int = 0,
+    video: bool = False,
+    video_size: tuple[int, int] = (320, 240),
+) -> Any:
     """The unwrapped batched env of ``task_id``.
 
     Args:

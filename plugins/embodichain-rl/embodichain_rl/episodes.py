@@ -53,8 +53,9 @@ class EpisodeTracker:
         self.lengths += 1
         if done.any():
             success = final_success(info, done).cpu()
-            self._done.append((self.returns[done].numpy().copy(), self.lengths[done].numpy().copy(),
-                               success[done].numpy().copy()))
+            self._done.append(
+                (self.returns[done].numpy().copy(), self.lengths[done].numpy().copy(), success[done].numpy().copy())
+            )
             self.returns[done] = 0.0
             self.lengths[done] = 0
 

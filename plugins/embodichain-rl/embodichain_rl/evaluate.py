@@ -26,8 +26,7 @@ def evaluate(checkpoint: Path, num_envs: int = 64, seed: int = 1000, determinist
     from training's by default; ``deterministic``: the mean action, else sampled actions as
     in training)."""
     meta = read_meta(checkpoint)
-    adapter, act = policy_and_env(checkpoint, meta, seed, num_envs=num_envs, video=False,
-                                  deterministic=deterministic)
+    adapter, act = policy_and_env(checkpoint, meta, seed, num_envs=num_envs, video=False, deterministic=deterministic)
     env = adapter.env
     obs, _ = env.reset(seed=seed)
     finished = torch.zeros(num_envs, dtype=torch.bool)
@@ -40,5 +39,4 @@ def evaluate(checkpoint: Path, num_envs: int = 64, seed: int = 1000, determinist
             success |= final_success(info, done) & done
             finished |= done
     adapter.close()
-    return {"episodes": num_envs, "success_rate": float(success.float().mean()),
-            "mean_return": float(returns.mean())}
+    return {"episodes": num_envs, "success_rate": float(success.float().mean()), "mean_return": float(returns.mean())}

@@ -52,8 +52,9 @@ def _walk(space: gym.Space, prefix: str = "") -> list[tuple[str, gym.spaces.Box]
             out += _walk(space.spaces[key], f"{prefix}{key}/")
         return out
     if not isinstance(space, gym.spaces.Box):
-        raise TypeError(f"observation {prefix.rstrip('/')!r}: only Box and Dict spaces can be flattened, "
-                        f"got {type(space).__name__}")
+        raise TypeError(
+            f"observation {prefix.rstrip('/')!r}: only Box and Dict spaces can be flattened, got {type(space).__name__}"
+        )
     return [(prefix.rstrip("/"), space)]
 
 
@@ -91,13 +92,21 @@ class ObsFlattener:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "ObsFlattener":
         """Rebuild a layout written by :meth:`to_dict`."""
-        return cls(list(data["state_paths"]), [int(n) for n in data["state_sizes"]], list(data.get("image_paths", [])),
-                   [tuple(s) for s in data.get("image_shapes", [])])
+        return cls(
+            list(data["state_paths"]),
+            [int(n) for n in data["state_sizes"]],
+            list(data.get("image_paths", [])),
+            [tuple(s) for s in data.get("image_shapes", [])],
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-friendly copy of the layout."""
-        return {"state_paths": list(self.state_paths), "state_sizes": list(self.state_sizes),
-                "image_paths": list(self.image_paths), "image_shapes": [list(s) for s in self.image_shapes]}
+        return {
+            "state_paths": list(self.state_paths),
+            "state_sizes": list(self.state_sizes),
+            "image_paths": list(self.image_paths),
+            "image_shapes": [list(s) for s in self.image_shapes],
+        }
 
     @property
     def state_dim(self) -> int:

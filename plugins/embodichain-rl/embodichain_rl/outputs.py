@@ -52,8 +52,10 @@ def read_meta(checkpoint: Path) -> dict[str, Any]:
     for folder in [checkpoint.parent, *checkpoint.parent.parents][:3]:
         if (folder / META_FILE).is_file():
             return json.loads((folder / META_FILE).read_text(encoding="utf-8"))
-    raise FileNotFoundError(f"{checkpoint}: no {META_FILE} in its directory or the two above it; "
-                            "pass a checkpoint written by 'embodichain train-rl'")
+    raise FileNotFoundError(
+        f"{checkpoint}: no {META_FILE} in its directory or the two above it; "
+        "pass a checkpoint written by 'embodichain train-rl'"
+    )
 
 
 def write_mp4(frames: Sequence[np.ndarray], fps: float, path: Path) -> Path:
@@ -87,7 +89,15 @@ def plot_curve(csv_path: Path, png_path: Path, title: str) -> Path | None:
     rate = np.array([float(r["success_rate"]) for r in rows])
     episodes = np.array([float(r["episodes"]) for r in rows])
     kernel = np.ones(max(1, len(rate) // 15))
-    smooth = np.convolve(rate * episodes, kernel)[:len(rate)] / np.convolve(episodes, kernel)[:len(rate)]
-    png_path.write_bytes(line_plot_png([steps, steps], [rate, smooth], title=title, xlabel="env steps",
-                                       ylabel="success rate", labels=["per iteration", "smoothed"]))
+    smooth = np.convolve(rate * episodes, kernel)[: len(rate)] / np.convolve(episodes, kernel)[: len(rate)]
+    png_path.write_bytes(
+        line_plot_png(
+            [steps, steps],
+            [rate, smooth],
+            title=title,
+            xlabel="env steps",
+            ylabel="success rate",
+            labels=["per iteration", "smoothed"],
+        )
+    )
     return png_path

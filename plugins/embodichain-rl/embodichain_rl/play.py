@@ -23,8 +23,9 @@ def _frame(obs: Any) -> np.ndarray:
     return obs["sensor"][VIDEO_CAMERA]["color"][0].cpu().numpy()
 
 
-def policy_and_env(checkpoint: Path, meta: dict[str, Any], seed: int, num_envs: int = 1, video: bool = True,
-                   deterministic: bool = True) -> tuple[Any, Callable[[Any], torch.Tensor]]:
+def policy_and_env(
+    checkpoint: Path, meta: dict[str, Any], seed: int, num_envs: int = 1, video: bool = True, deterministic: bool = True
+) -> tuple[Any, Callable[[Any], torch.Tensor]]:
     """The adapter (``num_envs`` envs, a video camera with ``video``) and
     ``act(raw_obs) -> (num_envs, A)``: the checkpoint's policy, its mean action (``deterministic``)
     or a sample of its action distribution, clipped to the action space as in training."""
@@ -43,8 +44,9 @@ def policy_and_env(checkpoint: Path, meta: dict[str, Any], seed: int, num_envs: 
     raise ValueError(f"unknown library {meta['library']!r} in the run metadata (rsl_rl or sb3)")
 
 
-def play(checkpoint: Path, video: Path, episodes: int = 1, seed: int = 0,
-         log: Callable[[str], None] = print) -> dict[str, Any]:
+def play(
+    checkpoint: Path, video: Path, episodes: int = 1, seed: int = 0, log: Callable[[str], None] = print
+) -> dict[str, Any]:
     """Run ``episodes`` episodes of the checkpoint's policy; write ``video``.
 
     Returns:

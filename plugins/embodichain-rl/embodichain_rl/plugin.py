@@ -11,5 +11,8 @@ from embodichain_core.plugins import hookimpl
 @hookimpl
 def embodichain_register_commands(register: Any) -> None:
     """Register ``embodichain train-rl``."""
-    register("train-rl", "embodichain_rl.cli:main",
-             help="Train a task with rsl_rl or Stable-Baselines3 PPO; --play CHECKPOINT writes an mp4")
+    register(
+        "train-rl",
+        "embodichain_rl.cli:main",
+        help="Train a task with rsl_rl or Stable-Baselines3 PPO; --play CHECKPOINT writes an mp4",
+    )

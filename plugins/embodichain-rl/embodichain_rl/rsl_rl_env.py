@@ -55,8 +55,14 @@ class RslRlVecEnv(VecEnv):
             gives one call per iteration).
     """
 
-    def __init__(self, env: Any, clip_actions: float | None = None, flattener: ObsFlattener | None = None,
-                 on_stats: Callable[[int, EpisodeStats], None] | None = None, stats_every: int = 0):
+    def __init__(
+        self,
+        env: Any,
+        clip_actions: float | None = None,
+        flattener: ObsFlattener | None = None,
+        on_stats: Callable[[int, EpisodeStats], None] | None = None,
+        stats_every: int = 0,
+    ):
         self.env = env.unwrapped
         self.num_envs = int(self.env.num_envs)
         self.device = self.env.device
@@ -102,8 +108,10 @@ class RslRlVecEnv(VecEnv):
         if self.on_stats is not None and self.stats_every > 0 and self.steps % self.stats_every == 0:
             self.on_stats(self.steps * self.num_envs, self.episodes.pop())
         self._obs = self.to_tensordict(obs)
-        extras = {"time_outs": truncated & ~terminated,
-                  "log": {"/success": torch.as_tensor(info["success"]).float().mean()}}
+        extras = {
+            "time_outs": truncated & ~terminated,
+            "log": {"/success": torch.as_tensor(info["success"]).float().mean()},
+        }
         return self._obs, reward, (terminated | truncated).long(), extras
 
     def clip(self, actions: torch.Tensor) -> torch.Tensor:

@@ -96,8 +96,9 @@ class Sb3VecEnv(VecEnv):
         infos = self._infos(info, done, truncated & ~terminated, reward_t)
         return self.to_sb3(obs), reward_t.numpy(), done.numpy(), infos
 
-    def _infos(self, info: dict[str, Any], done: torch.Tensor, time_out: torch.Tensor,
-               reward: torch.Tensor) -> list[dict[str, Any]]:
+    def _infos(
+        self, info: dict[str, Any], done: torch.Tensor, time_out: torch.Tensor, reward: torch.Tensor
+    ) -> list[dict[str, Any]]:
         """One dict per env; only finished envs get entries."""
         returns, lengths = self.episodes.returns + reward.double(), self.episodes.lengths + 1
         self.episodes.add(reward, done, info)
@@ -108,10 +109,17 @@ class Sb3VecEnv(VecEnv):
         final = self.to_sb3(info["final_obs"]) if "final_obs" in info else None
         success = final_success(info, done)
         for i in ids:  # the finished envs only
-            terminal = None if final is None else (
-                {k: v[i] for k, v in final.items()} if isinstance(final, dict) else final[i])
-            infos[i] = {"terminal_observation": terminal, "TimeLimit.truncated": bool(time_out[i]),
-                        "episode": {"r": float(returns[i]), "l": int(lengths[i])}, "is_success": bool(success[i])}
+            terminal = (
+                None
+                if final is None
+                else ({k: v[i] for k, v in final.items()} if isinstance(final, dict) else final[i])
+            )
+            infos[i] = {
+                "terminal_observation": terminal,
+                "TimeLimit.truncated": bool(time_out[i]),
+                "episode": {"r": float(returns[i]), "l": int(lengths[i])},
+                "is_success": bool(success[i]),
+            }
         return infos
 
     def close(self) -> None:
@@ -129,8 +137,9 @@ class Sb3VecEnv(VecEnv):
             raise ValueError(f"set_attr({attr_name!r}) must target every env: the batch is one env object")
         setattr(self.env, attr_name, value)
 
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
-                   **method_kwargs: Any) -> list[Any]:
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any
+    ) -> list[Any]:
         """Call a method of the env once; its result is repeated per requested env."""
         result = getattr(self.env, method_name)(*method_args, **method_kwargs)
         return [result for _ in self._get_indices(indices)]

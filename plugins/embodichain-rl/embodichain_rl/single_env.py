@@ -43,8 +43,9 @@ class SingleEnvView(gym.Env):
             raise ValueError(f"SingleEnvView needs an env with num_envs=1, got num_envs={self.env.num_envs}")
         self.flattener = flattener or ObsFlattener.from_space(self.env.single_observation_space)
         space = self.env.single_action_space
-        self.action_space = gym.spaces.Box(space.low.astype(np.float32), space.high.astype(np.float32),
-                                           dtype=np.float32)
+        self.action_space = gym.spaces.Box(
+            space.low.astype(np.float32), space.high.astype(np.float32), dtype=np.float32
+        )
         self.observation_space = self._observation_space()
         self.metadata = {"render_modes": [], "render_fps": self.env.metadata.get("render_fps", 25)}
         self.render_mode = None
@@ -81,9 +82,13 @@ class SingleEnvView(gym.Env):
             obs = info["final_obs"]
         source = info.get("final_info", info) if done else info
         out_info = {"success": bool(torch.as_tensor(source["success"]).reshape(-1)[0])}
-        return (self._obs(obs), float(torch.as_tensor(reward).reshape(-1)[0]),
-                bool(torch.as_tensor(terminated).reshape(-1)[0]), bool(torch.as_tensor(truncated).reshape(-1)[0]),
-                out_info)
+        return (
+            self._obs(obs),
+            float(torch.as_tensor(reward).reshape(-1)[0]),
+            bool(torch.as_tensor(terminated).reshape(-1)[0]),
+            bool(torch.as_tensor(truncated).reshape(-1)[0]),
+            out_info,
+        )
 
     def close(self) -> None:
         """Close the env."""

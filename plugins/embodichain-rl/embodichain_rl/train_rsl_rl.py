@@ -30,20 +30,43 @@ def default_train_cfg(num_steps_per_env: int = 24, save_interval: int = 50) -> d
     normalization, a scalar Gaussian std, both reading the ``"policy"`` group."""
     mlp = {"class_name": "MLPModel", "hidden_dims": [256, 256, 256], "activation": "elu", "obs_normalization": True}
     return {
-        "num_steps_per_env": num_steps_per_env, "save_interval": save_interval,
+        "num_steps_per_env": num_steps_per_env,
+        "save_interval": save_interval,
         "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
-        "algorithm": {"class_name": "PPO", "num_learning_epochs": 5, "num_mini_batches": 4, "learning_rate": 1e-3,
-                      "schedule": "adaptive", "desired_kl": 0.01, "gamma": 0.97, "lam": 0.95, "entropy_coef": 0.005,
-                      "clip_param": 0.2, "max_grad_norm": 1.0, "value_loss_coef": 1.0},
-        "actor": {**mlp, "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0,
-                                              "std_type": "scalar"}},
+        "algorithm": {
+            "class_name": "PPO",
+            "num_learning_epochs": 5,
+            "num_mini_batches": 4,
+            "learning_rate": 1e-3,
+            "schedule": "adaptive",
+            "desired_kl": 0.01,
+            "gamma": 0.97,
+            "lam": 0.95,
+            "entropy_coef": 0.005,
+            "clip_param": 0.2,
+            "max_grad_norm": 1.0,
+            "value_loss_coef": 1.0,
+        },
+        "actor": {
+            **mlp,
+            "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0, "std_type": "scalar"},
+        },
         "critic": copy.deepcopy(mlp),
         "logger": "tensorboard",
     }
 
 
-def train(task: str, num_envs: int, steps: int, seed: int, out: Path, max_episode_steps: int = 0,
-          train_cfg: dict[str, Any] | None = None, threads: int = 1, log: Callable[[str], None] = print) -> Path:
+def train(
+    task: str,
+    num_envs: int,
+    steps: int,
+    seed: int,
+    out: Path,
+    max_episode_steps: int = 0,
+    train_cfg: dict[str, Any] | None = None,
+    threads: int = 1,
+    log: Callable[[str], None] = print,
+) -> Path:
     """Train for at least ``steps`` env steps (all envs); return the last checkpoint.
 
     Args:
@@ -72,8 +95,16 @@ def train(task: str, num_envs: int, steps: int, seed: int, out: Path, max_episod
 
     env = make_env(task, num_envs, seed=seed, max_episode_steps=max_episode_steps)
     vec = RslRlVecEnv(env, on_stats=on_stats, stats_every=cfg["num_steps_per_env"])
-    write_meta(out, task=task, library="rsl_rl", flattener=vec.flattener, train_cfg=cfg, num_envs=num_envs,
-               seed=seed, max_episode_steps=vec.max_episode_length)
+    write_meta(
+        out,
+        task=task,
+        library="rsl_rl",
+        flattener=vec.flattener,
+        train_cfg=cfg,
+        num_envs=num_envs,
+        seed=seed,
+        max_episode_steps=vec.max_episode_length,
+    )
     iterations = max(1, math.ceil(steps / (num_envs * cfg["num_steps_per_env"])))
     log(f"rsl_rl PPO on {task}: {num_envs} envs, {iterations} iterations, observations {vec.flattener.state_dim}")
     runner = OnPolicyRunner(vec, copy.deepcopy(cfg), log_dir=str(out), device="cpu")

@@ -23,9 +23,17 @@ __all__ = ["default_ppo_kwargs", "train", "load_policy", "play_env"]
 
 def default_ppo_kwargs(num_envs: int, n_steps: int = 32) -> dict[str, Any]:
     """SB3 PPO settings: ``n_steps`` per env per rollout, 4 minibatches, gamma 0.97."""
-    return {"n_steps": n_steps, "batch_size": max(1, n_steps * num_envs // 4), "n_epochs": 5, "gamma": 0.97,
-            "gae_lambda": 0.95, "learning_rate": 3e-4, "ent_coef": 0.0, "clip_range": 0.2,
-            "policy_kwargs": {"net_arch": [256, 256]}}
+    return {
+        "n_steps": n_steps,
+        "batch_size": max(1, n_steps * num_envs // 4),
+        "n_epochs": 5,
+        "gamma": 0.97,
+        "gae_lambda": 0.95,
+        "learning_rate": 3e-4,
+        "ent_coef": 0.0,
+        "clip_range": 0.2,
+        "policy_kwargs": {"net_arch": [256, 256]},
+    }
 
 
 def _tensorboard_dir(out: Path) -> str | None:
@@ -36,8 +44,17 @@ def _tensorboard_dir(out: Path) -> str | None:
     return str(out / "tb")
 
 
-def train(task: str, num_envs: int, steps: int, seed: int, out: Path, max_episode_steps: int = 0,
-          ppo_kwargs: dict[str, Any] | None = None, threads: int = 1, log: Callable[[str], None] = print) -> Path:
+def train(
+    task: str,
+    num_envs: int,
+    steps: int,
+    seed: int,
+    out: Path,
+    max_episode_steps: int = 0,
+    ppo_kwargs: dict[str, Any] | None = None,
+    threads: int = 1,
+    log: Callable[[str], None] = print,
+) -> Path:
     """Train PPO for ``steps`` env steps (all envs); return the final ``model.zip``.
 
     ``ppo_kwargs`` default to :func:`default_ppo_kwargs`; ``threads`` sets torch's intra-op
@@ -55,8 +72,16 @@ def train(task: str, num_envs: int, steps: int, seed: int, out: Path, max_episod
     venv.seed(seed)
     kwargs = ppo_kwargs or default_ppo_kwargs(num_envs)
     policy = "MultiInputPolicy" if venv.flattener.image_paths else "MlpPolicy"
-    write_meta(out, task=task, library="sb3", flattener=venv.flattener, num_envs=num_envs, seed=seed,
-               max_episode_steps=int(venv.env.max_episode_steps), policy=policy)
+    write_meta(
+        out,
+        task=task,
+        library="sb3",
+        flattener=venv.flattener,
+        num_envs=num_envs,
+        seed=seed,
+        max_episode_steps=int(venv.env.max_episode_steps),
+        policy=policy,
+    )
     log(f"SB3 PPO ({policy}) on {task}: {num_envs} envs, {steps} steps, observations {venv.observation_space}")
     model = PPO(policy, venv, seed=seed, device="cpu", tensorboard_log=_tensorboard_dir(out), verbose=1, **kwargs)
     save_freq = max(1, kwargs["n_steps"] * 10)  # per env: every 10 rollouts

@@ -39,9 +39,11 @@ def main() -> int:
         out = Path(args.out)
         checkpoint = train("PushCube-v1", args.num_envs, args.steps, args.seed, out)
     plot_curve(out / "curve.csv", out / "curve.png", "rsl_rl PPO, PushCube-v1")
-    result = {"checkpoint": str(checkpoint),
-              "deterministic": evaluate(checkpoint, num_envs=args.eval_envs),
-              "sampled": evaluate(checkpoint, num_envs=args.eval_envs, deterministic=False)}
+    result = {
+        "checkpoint": str(checkpoint),
+        "deterministic": evaluate(checkpoint, num_envs=args.eval_envs),
+        "sampled": evaluate(checkpoint, num_envs=args.eval_envs, deterministic=False),
+    }
     (out / "result.json").write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     print(json.dumps(result))
     return 0

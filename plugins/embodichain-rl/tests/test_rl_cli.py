@@ -25,9 +25,11 @@ def test_the_command_is_registered() -> None:
 
 
 def test_loading_the_plugin_imports_no_rl_library() -> None:
-    code = ("import sys, embodichain_rl\n"
-            "from embodichain_core.plugins import load_plugins; load_plugins()\n"
-            "print(sorted({m.split('.')[0] for m in sys.modules} & {'rsl_rl', 'stable_baselines3', 'tensordict'}))\n")
+    code = (
+        "import sys, embodichain_rl\n"
+        "from embodichain_core.plugins import load_plugins; load_plugins()\n"
+        "print(sorted({m.split('.')[0] for m in sys.modules} & {'rsl_rl', 'stable_baselines3', 'tensordict'}))\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
@@ -35,8 +37,21 @@ def test_loading_the_plugin_imports_no_rl_library() -> None:
 @pytest.mark.parametrize("library, checkpoint, events", [("rsl_rl", "model_1.pt", "."), ("sb3", "model.zip", "tb")])
 def test_train_then_play(tmp_path: Path, library: str, checkpoint: str, events: str) -> None:
     out = tmp_path / library
-    args = ["train-rl", "--task", "PushCube-v1", "--library", library, "--num_envs", "4", "--steps", "150",
-            "--max_episode_steps", "8", "--out", str(out)]
+    args = [
+        "train-rl",
+        "--task",
+        "PushCube-v1",
+        "--library",
+        library,
+        "--num_envs",
+        "4",
+        "--steps",
+        "150",
+        "--max_episode_steps",
+        "8",
+        "--out",
+        str(out),
+    ]
     assert embodichain(args) == 0
     assert (out / checkpoint).is_file()
     assert list((out / events).rglob("events.out.tfevents.*"))

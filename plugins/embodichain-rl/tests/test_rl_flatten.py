@@ -9,18 +9,23 @@ import torch
 
 from embodichain_rl.flatten import ObsFlattener, leaf
 
-SPACE = gym.spaces.Dict({
-    "robot": gym.spaces.Dict({"qvel": gym.spaces.Box(-1, 1, (2,)), "qpos": gym.spaces.Box(-1, 1, (2,))}),
-    "cube_pose": gym.spaces.Box(-1, 1, (7,)),
-    "sensor": gym.spaces.Dict({"cam": gym.spaces.Dict({"color": gym.spaces.Box(0, 255, (4, 5, 3), np.uint8)})}),
-    "grid": gym.spaces.Box(-1, 1, (2, 3)),
-})
+SPACE = gym.spaces.Dict(
+    {
+        "robot": gym.spaces.Dict({"qvel": gym.spaces.Box(-1, 1, (2,)), "qpos": gym.spaces.Box(-1, 1, (2,))}),
+        "cube_pose": gym.spaces.Box(-1, 1, (7,)),
+        "sensor": gym.spaces.Dict({"cam": gym.spaces.Dict({"color": gym.spaces.Box(0, 255, (4, 5, 3), np.uint8)})}),
+        "grid": gym.spaces.Box(-1, 1, (2, 3)),
+    }
+)
 
 
 def batch(n: int) -> dict:
-    return {"robot": {"qvel": torch.full((n, 2), 2.0), "qpos": torch.full((n, 2), 1.0)},
-            "cube_pose": torch.arange(7.0).expand(n, 7), "grid": torch.zeros(n, 2, 3),
-            "sensor": {"cam": {"color": torch.zeros(n, 4, 5, 3, dtype=torch.uint8)}}}
+    return {
+        "robot": {"qvel": torch.full((n, 2), 2.0), "qpos": torch.full((n, 2), 1.0)},
+        "cube_pose": torch.arange(7.0).expand(n, 7),
+        "grid": torch.zeros(n, 2, 3),
+        "sensor": {"cam": {"color": torch.zeros(n, 4, 5, 3, dtype=torch.uint8)}},
+    }
 
 
 def test_layout_is_sorted_and_keeps_images_apart() -> None:

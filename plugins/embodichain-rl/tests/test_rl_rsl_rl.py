@@ -45,8 +45,9 @@ def test_actions_are_clamped_to_the_action_space(push_cube) -> None:
 
 def test_rsl_rl_ppo_learns_two_iterations(push_cube, tmp_path: Path) -> None:
     rows = []
-    vec = RslRlVecEnv(push_cube(4, max_episode_steps=6), on_stats=lambda steps, s: rows.append((steps, s)),
-                      stats_every=8)
+    vec = RslRlVecEnv(
+        push_cube(4, max_episode_steps=6), on_stats=lambda steps, s: rows.append((steps, s)), stats_every=8
+    )
     cfg = default_train_cfg(num_steps_per_env=8, save_interval=1)
     runner = OnPolicyRunner(vec, cfg, log_dir=str(tmp_path), device="cpu")
     before = [p.clone() for p in runner.alg.get_policy().parameters()]

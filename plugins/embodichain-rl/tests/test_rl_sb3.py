@@ -71,7 +71,7 @@ def test_terminal_observation_and_time_limit(push_cube) -> None:
         assert not np.allclose(terminal, obs[i])
     qpos = venv.flattener.state_paths.index("robot/qpos")
     offset = sum(venv.flattener.state_sizes[:qpos])
-    reset_qpos = torch.as_tensor(obs[:, offset:offset + 7])
+    reset_qpos = torch.as_tensor(obs[:, offset : offset + 7])
     assert torch.allclose(reset_qpos, venv.env.robot.get_qpos()[:, :7].float(), atol=1e-5)
 
 

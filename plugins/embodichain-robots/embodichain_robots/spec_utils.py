@@ -51,9 +51,15 @@ def new_spec(name: str) -> mujoco.MjSpec:
     return spec
 
 
-def add_body(parent: mujoco.MjsBody, name: str, pos: Sequence[float] = (0, 0, 0),
-             quat: Sequence[float] = (1, 0, 0, 0), mass: float = 0.0,
-             inertia_box: Optional[Sequence[float]] = None, ipos: Sequence[float] = (0, 0, 0)) -> mujoco.MjsBody:
+def add_body(
+    parent: mujoco.MjsBody,
+    name: str,
+    pos: Sequence[float] = (0, 0, 0),
+    quat: Sequence[float] = (1, 0, 0, 0),
+    mass: float = 0.0,
+    inertia_box: Optional[Sequence[float]] = None,
+    ipos: Sequence[float] = (0, 0, 0),
+) -> mujoco.MjsBody:
     """A child body with an explicit inertial.
 
     Args:
@@ -81,9 +87,18 @@ def box_inertia(mass: float, extents: Iterable[float]) -> np.ndarray:
     return mass / 12.0 * np.array([y * y + z * z, x * x + z * z, x * x + y * y])
 
 
-def add_geom(body: mujoco.MjsBody, kind: str, *, colour: str, size: Sequence[float] = (0, 0, 0),
-             fromto: Optional[Sequence[float]] = None, pos: Sequence[float] = (0, 0, 0),
-             quat: Sequence[float] = (1, 0, 0, 0), name: str = "", visual: bool = False) -> mujoco.MjsGeom:
+def add_geom(
+    body: mujoco.MjsBody,
+    kind: str,
+    *,
+    colour: str,
+    size: Sequence[float] = (0, 0, 0),
+    fromto: Optional[Sequence[float]] = None,
+    pos: Sequence[float] = (0, 0, 0),
+    quat: Sequence[float] = (1, 0, 0, 0),
+    name: str = "",
+    visual: bool = False,
+) -> mujoco.MjsGeom:
     """A massless primitive geom (masses come from the body's explicit inertial).
 
     Args:
@@ -98,8 +113,14 @@ def add_geom(body: mujoco.MjsBody, kind: str, *, colour: str, size: Sequence[flo
         visual: True for decoration that never collides.
     """
     size = list(size) + [0.0] * (3 - len(size))
-    geom = body.add_geom(type=_GEOM_TYPES[kind], size=size, pos=list(pos), quat=list(quat),
-                         material=f"mat_{colour}", rgba=list(PALETTE[colour]))
+    geom = body.add_geom(
+        type=_GEOM_TYPES[kind],
+        size=size,
+        pos=list(pos),
+        quat=list(quat),
+        material=f"mat_{colour}",
+        rgba=list(PALETTE[colour]),
+    )
     if name:
         geom.name = name
     if fromto is not None:
@@ -110,20 +131,46 @@ def add_geom(body: mujoco.MjsBody, kind: str, *, colour: str, size: Sequence[flo
     return geom
 
 
-def add_hinge(body: mujoco.MjsBody, name: str, axis: Sequence[float], limits: Sequence[float],
-              armature: float = 0.0, damping: float = 0.0, pos: Sequence[float] = (0, 0, 0)) -> mujoco.MjsJoint:
+def add_hinge(
+    body: mujoco.MjsBody,
+    name: str,
+    axis: Sequence[float],
+    limits: Sequence[float],
+    armature: float = 0.0,
+    damping: float = 0.0,
+    pos: Sequence[float] = (0, 0, 0),
+) -> mujoco.MjsJoint:
     """A limited hinge joint (``limits`` in radians)."""
-    return body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(axis), pos=list(pos),
-                          range=[float(limits[0]), float(limits[1])], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                          armature=float(armature), damping=float(damping))
+    return body.add_joint(
+        name=name,
+        type=mujoco.mjtJoint.mjJNT_HINGE,
+        axis=list(axis),
+        pos=list(pos),
+        range=[float(limits[0]), float(limits[1])],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        armature=float(armature),
+        damping=float(damping),
+    )
 
 
-def add_slide(body: mujoco.MjsBody, name: str, axis: Sequence[float], limits: Sequence[float],
-              armature: float = 0.0, damping: float = 0.0) -> mujoco.MjsJoint:
+def add_slide(
+    body: mujoco.MjsBody,
+    name: str,
+    axis: Sequence[float],
+    limits: Sequence[float],
+    armature: float = 0.0,
+    damping: float = 0.0,
+) -> mujoco.MjsJoint:
     """A limited prismatic joint (``limits`` in metres)."""
-    return body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(axis),
-                          range=[float(limits[0]), float(limits[1])], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                          armature=float(armature), damping=float(damping))
+    return body.add_joint(
+        name=name,
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=list(axis),
+        range=[float(limits[0]), float(limits[1])],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        armature=float(armature),
+        damping=float(damping),
+    )
 
 
 def add_mimic(spec: mujoco.MjSpec, follower: str, leader: str, multiplier: float = 1.0, offset: float = 0.0) -> None:

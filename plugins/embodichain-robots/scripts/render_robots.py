@@ -24,17 +24,45 @@ import numpy as np  # noqa: E402
 REPO = Path(__file__).resolve().parents[3]
 
 #: The docs' mirror example: both hands in front of the chest, palms down.
-READY = {"LEFT_J2": -0.7854, "LEFT_J4": -1.5708, "LEFT_J5": -0.7854,
-         "RIGHT_J2": 0.7854, "RIGHT_J4": 1.5708, "RIGHT_J5": 0.7854, "NECK2": -0.3}
+READY = {
+    "LEFT_J2": -0.7854,
+    "LEFT_J4": -1.5708,
+    "LEFT_J5": -0.7854,
+    "RIGHT_J2": 0.7854,
+    "RIGHT_J4": 1.5708,
+    "RIGHT_J5": 0.7854,
+    "NECK2": -0.3,
+}
 #: file stem -> (config dict, camera lookat, distance, azimuth, elevation, image size, qpos overrides)
 SHOTS: dict[str, tuple] = {
     "robot_dexforce_w1": ({"robot_type": "DexforceW1", "uid": "w1"}, (0.0, 0.0, 0.95), 3.1, 145, -12, (720, 900), {}),
-    "robot_dexforce_w1_ready": ({"robot_type": "DexforceW1", "uid": "w1"}, (0.1, 0.0, 0.95), 2.7, 150, -14,
-                                (720, 900), READY),
-    "robot_dexforce_w1_industrial": ({"robot_type": "DexforceW1", "uid": "w1", "arm_kind": "industrial"},
-                                     (0.0, 0.0, 0.95), 3.1, 145, -12, (720, 900), {}),
-    "robot_seven_dof_arm": ({"robot_type": "SevenDofArm", "uid": "arm"}, (0.18, 0.0, 0.38), 1.25, 135, -16,
-                            (800, 720), {}),
+    "robot_dexforce_w1_ready": (
+        {"robot_type": "DexforceW1", "uid": "w1"},
+        (0.1, 0.0, 0.95),
+        2.7,
+        150,
+        -14,
+        (720, 900),
+        READY,
+    ),
+    "robot_dexforce_w1_industrial": (
+        {"robot_type": "DexforceW1", "uid": "w1", "arm_kind": "industrial"},
+        (0.0, 0.0, 0.95),
+        3.1,
+        145,
+        -12,
+        (720, 900),
+        {},
+    ),
+    "robot_seven_dof_arm": (
+        {"robot_type": "SevenDofArm", "uid": "arm"},
+        (0.18, 0.0, 0.38),
+        1.25,
+        135,
+        -16,
+        (800, 720),
+        {},
+    ),
 }
 
 
@@ -89,8 +117,9 @@ def write_png(path: Path, rgb: np.ndarray) -> None:
 
     header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9))
-                     + chunk(b"IEND", b""))
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,8 +23,9 @@ def w1() -> Any:
     """The seed tutorial's W1 (two envs), as a built ``Robot``."""
     from embodichain_robots.dexforce_w1.cfg import DexforceW1Cfg
 
-    cfg = DexforceW1Cfg.from_dict({"uid": "dexforce_w1", "version": "v021", "arm_kind": "anthropomorphic",
-                                   "init_pos": [0, 0, 0]})
+    cfg = DexforceW1Cfg.from_dict(
+        {"uid": "dexforce_w1", "version": "v021", "arm_kind": "anthropomorphic", "init_pos": [0, 0, 0]}
+    )
     return make_scene(cfg)["dexforce_w1"]
 
 
@@ -40,4 +41,3 @@ def arm() -> Any:
 def scene_factory() -> Callable[..., Any]:
     """``scene_factory(cfg, num_envs=2) -> Scene``."""
     return make_scene
-

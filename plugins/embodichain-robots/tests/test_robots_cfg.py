@@ -31,15 +31,18 @@ def test_unknown_key_names_the_key(cls: type) -> None:
         cls.from_dict({"uid": "r", "arm_knd": "industrial"})
 
 
-@pytest.mark.parametrize(("data", "path"), [
-    ({"version": "v030"}, "version"),
-    ({"arm_kind": "humanoid"}, "arm_kind"),
-    ({"hand_types": {"left": "robotiq"}}, "hand_types.left"),
-    ({"hand_types": {"middle": "BRAINCO_HAND"}}, "hand_types.middle"),
-    ({"hand_attach_xposes": {"left": [[1, 0], [0, 1]]}}, "hand_attach_xposes.left"),
-    ({"drive_pros": {"stifness": 1.0}}, "drive_pros.stifness"),
-    ({"solver_cfg": {"left_arm": {"tcpp": []}}}, "solver_cfg.left_arm.tcpp"),
-])
+@pytest.mark.parametrize(
+    ("data", "path"),
+    [
+        ({"version": "v030"}, "version"),
+        ({"arm_kind": "humanoid"}, "arm_kind"),
+        ({"hand_types": {"left": "robotiq"}}, "hand_types.left"),
+        ({"hand_types": {"middle": "BRAINCO_HAND"}}, "hand_types.middle"),
+        ({"hand_attach_xposes": {"left": [[1, 0], [0, 1]]}}, "hand_attach_xposes.left"),
+        ({"drive_pros": {"stifness": 1.0}}, "drive_pros.stifness"),
+        ({"solver_cfg": {"left_arm": {"tcpp": []}}}, "solver_cfg.left_arm.tcpp"),
+    ],
+)
 def test_bad_values_name_their_path(data: dict, path: str) -> None:
     with pytest.raises(ConfigError) as err:
         DexforceW1Cfg.from_dict({"uid": "w1", **data})
@@ -55,8 +58,9 @@ def test_nested_path_is_prefixed() -> None:
 def test_enums_and_case_are_accepted() -> None:
     from embodichain_robots.dexforce_w1.params import DexforceW1ArmKind, DexforceW1Version
 
-    cfg = DexforceW1Cfg(version=DexforceW1Version.V025, arm_kind=DexforceW1ArmKind.INDUSTRIAL,
-                        hand_types={"LEFT": "brainco_hand"})
+    cfg = DexforceW1Cfg(
+        version=DexforceW1Version.V025, arm_kind=DexforceW1ArmKind.INDUSTRIAL, hand_types={"LEFT": "brainco_hand"}
+    )
     assert (cfg.version, cfg.arm_kind, cfg.hand_types) == ("v025", "industrial", {"left": "BRAINCO_HAND"})
     assert "right_eef" not in cfg.control_parts
 

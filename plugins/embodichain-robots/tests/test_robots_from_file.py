@@ -28,17 +28,30 @@ from embodichain_core.utils.math import matrix_to_pose  # noqa: E402
 
 TCP = [[1, 0, 0, 0], [0, 1, 0, 0.08], [0, 0, 1, 0], [0, 0, 0, 1]]
 SOLVER = {"class_type": "DLSSolver", "root_link_name": "base_link", "end_link_name": "flange", "tcp": TCP}
-EEF_EVENT = {"func": "randomize_robot_eef_pose", "mode": "reset",
-             "params": {"entity_cfg": {"uid": "arm", "control_parts": ["arm"]},
-                        "position_range": [[-0.03, -0.03, -0.03], [0.03, 0.03, 0.03]]}}
+EEF_EVENT = {
+    "func": "randomize_robot_eef_pose",
+    "mode": "reset",
+    "params": {
+        "entity_cfg": {"uid": "arm", "control_parts": ["arm"]},
+        "position_range": [[-0.03, -0.03, -0.03], [0.03, 0.03, 0.03]],
+    },
+}
 
 
 def gym_config(tmp_path: Path, robot: dict, actions: dict | None = None, events: dict | None = None) -> Path:
     """A JSON gym config next to the robot files (``fpath`` relative to it)."""
-    data = {"id": "OwnRobot-v0", "num_envs": 4, "max_episode_steps": 50, "headless": True,
-            "env": {"control_parts": ["arm"], "events": events or {},
-                    "actions": actions or {"eef": {"func": "EefPoseTerm", "params": {"part_name": "arm"}}}},
-            "robot": robot}
+    data = {
+        "id": "OwnRobot-v0",
+        "num_envs": 4,
+        "max_episode_steps": 50,
+        "headless": True,
+        "env": {
+            "control_parts": ["arm"],
+            "events": events or {},
+            "actions": actions or {"eef": {"func": "EefPoseTerm", "params": {"part_name": "arm"}}},
+        },
+        "robot": robot,
+    }
     path = tmp_path / "own_robot.json"
     path.write_text(json.dumps(data))
     return path
@@ -129,14 +142,20 @@ def test_per_env_damping_differs_across_envs(urdf_env) -> None:
     assert len(set(damping[:, 0].tolist())) == 4
 
 
-@pytest.mark.parametrize("solver, key, needle", [
-    ({**SOLVER, "end_link_name": "flang"}, "robot.solver_cfg.arm.end_link_name", "'flange'"),
-    ({**SOLVER, "root_link_name": "flange", "end_link_name": "base_link"}, "robot.solver_cfg.arm.end_link_name",
-     "not a descendant"),
-    ({**SOLVER, "root_link_name": "shoulder"}, "robot.solver_cfg.arm", "'shoulder_pan'"),
-    ({**SOLVER, "class_type": "DLSSolve"}, "robot.solver_cfg.arm.class_type", "'DLSSolver'"),
-    ({**SOLVER, "max_iteration": 3}, "robot.solver_cfg.arm.max_iteration", "max_iterations"),
-])
+@pytest.mark.parametrize(
+    "solver, key, needle",
+    [
+        ({**SOLVER, "end_link_name": "flang"}, "robot.solver_cfg.arm.end_link_name", "'flange'"),
+        (
+            {**SOLVER, "root_link_name": "flange", "end_link_name": "base_link"},
+            "robot.solver_cfg.arm.end_link_name",
+            "not a descendant",
+        ),
+        ({**SOLVER, "root_link_name": "shoulder"}, "robot.solver_cfg.arm", "'shoulder_pan'"),
+        ({**SOLVER, "class_type": "DLSSolve"}, "robot.solver_cfg.arm.class_type", "'DLSSolver'"),
+        ({**SOLVER, "max_iteration": 3}, "robot.solver_cfg.arm.max_iteration", "max_iterations"),
+    ],
+)
 def test_bad_solver_cfg_names_the_key(tmp_path: Path, solver: dict, key: str, needle: str) -> None:
     write_urdf_arm(tmp_path)
     robot = urdf_robot_section(Path("test_arm/urdf/arm.urdf"), solver_cfg={"arm": solver})
@@ -148,8 +167,13 @@ def test_bad_solver_cfg_names_the_key(tmp_path: Path, solver: dict, key: str, ne
 
 def test_mjcf_arm_with_its_own_actuators_from_json(tmp_path: Path) -> None:
     write_mjcf_arm(tmp_path)
-    robot = {"uid": "arm", "fpath": "servo_arm.xml", "keep_actuators": True, "init_qpos": [0.3, 0.5, -0.4],
-             "control_parts": {"arm": ["j[1-3]"]}}
+    robot = {
+        "uid": "arm",
+        "fpath": "servo_arm.xml",
+        "keep_actuators": True,
+        "init_qpos": [0.3, 0.5, -0.4],
+        "control_parts": {"arm": ["j[1-3]"]},
+    }
     actions = {"qpos": {"func": "QposTerm", "params": {}}}
     with warnings.catch_warnings():
         warnings.simplefilter("error", ModelImportWarning)  # kept: no replacement notice
@@ -200,8 +224,9 @@ def test_a_plugin_registers_a_file_based_robot_with_its_assets(tmp_path: Path) -
             env.reset()
             assert isinstance(env.robot.cfg, FileArmCfg)
             assert env.robot.get_solver("arm").joint_ids == list(range(6))
-            goal = env.robot.compute_fk(torch.tensor(HOME) + torch.tensor([0.1, -0.1, 0.1, 0.1, -0.1, 0.1]),
-                                        name="arm").expand(4, 4, 4)
+            goal = env.robot.compute_fk(
+                torch.tensor(HOME) + torch.tensor([0.1, -0.1, 0.1, 0.1, -0.1, 0.1]), name="arm"
+            ).expand(4, 4, 4)
             assert (env.robot.compute_fk(name="arm")[:, :3, 3] - goal[:, :3, 3]).norm(dim=-1).min() > 0.02
             assert eef_term_reaches(env, goal)
         finally:

@@ -16,8 +16,10 @@ def test_plugin_registers_both_robots(register_plugin: object, plugin_manager: o
 
 
 def test_plugin_import_is_cheap() -> None:
-    code = ("import sys, embodichain_robots, embodichain_robots.plugin; "
-            "print(sorted(m for m in ('torch', 'mujoco') if m in sys.modules))")
+    code = (
+        "import sys, embodichain_robots, embodichain_robots.plugin; "
+        "print(sorted(m for m in ('torch', 'mujoco') if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
 

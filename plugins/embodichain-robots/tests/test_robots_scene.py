@@ -10,13 +10,17 @@ from embodichain_robots.seven_dof_arm.cfg import SevenDofArmCfg
 from embodichain_robots.kinematics.solver import sample_joint_values
 
 
-@pytest.mark.parametrize("make", [
-    lambda: DexforceW1Cfg.from_dict({"uid": "robot"}),
-    lambda: DexforceW1Cfg.from_dict({"uid": "robot", "arm_kind": "industrial", "gravity_compensation": False}),
-    lambda: DexforceW1Cfg.from_dict({"uid": "robot", "gravity_compensation": False}),
-    lambda: SevenDofArmCfg.from_dict({"uid": "robot"}),
-    lambda: SevenDofArmCfg.from_dict({"uid": "robot", "gravity_compensation": False}),
-], ids=["w1", "w1_industrial_nogravcomp", "w1_nogravcomp", "arm", "arm_nogravcomp"])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: DexforceW1Cfg.from_dict({"uid": "robot"}),
+        lambda: DexforceW1Cfg.from_dict({"uid": "robot", "arm_kind": "industrial", "gravity_compensation": False}),
+        lambda: DexforceW1Cfg.from_dict({"uid": "robot", "gravity_compensation": False}),
+        lambda: SevenDofArmCfg.from_dict({"uid": "robot"}),
+        lambda: SevenDofArmCfg.from_dict({"uid": "robot", "gravity_compensation": False}),
+    ],
+    ids=["w1", "w1_industrial_nogravcomp", "w1_nogravcomp", "arm", "arm_nogravcomp"],
+)
 def test_holds_home_pose_for_one_second(scene_factory: object, make: object) -> None:
     scene = scene_factory(make(), num_envs=2)
     robot = scene["robot"]

@@ -16,10 +16,48 @@ from embodichain_robots.kinematics.dh import w1_arm_dh_fk
 LEFT_EE = [[1, 0, 0, 0], [0, 0, 1, 0.791], [0, -1, 0, 1.3648], [0, 0, 0, 1]]
 RIGHT_EE = [[1, 0, 0, 0], [0, 0, -1, -0.791], [0, 1, 0, 1.3648], [0, 0, 0, 1]]
 #: ScoopIce's init_qpos (EmbodiChain configs/gym/scoop_ice/gym_config.json), BFS order.
-SCOOP_QPOS = [0.42241, -1.11061, 0.55116, 0.01815, 0.00002, -0.43273, -0.30339, 0.2412, -1.20074, 0.72621,
-              0.40264, -0.41044, -1.34341, 1.27664, -0.42869, -0.30873, -0.23608, 0.54272, -0.12095, -0.16959,
-              0.00011, 0.00002, 0.00009, 0.00003, 1.50006, 0.30045, 0.30028, 0.30051, 0.30037, 0.90003,
-              0.23262, 0.24298, 0.22003, 0.19901, 0.0, 0.59305, 0.6033, 0.58056, 0.55942, 0.29999]
+SCOOP_QPOS = [
+    0.42241,
+    -1.11061,
+    0.55116,
+    0.01815,
+    0.00002,
+    -0.43273,
+    -0.30339,
+    0.2412,
+    -1.20074,
+    0.72621,
+    0.40264,
+    -0.41044,
+    -1.34341,
+    1.27664,
+    -0.42869,
+    -0.30873,
+    -0.23608,
+    0.54272,
+    -0.12095,
+    -0.16959,
+    0.00011,
+    0.00002,
+    0.00009,
+    0.00003,
+    1.50006,
+    0.30045,
+    0.30028,
+    0.30051,
+    0.30037,
+    0.90003,
+    0.23262,
+    0.24298,
+    0.22003,
+    0.19901,
+    0.0,
+    0.59305,
+    0.6033,
+    0.58056,
+    0.55942,
+    0.29999,
+]
 
 
 def _model(**cfg: object) -> mujoco.MjModel:
@@ -109,13 +147,16 @@ def test_eyes_frame_and_stereo_cameras() -> None:
         assert model.camera(f"{side}_wrist_camera").bodyid == model.body(f"{side}_wrist_camera").id
 
 
-@pytest.mark.parametrize(("cfg", "dof", "mimic"), [
-    ({}, 40, 8),
-    ({"arm_kind": "industrial"}, 24, 0),
-    ({"hand_types": {"left": "dh_pgc_gripper", "right": "DH_PGC_GRIPPER_M"}}, 24, 0),
-    ({"with_default_eef": False}, 20, 0),
-    ({"hand_types": {"left": "BRAINCO_HAND"}}, 30, 4),
-])
+@pytest.mark.parametrize(
+    ("cfg", "dof", "mimic"),
+    [
+        ({}, 40, 8),
+        ({"arm_kind": "industrial"}, 24, 0),
+        ({"hand_types": {"left": "dh_pgc_gripper", "right": "DH_PGC_GRIPPER_M"}}, 24, 0),
+        ({"with_default_eef": False}, 20, 0),
+        ({"hand_types": {"left": "BRAINCO_HAND"}}, 30, 4),
+    ],
+)
 def test_dof_counts(cfg: dict, dof: int, mimic: int) -> None:
     model = _model(**cfg)
     assert model.njnt == dof
@@ -135,8 +176,16 @@ def test_part_joint_ids(w1: object) -> None:
     assert sorted(w1.get_joint_ids("left_eef")) == [20, 21, 22, 23, 24, 34]
     assert w1.joint_names[24] == "LEFT_HAND_THUMB2"
     assert w1.joint_names[29] == "RIGHT_HAND_THUMB2"
-    assert set(w1.control_parts) == {"torso", "head", "left_arm", "right_arm", "dual_arm", "left_eef",
-                                      "right_eef", "full_body"}
+    assert set(w1.control_parts) == {
+        "torso",
+        "head",
+        "left_arm",
+        "right_arm",
+        "dual_arm",
+        "left_eef",
+        "right_eef",
+        "full_body",
+    }
 
 
 def test_mimic_joints_follow(w1: object) -> None:

@@ -79,7 +79,9 @@ class Camera(BaseSensor):
     def _initial_local_pose(self) -> tuple[np.ndarray, np.ndarray]:
         ext = self.cfg.extrinsics
         if ext.eye is not None:
-            pos, rot = geo.look_at(np.asarray(ext.eye), np.asarray(ext.target), None if ext.up is None else np.asarray(ext.up))
+            pos, rot = geo.look_at(
+                np.asarray(ext.eye), np.asarray(ext.target), None if ext.up is None else np.asarray(ext.up)
+            )
         else:
             pos, rot = np.asarray(ext.pos, dtype=np.float64), quat_to_matrix(quat_normalize(np.asarray(ext.quat)))
         n = self.num_envs
@@ -127,8 +129,11 @@ class Camera(BaseSensor):
     def _wants(self) -> dict[str, bool]:
         cfg = self.cfg
         geometric = cfg.enable_normal or cfg.enable_position
-        return {"color": cfg.enable_color, "depth": cfg.enable_depth or geometric or getattr(cfg, "enable_disparity", False),
-                "mask": cfg.enable_mask}
+        return {
+            "color": cfg.enable_color,
+            "depth": cfg.enable_depth or geometric or getattr(cfg, "enable_disparity", False),
+            "mask": cfg.enable_mask,
+        }
 
     def update(self) -> None:
         """Render every env and every view; results go to :meth:`get_data`."""
@@ -215,8 +220,13 @@ class Camera(BaseSensor):
     def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
         """Point the camera from ``eye`` at ``target`` (parent frame), for ``env_ids``."""
         ids = env_index(env_ids, self.num_envs).numpy()
-        eye, target = np.broadcast_to(np.asarray(eye, float), (len(ids), 3)), np.broadcast_to(np.asarray(target, float), (len(ids), 3))
-        self._local_pos[ids], self._local_rot[ids] = geo.look_at(eye, target, None if up is None else np.asarray(up, float))
+        eye, target = (
+            np.broadcast_to(np.asarray(eye, float), (len(ids), 3)),
+            np.broadcast_to(np.asarray(target, float), (len(ids), 3)),
+        )
+        self._local_pos[ids], self._local_rot[ids] = geo.look_at(
+            eye, target, None if up is None else np.asarray(up, float)
+        )
 
     def get_intrinsics(self) -> torch.Tensor:
         """``(N, 3, 3)`` intrinsic matrices (float32)."""
@@ -283,8 +293,9 @@ def _pose_out(pos: np.ndarray, rot: np.ndarray, to_matrix: bool) -> torch.Tensor
     return torch.from_numpy(np.concatenate([pos, matrix_to_quat(rot)], axis=-1).astype(np.float32))
 
 
-def _add_spec_camera(body: Any, name: str, pos: np.ndarray, rot: np.ndarray, intr: np.ndarray,
-                     width: int, height: int) -> None:
+def _add_spec_camera(
+    body: Any, name: str, pos: np.ndarray, rot: np.ndarray, intr: np.ndarray, width: int, height: int
+) -> None:
     """A MuJoCo camera matching the sensor (for viewers and ``mujoco.Renderer``).
 
     MuJoCo's ``principal_pixel`` is the offset of the image centre from the

@@ -80,8 +80,9 @@ class CameraCfg(SensorCfg):
                 if getattr(self, name) is not None:
                     _check_vector(getattr(self, name), 3, name)
             if (self.eye is None) != (self.target is None):
-                raise ConfigError("target" if self.target is None else "eye",
-                                  "look-at extrinsics need both 'eye' and 'target'")
+                raise ConfigError(
+                    "target" if self.target is None else "eye", "look-at extrinsics need both 'eye' and 'target'"
+                )
 
     sensor_type: str = "Camera"
     visualization_role: Literal["sensor", "record"] = "sensor"
@@ -103,8 +104,9 @@ class CameraCfg(SensorCfg):
             if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
                 raise ConfigError(name, f"must be a positive int, got {value!r}")
             if value > MAX_IMAGE_SIDE:
-                raise ConfigError(name, f"must be at most {MAX_IMAGE_SIDE} pixels (an OpenGL framebuffer side), "
-                                        f"got {value}")
+                raise ConfigError(
+                    name, f"must be at most {MAX_IMAGE_SIDE} pixels (an OpenGL framebuffer side), got {value}"
+                )
         if not (0.0 < float(self.near) < float(self.far)):
             raise ConfigError("near", f"need 0 < near < far, got near={self.near!r}, far={self.far!r}")
         _check_intrinsics(self.intrinsics, "intrinsics")
@@ -113,10 +115,16 @@ class CameraCfg(SensorCfg):
         """Bytes of one env's images of one update: every enabled output of every view,
         plus the depth buffer the derived outputs are computed from (used by the
         core's memory estimate before the scene is built)."""
-        wants = {"color": self.enable_color, "mask": self.enable_mask, "normal": self.enable_normal,
-                 "position": self.enable_position,
-                 "depth": self.enable_depth or self.enable_normal or self.enable_position
-                 or bool(getattr(self, "enable_disparity", False))}
+        wants = {
+            "color": self.enable_color,
+            "mask": self.enable_mask,
+            "normal": self.enable_normal,
+            "position": self.enable_position,
+            "depth": self.enable_depth
+            or self.enable_normal
+            or self.enable_position
+            or bool(getattr(self, "enable_disparity", False)),
+        }
         per_pixel = sum(size for key, size in _BYTES_PER_PIXEL.items() if wants[key])
         per_pixel += 4 * bool(getattr(self, "enable_disparity", False))
         return int(self.width) * int(self.height) * per_pixel * self._views()

@@ -70,8 +70,10 @@ class ContactSensor(BaseSensor):
         arts = {**self.scene.articulations, **self.scene.robots}
         art = arts.get(filt.articulation_uid)
         if art is None:
-            raise KeyError(f"contact sensor {self.uid!r}: no articulation {filt.articulation_uid!r}."
-                           f"{did_you_mean(filt.articulation_uid, arts)}")
+            raise KeyError(
+                f"contact sensor {self.uid!r}: no articulation {filt.articulation_uid!r}."
+                f"{did_you_mean(filt.articulation_uid, arts)}"
+            )
         if not filt.link_name_list:
             return art.body_ids.numpy()
         ids, _ = art.find_bodies(list(filt.link_name_list))
@@ -85,10 +87,16 @@ class ContactSensor(BaseSensor):
     def update(self) -> None:
         """Collect the contacts of every env."""
         n, k = self.num_envs, self.max_contacts
-        out = {"position": np.zeros((n, k, 3), np.float32), "normal": np.zeros((n, k, 3), np.float32),
-               "force": np.zeros((n, k, 3), np.float32), "friction": np.zeros((n, k, 3), np.float32),
-               "impulse": np.zeros((n, k), np.float32), "distance": np.zeros((n, k), np.float32),
-               "user_ids": np.full((n, k, 2), -1, np.int32), "is_valid": np.zeros((n, k), bool)}
+        out = {
+            "position": np.zeros((n, k, 3), np.float32),
+            "normal": np.zeros((n, k, 3), np.float32),
+            "force": np.zeros((n, k, 3), np.float32),
+            "friction": np.zeros((n, k, 3), np.float32),
+            "impulse": np.zeros((n, k), np.float32),
+            "distance": np.zeros((n, k), np.float32),
+            "user_ids": np.full((n, k, 2), -1, np.int32),
+            "is_valid": np.zeros((n, k), bool),
+        }
         for i in range(n):
             self._collect(self._envs.data(i), i, out)
         self._data = {key: torch.from_numpy(v) for key, v in out.items()}

@@ -44,8 +44,7 @@ class SensorRenderer:
         max_geom: scene capacity.
     """
 
-    def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast",
-                 max_geom: int = 10000):
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast", max_geom: int = 10000):
         self.width, self.height, self.quality = int(width), int(height), quality
         self._gl = create_gl_context(self.width, self.height)
         self.context = self._make_context(model)
@@ -114,12 +113,16 @@ class SensorRenderer:
             if not light.attenuation.any():
                 light.attenuation[:] = (1.0, 0.0, 0.0)
 
-    def set_camera(self, pos: np.ndarray, rot: np.ndarray, intrinsics: Sequence[float], near: float,
-                   far: float) -> None:
+    def set_camera(
+        self, pos: np.ndarray, rot: np.ndarray, intrinsics: Sequence[float], near: float, far: float
+    ) -> None:
         """Render from ``pos``/``rot`` (OpenGL camera frame) with exact intrinsics."""
         center, half_width, bottom, top = frustum(intrinsics, self.width, self.height, near)
-        self._gl_camera = (np.asarray(pos, dtype=np.float32), np.asarray(rot, dtype=np.float32),
-                           (center, half_width, bottom, top, float(near), float(far)))
+        self._gl_camera = (
+            np.asarray(pos, dtype=np.float32),
+            np.asarray(rot, dtype=np.float32),
+            (center, half_width, bottom, top, float(near), float(far)),
+        )
         self._near_far = (float(near), float(far))
         self._camera_dirty = True  # applied by the next update_scene or render
 
@@ -146,8 +149,7 @@ class SensorRenderer:
         if self._camera_dirty:
             self._apply_camera()
         mujoco.mjr_render(self._rect, self.scene, self.context)
-        mujoco.mjr_readPixels(self._rgb if color else None, self._depth if depth else None, self._rect,
-                              self.context)
+        mujoco.mjr_readPixels(self._rgb if color else None, self._depth if depth else None, self._rect, self.context)
         if depth:
             near, far = self._near_far
             # reversed-Z depth buffer (1 at near, 0 at far) -> z-depth in metres

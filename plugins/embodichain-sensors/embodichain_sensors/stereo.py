@@ -44,8 +44,9 @@ class StereoCamera(Camera):
         rot = quat_to_matrix(euler_xyz_to_quat(cfg.left_to_right_rot))
         left_pos = -0.5 * baseline
         left = View("", np.tile(np.asarray(cfg.intrinsics, dtype=np.float64), (n, 1)), left_pos, np.eye(3))
-        right = View("_right", np.tile(np.asarray(cfg.right_intrinsics(), dtype=np.float64), (n, 1)),
-                     left_pos + baseline, rot)
+        right = View(
+            "_right", np.tile(np.asarray(cfg.right_intrinsics(), dtype=np.float64), (n, 1)), left_pos + baseline, rot
+        )
         return [left, right]
 
     @property

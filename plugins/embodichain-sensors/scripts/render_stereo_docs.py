@@ -23,20 +23,37 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[3]
 #: W1 pose of the images: arms forward over the table, head pitched down.
-READY = {"LEFT_J2": -0.7854, "LEFT_J4": -1.5708, "LEFT_J5": -0.7854,
-         "RIGHT_J2": 0.7854, "RIGHT_J4": 1.5708, "RIGHT_J5": 0.7854, "NECK2": -0.5}
+READY = {
+    "LEFT_J2": -0.7854,
+    "LEFT_J4": -1.5708,
+    "LEFT_J5": -0.7854,
+    "RIGHT_J2": 0.7854,
+    "RIGHT_J4": 1.5708,
+    "RIGHT_J5": 0.7854,
+    "NECK2": -0.5,
+}
 #: Objects added to the seed scene in front of the drawer: (uid, data path, position).
-EXTRA_OBJECTS = (("cup", "PaperCup/paper_cup.ply", (0.72, 0.3, 0.9), (0.2, 0.45, 0.85, 1.0)),
-                 ("can", "SodaCan/simple_cola_can.obj", (0.72, -0.3, 0.9), (0.8, 0.1, 0.1, 1.0)))
+EXTRA_OBJECTS = (
+    ("cup", "PaperCup/paper_cup.ply", (0.72, 0.3, 0.9), (0.2, 0.45, 0.85, 1.0)),
+    ("can", "SodaCan/simple_cola_can.obj", (0.72, -0.3, 0.9), (0.8, 0.1, 0.1, 1.0)),
+)
 
 
 def eye_in_head(**overrides: Any) -> Any:
     """The seed tutorial's stereo camera config."""
     from embodichain_sensors.cfg import StereoCameraCfg
 
-    cfg = dict(uid="eye_in_head", width=960, height=540, enable_mask=True, enable_depth=True,
-               left_to_right_pos=(0.06, 0, 0), intrinsics=(450, 450, 480, 270), intrinsics_right=(450, 450, 480, 270),
-               extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"))
+    cfg = dict(
+        uid="eye_in_head",
+        width=960,
+        height=540,
+        enable_mask=True,
+        enable_depth=True,
+        left_to_right_pos=(0.06, 0, 0),
+        intrinsics=(450, 450, 480, 270),
+        intrinsics_right=(450, 450, 480, 270),
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"),
+    )
     cfg.update(overrides)
     return StereoCameraCfg(**cfg)
 
@@ -52,8 +69,16 @@ def w1_scene() -> tuple[Any, Any]:
 
     cfgs = seed_scene_cfgs()
     scene = Scene(SimulationManagerCfg(), num_envs=1)
-    scene.add_robot(RobotCfg.from_dict({"robot_type": "DexforceW1", "uid": "dexforce_w1",
-                                        "arm_kind": "anthropomorphic", "init_pos": [0.0, 0.0, 0.0]}))
+    scene.add_robot(
+        RobotCfg.from_dict(
+            {
+                "robot_type": "DexforceW1",
+                "uid": "dexforce_w1",
+                "arm_kind": "anthropomorphic",
+                "init_pos": [0.0, 0.0, 0.0],
+            }
+        )
+    )
     scene.add_rigid_object(cfgs["table"], background=True)
     scene.add_rigid_object(cfgs["fork"])
     scene.add_articulation(cfgs["drawer"])
@@ -80,17 +105,24 @@ def fallback_scene() -> tuple[Any, Any]:
     from embodichain_core.sim.shapes import CubeCfg
     from embodichain_sensors.stereo import StereoCamera
 
-    head = ('<mujoco><worldbody><body name="base"><geom type="cylinder" size="0.1 0.6" pos="0 0 0.6"/>'
-            '<body name="eyes" pos="0.1 0 1.45" euler="0 75 90" ><geom type="box" size="0.05 0.02 0.02"/>'
-            '</body></body></worldbody></mujoco>')
+    head = (
+        '<mujoco><worldbody><body name="base"><geom type="cylinder" size="0.1 0.6" pos="0 0 0.6"/>'
+        '<body name="eyes" pos="0.1 0 1.45" euler="0 75 90" ><geom type="box" size="0.05 0.02 0.02"/>'
+        "</body></body></worldbody></mujoco>"
+    )
     scene = Scene(SimulationManagerCfg(), num_envs=1)
     scene.add_robot(RobotCfg(uid="robot", mjcf=head))
     scene.add_light(LightCfg(uid="lamp", init_pos=(0.0, 0.0, 2.0), intensity=30.0))
-    scene.add_rigid_object(RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.8, 1.0, 0.8]), init_pos=(0.8, 0.0, 0.4),
-                                          body_type="kinematic"), background=True)
+    scene.add_rigid_object(
+        RigidObjectCfg(
+            uid="table", shape=CubeCfg(size=[0.8, 1.0, 0.8]), init_pos=(0.8, 0.0, 0.4), body_type="kinematic"
+        ),
+        background=True,
+    )
     for i, y in enumerate((-0.15, 0.12)):
-        scene.add_rigid_object(RigidObjectCfg(uid=f"cube{i}", shape=CubeCfg(size=[0.06, 0.06, 0.06]),
-                                              init_pos=(0.65, y, 0.83)))
+        scene.add_rigid_object(
+            RigidObjectCfg(uid=f"cube{i}", shape=CubeCfg(size=[0.06, 0.06, 0.06]), init_pos=(0.65, y, 0.83))
+        )
     camera = StereoCamera(eye_in_head(), scene)
     scene.add_sensor(camera)
     scene.build()
@@ -110,9 +142,21 @@ def depth_image(depth: np.ndarray, near: float, far: float) -> np.ndarray:
 
 def mask_image(mask: np.ndarray) -> np.ndarray:
     """Entity ids (H, W) to distinct colours (a categorical palette); -1 (nothing) is black."""
-    palette = np.array([[78, 121, 167], [242, 142, 43], [225, 87, 89], [118, 183, 178], [89, 161, 79],
-                        [237, 201, 72], [176, 122, 161], [255, 157, 167], [156, 117, 95], [186, 176, 172]],
-                       dtype=np.uint8)
+    palette = np.array(
+        [
+            [78, 121, 167],
+            [242, 142, 43],
+            [225, 87, 89],
+            [118, 183, 178],
+            [89, 161, 79],
+            [237, 201, 72],
+            [176, 122, 161],
+            [255, 157, 167],
+            [156, 117, 95],
+            [186, 176, 172],
+        ],
+        dtype=np.uint8,
+    )
     out = palette[np.maximum(mask, 0) % len(palette)]
     out[mask < 0] = 0
     return out
@@ -150,13 +194,19 @@ def main(argv: list[str] | None = None) -> None:
     depth = data["depth"][0, ..., 0].numpy()
     valid = depth[depth < camera.cfg.far * 0.999]
     near, far = (float(valid.min()), float(np.percentile(valid, 98))) if valid.size else (0.0, 1.0)
-    images = {"stereo_left": data["color"][0, ..., :3].numpy(), "stereo_right": data["color_right"][0, ..., :3].numpy(),
-              "stereo_depth": depth_image(depth, near, far), "stereo_mask": mask_image(data["mask"][0, ..., 0].numpy())}
+    images = {
+        "stereo_left": data["color"][0, ..., :3].numpy(),
+        "stereo_right": data["color_right"][0, ..., :3].numpy(),
+        "stereo_depth": depth_image(depth, near, far),
+        "stereo_mask": mask_image(data["mask"][0, ..., 0].numpy()),
+    }
     for stem, image in images.items():
         write_png(out / f"{stem}.png", image)
     ids = sorted(int(i) for i in np.unique(data["mask"][0].numpy()))
-    print(f"{which}: wrote {', '.join(images)} to {out}; depth {near:.2f}-{far:.2f} m; "
-          f"mask ids {[(i, camera.uid_of_mask_id(i)) for i in ids]}")
+    print(
+        f"{which}: wrote {', '.join(images)} to {out}; depth {near:.2f}-{far:.2f} m; "
+        f"mask ids {[(i, camera.uid_of_mask_id(i)) for i in ids]}"
+    )
     camera.close()
 
 

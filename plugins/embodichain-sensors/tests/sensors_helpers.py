@@ -33,18 +33,29 @@ CUBE_SIZE = 0.1
 TABLE_POS = (0.0, 0.8, 0.2)
 
 
-def make_scene(*sensor_cfgs: Any, num_envs: int = 1, robot: bool = False, cube_dynamic: bool = False,
-               sim_cfg: SimulationManagerCfg | None = None) -> tuple[Scene, list[Any]]:
+def make_scene(
+    *sensor_cfgs: Any,
+    num_envs: int = 1,
+    robot: bool = False,
+    cube_dynamic: bool = False,
+    sim_cfg: SimulationManagerCfg | None = None,
+) -> tuple[Scene, list[Any]]:
     """A built scene with a cube (static unless ``cube_dynamic``), a kinematic
     table, a point light ``lamp`` and the sensors of ``sensor_cfgs``."""
     scene = Scene(sim_cfg or SimulationManagerCfg(), num_envs=num_envs)
     if robot:
         scene.add_robot(RobotCfg(uid="arm", mjcf=HEAD_ARM, control_parts={"all": ["j1"]}))
     scene.add_light(LightCfg(uid="lamp", init_pos=(0.0, 0.0, 2.0)))
-    scene.add_rigid_object(RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_POS,
-                                          body_type="kinematic"), background=True)
-    cube = RigidObjectCfg(uid="cube", shape=CubeCfg(size=[CUBE_SIZE] * 3), init_pos=CUBE_POS,
-                          body_type="dynamic" if cube_dynamic else "static")
+    scene.add_rigid_object(
+        RigidObjectCfg(uid="table", shape=CubeCfg(size=[0.4, 0.4, 0.4]), init_pos=TABLE_POS, body_type="kinematic"),
+        background=True,
+    )
+    cube = RigidObjectCfg(
+        uid="cube",
+        shape=CubeCfg(size=[CUBE_SIZE] * 3),
+        init_pos=CUBE_POS,
+        body_type="dynamic" if cube_dynamic else "static",
+    )
     scene.add_rigid_object(cube, background=not cube_dynamic)
     sensors = [add_sensor(scene, cfg) for cfg in sensor_cfgs]
     scene.build()
@@ -59,8 +70,9 @@ def add_sensor(scene: Scene, cfg: Any) -> Any:
     return sensor
 
 
-def project_opencv(point_world: Sequence[float], eye: Sequence[float], rot_world_cam: np.ndarray,
-                   intrinsics: Sequence[float]) -> tuple[float, float, float]:
+def project_opencv(
+    point_world: Sequence[float], eye: Sequence[float], rot_world_cam: np.ndarray, intrinsics: Sequence[float]
+) -> tuple[float, float, float]:
     """``(u, v, z)`` of a world point for an OpenGL camera frame, by the textbook formula."""
     fx, fy, cx, cy = intrinsics
     p = rot_world_cam.T @ (np.asarray(point_world, float) - np.asarray(eye, float))
@@ -70,8 +82,14 @@ def project_opencv(point_world: Sequence[float], eye: Sequence[float], rot_world
 
 def cube_corners(center: Sequence[float] = CUBE_POS, size: float = CUBE_SIZE) -> np.ndarray:
     h = size / 2
-    return np.array([[center[0] + sx * h, center[1] + sy * h, center[2] + sz * h]
-                     for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    return np.array(
+        [
+            [center[0] + sx * h, center[1] + sy * h, center[2] + sz * h]
+            for sx in (-1, 1)
+            for sy in (-1, 1)
+            for sz in (-1, 1)
+        ]
+    )
 
 
 def mask_bbox(mask: np.ndarray, value: int) -> tuple[int, int, int, int]:

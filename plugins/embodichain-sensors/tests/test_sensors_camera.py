@@ -24,8 +24,9 @@ EYE = (0.30, -0.20, 1.20)
 def down_camera(**kw) -> CameraCfg:
     """Looking straight down from EYE; image up is world +x."""
     ext = CameraCfg.ExtrinsicsCfg(eye=EYE, target=(EYE[0], EYE[1], 0.0), up=(1.0, 0.0, 0.0))
-    return CameraCfg(uid="cam", width=W, height=H, intrinsics=INTR, extrinsics=ext, enable_depth=True,
-                     enable_mask=True, **kw)
+    return CameraCfg(
+        uid="cam", width=W, height=H, intrinsics=INTR, extrinsics=ext, enable_depth=True, enable_mask=True, **kw
+    )
 
 
 def test_cube_projects_where_the_intrinsics_say(scene_factory):
@@ -48,7 +49,12 @@ def test_cube_projects_where_the_intrinsics_say(scene_factory):
     assert abs(z - (EYE[2] - top[2])) < 1e-9
     # the silhouette of the box is the hull of its projected corners: pixel centres inside it
     uv = np.array([project_opencv(c, EYE, rot, INTR)[:2] for c in cube_corners()])
-    want = (math.ceil(uv[:, 0].min()), math.floor(uv[:, 0].max()), math.ceil(uv[:, 1].min()), math.floor(uv[:, 1].max()))
+    want = (
+        math.ceil(uv[:, 0].min()),
+        math.floor(uv[:, 0].max()),
+        math.ceil(uv[:, 1].min()),
+        math.floor(uv[:, 1].max()),
+    )
     got = mask_bbox(mask, cam.mask_id_of("cube"))
     assert np.all(np.abs(np.array(got) - np.array(want)) <= 1), (got, want)
 
@@ -122,8 +128,13 @@ def test_model_camera_matches_the_sensor(scene_factory):
 
 def test_mounted_on_a_robot_link_and_a_site(scene_factory):
     offset = (0.0, 0.0, 0.05)
-    link = CameraCfg(uid="head", width=32, height=24, intrinsics=(30, 30, 16, 12),
-                     extrinsics=CameraCfg.ExtrinsicsCfg(parent="eyes", pos=offset))
+    link = CameraCfg(
+        uid="head",
+        width=32,
+        height=24,
+        intrinsics=(30, 30, 16, 12),
+        extrinsics=CameraCfg.ExtrinsicsCfg(parent="eyes", pos=offset),
+    )
     full = CameraCfg(uid="head2", width=32, height=24, extrinsics=CameraCfg.ExtrinsicsCfg(parent="arm/eyes"))
     site = CameraCfg(uid="tip", width=32, height=24, extrinsics=CameraCfg.ExtrinsicsCfg(parent="tip"))
     scene, (a, b, c) = scene_factory(link, full, site, robot=True, num_envs=2)
@@ -177,9 +188,16 @@ def test_config_validation():
         CameraCfg(uid="c", near=2.0, far=1.0)
     with pytest.raises(ConfigError, match="target"):
         CameraCfg.ExtrinsicsCfg(eye=(1, 0, 0))
-    cfg = CameraCfg.from_dict({"sensor_type": "Camera", "uid": "cam_high", "width": 96, "height": 54,
-                               "intrinsics": [48.8, 48.8, 48, 27],
-                               "extrinsics": {"eye": [1, 0, 1], "target": [0, 0, 0], "up": [0, 0, 1]}})
+    cfg = CameraCfg.from_dict(
+        {
+            "sensor_type": "Camera",
+            "uid": "cam_high",
+            "width": 96,
+            "height": 54,
+            "intrinsics": [48.8, 48.8, 48, 27],
+            "extrinsics": {"eye": [1, 0, 1], "target": [0, 0, 0], "up": [0, 0, 1]},
+        }
+    )
     assert isinstance(cfg, CameraCfg)
     assert cfg.extrinsics.eye == (1, 0, 1)
     assert cfg.fx == 48.8

@@ -37,8 +37,15 @@ def test_forces_while_resting_and_none_when_lifted():
     sensor.update()
     data = sensor.get_data()
     assert {k: tuple(v.shape) for k, v in data.items()} == {
-        "position": (2, K, 3), "normal": (2, K, 3), "force": (2, K, 3), "friction": (2, K, 3),
-        "impulse": (2, K), "distance": (2, K), "user_ids": (2, K, 2), "is_valid": (2, K)}
+        "position": (2, K, 3),
+        "normal": (2, K, 3),
+        "force": (2, K, 3),
+        "friction": (2, K, 3),
+        "impulse": (2, K),
+        "distance": (2, K),
+        "user_ids": (2, K, 2),
+        "is_valid": (2, K),
+    }
     assert data["is_valid"].dtype == torch.bool
     assert data["user_ids"].dtype == torch.int32
     valid = data["is_valid"]
@@ -64,8 +71,9 @@ def test_forces_while_resting_and_none_when_lifted():
 
 def test_filters_need_both_or_either_and_fixed_k():
     both = ContactSensorCfg(uid="both", rigid_uid_list=["cube"], filter_need_both_actor=True)
-    either = ContactSensorCfg(uid="either", rigid_uid_list=["cube"], filter_need_both_actor=False,
-                              max_contacts_per_env=2)
+    either = ContactSensorCfg(
+        uid="either", rigid_uid_list=["cube"], filter_need_both_actor=False, max_contacts_per_env=2
+    )
     everything = ContactSensorCfg(uid="all")
     scene, sensors = make_scene(both, either, everything, cube_dynamic=True)
     cube_on_table(scene)
@@ -80,10 +88,16 @@ def test_filters_need_both_or_either_and_fixed_k():
 
 
 def test_articulation_link_filter():
-    lid = ContactSensorCfg(uid="lid", articulation_cfg_list=[ArticulationContactFilterCfg(
-        articulation_uid="block", link_name_list=["lid"])], filter_need_both_actor=False)
-    base = ContactSensorCfg(uid="base", articulation_cfg_list=[ArticulationContactFilterCfg(
-        articulation_uid="block", link_name_list=["blo.*"])], filter_need_both_actor=False)
+    lid = ContactSensorCfg(
+        uid="lid",
+        articulation_cfg_list=[ArticulationContactFilterCfg(articulation_uid="block", link_name_list=["lid"])],
+        filter_need_both_actor=False,
+    )
+    base = ContactSensorCfg(
+        uid="base",
+        articulation_cfg_list=[ArticulationContactFilterCfg(articulation_uid="block", link_name_list=["blo.*"])],
+        filter_need_both_actor=False,
+    )
     scene = Scene(SimulationManagerCfg(), num_envs=1)
     scene.add_articulation(ArticulationCfg(uid="block", mjcf=BLOCK, fix_base=False, init_pos=(0.0, 0.0, 0.031)))
     sensors = [add_sensor(scene, c) for c in (lid, base)]

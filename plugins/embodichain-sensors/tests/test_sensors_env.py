@@ -17,21 +17,45 @@ from embodichain_sensors.contact import ContactSensor
 from embodichain_sensors.stereo import StereoCamera
 
 SENSORS = [
-    {"sensor_type": "Camera", "uid": "cam_high", "width": 64, "height": 48, "intrinsics": [60, 60, 31.5, 23.5],
-     "enable_depth": True, "enable_mask": True,
-     "extrinsics": {"eye": [1.0, 0.0, 1.0], "target": [0.3, 0.0, 0.0], "up": [0, 0, 1]}},
-    {"sensor_type": "StereoCamera", "uid": "eye_in_head", "width": 48, "height": 32, "intrinsics": [40, 40, 24, 16],
-     "left_to_right_pos": [0.06, 0, 0], "enable_depth": True, "enable_disparity": True,
-     "extrinsics": {"parent": "eyes"}},
-    {"sensor_type": "ContactSensor", "uid": "touch", "rigid_uid_list": ["cube"], "filter_need_both_actor": False,
-     "max_contacts_per_env": 4},
+    {
+        "sensor_type": "Camera",
+        "uid": "cam_high",
+        "width": 64,
+        "height": 48,
+        "intrinsics": [60, 60, 31.5, 23.5],
+        "enable_depth": True,
+        "enable_mask": True,
+        "extrinsics": {"eye": [1.0, 0.0, 1.0], "target": [0.3, 0.0, 0.0], "up": [0, 0, 1]},
+    },
+    {
+        "sensor_type": "StereoCamera",
+        "uid": "eye_in_head",
+        "width": 48,
+        "height": 32,
+        "intrinsics": [40, 40, 24, 16],
+        "left_to_right_pos": [0.06, 0, 0],
+        "enable_depth": True,
+        "enable_disparity": True,
+        "extrinsics": {"parent": "eyes"},
+    },
+    {
+        "sensor_type": "ContactSensor",
+        "uid": "touch",
+        "rigid_uid_list": ["cube"],
+        "filter_need_both_actor": False,
+        "max_contacts_per_env": 4,
+    },
 ]
 
 
 def make_cfg() -> EmbodiedEnvCfg:
     return EmbodiedEnvCfg(
-        num_envs=2, seed=0, verbose=False, max_episode_steps=10,
-        robot=RobotCfg(uid="arm", mjcf=HEAD_ARM, control_parts={"all": ["j1"]}), control_parts=["all"],
+        num_envs=2,
+        seed=0,
+        verbose=False,
+        max_episode_steps=10,
+        robot=RobotCfg(uid="arm", mjcf=HEAD_ARM, control_parts={"all": ["j1"]}),
+        control_parts=["all"],
         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.3, 0.0, 0.025))],
         light=EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="lamp", init_pos=(0.0, 0.0, 2.0))]),
         sensor=[SensorCfg.from_dict(s, f"sensor[{i}]") for i, s in enumerate(SENSORS)],
@@ -82,6 +106,8 @@ def test_an_unknown_parent_names_the_sensor_entry_of_the_config():
 
     cfg = make_cfg()
     cfg.sensor[1].extrinsics.parent = "eyez"
-    with pytest.raises(ConfigError, match=r"^sensor\[1\]\.extrinsics\.parent: sensor 'eye_in_head': no link, body or site named 'eyez'") as err:
+    with pytest.raises(
+        ConfigError, match=r"^sensor\[1\]\.extrinsics\.parent: sensor 'eye_in_head': no link, body or site named 'eyez'"
+    ) as err:
         EmbodiedEnv(cfg)
     assert "'arm/eyes'" in str(err.value)  # the closest valid choice is offered

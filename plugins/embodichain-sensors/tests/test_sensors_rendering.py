@@ -22,11 +22,14 @@ def test_user_value_is_respected():
     assert env == {"MUJOCO_GL": "osmesa"}
 
 
-@pytest.mark.parametrize("found, want", [
-    ({"egl": "libEGL.so.1", "osmesa": "libOSMesa.so.8"}, "egl"),
-    ({"egl": None, "osmesa": "libOSMesa.so.8"}, "osmesa"),
-    ({"egl": None, "osmesa": None}, None),
-])
+@pytest.mark.parametrize(
+    "found, want",
+    [
+        ({"egl": "libEGL.so.1", "osmesa": "libOSMesa.so.8"}, "egl"),
+        ({"egl": None, "osmesa": "libOSMesa.so.8"}, "osmesa"),
+        ({"egl": None, "osmesa": None}, None),
+    ],
+)
 def test_prefers_egl_then_osmesa(monkeypatch, found, want):
     monkeypatch.setattr(rendering, "find_backend_libraries", lambda: found)
     monkeypatch.setattr(rendering.platform, "system", lambda: "Linux")
@@ -52,8 +55,10 @@ def test_a_broken_backend_names_what_to_install(monkeypatch):
 
 def test_sim_import_chooses_the_backend_before_mujoco():
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
-    code = ("import sys, os; import embodichain_core.sim; assert 'mujoco' not in sys.modules; "
-            "import mujoco.rendering.classic.gl_context as g; print(os.environ.get('MUJOCO_GL'), g._MUJOCO_GL)")
+    code = (
+        "import sys, os; import embodichain_core.sim; assert 'mujoco' not in sys.modules; "
+        "import mujoco.rendering.classic.gl_context as g; print(os.environ.get('MUJOCO_GL'), g._MUJOCO_GL)"
+    )
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     chosen, seen = out.stdout.split()
@@ -66,11 +71,13 @@ def test_sim_import_chooses_the_backend_before_mujoco():
 def test_each_installed_backend_renders(backend):
     if not rendering.find_backend_libraries()[backend]:
         pytest.skip(f"{backend} is not installed")
-    code = ("import sys; sys.path.insert(0, %r); from sensors_helpers import make_scene; "
-            "from embodichain_sensors.cfg import CameraCfg; "
-            "e = CameraCfg.ExtrinsicsCfg(eye=(1, 0, 1), target=(0, 0, 0)); "
-            "s, (c,) = make_scene(CameraCfg(uid='c', width=32, height=24, extrinsics=e)); "
-            "print(int(c.get_data()['color'][..., :3].float().std() > 1)); c.close()") % os.path.dirname(__file__)
+    code = (
+        "import sys; sys.path.insert(0, %r); from sensors_helpers import make_scene; "
+        "from embodichain_sensors.cfg import CameraCfg; "
+        "e = CameraCfg.ExtrinsicsCfg(eye=(1, 0, 1), target=(0, 0, 0)); "
+        "s, (c,) = make_scene(CameraCfg(uid='c', width=32, height=24, extrinsics=e)); "
+        "print(int(c.get_data()['color'][..., :3].float().std() > 1)); c.close()"
+    ) % os.path.dirname(__file__)
     env = {**os.environ, "MUJOCO_GL": backend}
     env.pop("PYOPENGL_PLATFORM", None)
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)

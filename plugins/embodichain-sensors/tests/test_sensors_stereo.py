@@ -18,9 +18,17 @@ EYE = (CUBE_POS[0], CUBE_POS[1] + 0.02, 1.2)
 
 
 def stereo_cfg(**kw) -> StereoCameraCfg:
-    base = dict(uid="stereo", width=W, height=H, intrinsics=(FX, FX, 70.2, 64.9),
-                left_to_right_pos=(BASELINE, 0.0, 0.0), enable_depth=True, enable_mask=True, enable_disparity=True,
-                extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=EYE, target=(EYE[0], EYE[1], 0.0), up=(1.0, 0.0, 0.0)))
+    base = dict(
+        uid="stereo",
+        width=W,
+        height=H,
+        intrinsics=(FX, FX, 70.2, 64.9),
+        left_to_right_pos=(BASELINE, 0.0, 0.0),
+        enable_depth=True,
+        enable_mask=True,
+        enable_disparity=True,
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(eye=EYE, target=(EYE[0], EYE[1], 0.0), up=(1.0, 0.0, 0.0)),
+    )
     base.update(kw)
     return StereoCameraCfg(**base)
 
@@ -30,9 +38,12 @@ def test_outputs_follow_the_reference_table(scene_factory):
     data = cam.get_data()
     shapes = {k: (tuple(v.shape), v.dtype) for k, v in data.items()}
     assert shapes == {
-        "color": ((2, H, W, 4), torch.uint8), "color_right": ((2, H, W, 4), torch.uint8),
-        "depth": ((2, H, W, 1), torch.float32), "depth_right": ((2, H, W, 1), torch.float32),
-        "mask": ((2, H, W, 1), torch.int32), "mask_right": ((2, H, W, 1), torch.int32),
+        "color": ((2, H, W, 4), torch.uint8),
+        "color_right": ((2, H, W, 4), torch.uint8),
+        "depth": ((2, H, W, 1), torch.float32),
+        "depth_right": ((2, H, W, 1), torch.float32),
+        "mask": ((2, H, W, 1), torch.int32),
+        "mask_right": ((2, H, W, 1), torch.int32),
         "disparity": ((2, H, W, 1), torch.float32),
     }
 
@@ -78,10 +89,17 @@ def test_disparity_needs_depth():
 
 def test_seed_eye_in_head_on_an_eyes_link(scene_factory):
     """The seed tutorial's camera: 960x540, fx 450, 6 cm baseline, parent ``eyes``."""
-    cfg = StereoCameraCfg(uid="eye_in_head", width=960, height=540, enable_mask=True, enable_depth=True,
-                          left_to_right_pos=(0.06, 0, 0), intrinsics=(450, 450, 480, 270),
-                          intrinsics_right=(450, 450, 480, 270),
-                          extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"))
+    cfg = StereoCameraCfg(
+        uid="eye_in_head",
+        width=960,
+        height=540,
+        enable_mask=True,
+        enable_depth=True,
+        left_to_right_pos=(0.06, 0, 0),
+        intrinsics=(450, 450, 480, 270),
+        intrinsics_right=(450, 450, 480, 270),
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"),
+    )
     scene, (cam,) = scene_factory(cfg, robot=True)
     data = cam.get_data()
     assert data["color"].shape == (1, 540, 960, 4)

@@ -15,8 +15,9 @@ from test_sensors_camera import down_camera
 
 def _run(backend: str) -> tuple[dict, dict, float, object]:
     touch = ContactSensorCfg(uid="touch", rigid_uid_list=["cube", "table"], max_contacts_per_env=8)
-    scene, (cam, contact) = make_scene(down_camera(), touch, num_envs=2, cube_dynamic=True,
-                                       sim_cfg=SimulationManagerCfg(backend=backend))
+    scene, (cam, contact) = make_scene(
+        down_camera(), touch, num_envs=2, cube_dynamic=True, sim_cfg=SimulationManagerCfg(backend=backend)
+    )
     scene["cube"].set_local_pose(torch.tensor([[TABLE_POS[0], TABLE_POS[1], 0.425, 1.0, 0.0, 0.0, 0.0]]).repeat(2, 1))
     for _ in range(60):
         scene.sim.step(1)

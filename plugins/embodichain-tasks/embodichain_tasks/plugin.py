@@ -34,14 +34,34 @@ class TaskSpec:
 
 #: Every task of this plugin, in the order ``embodichain list tasks`` shows them.
 TASKS: tuple[TaskSpec, ...] = (
-    TaskSpec("ModularEnv-v1", "embodichain_tasks.tutorials.modular_env:ModularEnv", 100, "modular_env.json",
-             "The seed tutorial: DexforceW1, stereo head camera, table, fork, drawer, four events"),
-    TaskSpec("PushCube-v1", "embodichain_tasks.rl.push_cube:PushCubeEnv", 100, "push_cube.json",
-             "RL: a 7-DoF arm pushes a cube to a random goal (delta joint actions, shaped reward)"),
-    TaskSpec("OpenDrawer-v1", "embodichain_tasks.il.open_drawer:OpenDrawerEnv", 300, "open_drawer.json",
-             "IL: the W1 pulls the drawer open by its handle (scripted IK demo)"),
-    TaskSpec("PickFork-v1", "embodichain_tasks.il.pick_fork:PickForkEnv", 300, "pick_fork.json",
-             "IL: the W1 picks the fork from the table and lifts it (scripted IK demo)"),
+    TaskSpec(
+        "ModularEnv-v1",
+        "embodichain_tasks.tutorials.modular_env:ModularEnv",
+        100,
+        "modular_env.json",
+        "The seed tutorial: DexforceW1, stereo head camera, table, fork, drawer, four events",
+    ),
+    TaskSpec(
+        "PushCube-v1",
+        "embodichain_tasks.rl.push_cube:PushCubeEnv",
+        100,
+        "push_cube.json",
+        "RL: a 7-DoF arm pushes a cube to a random goal (delta joint actions, shaped reward)",
+    ),
+    TaskSpec(
+        "OpenDrawer-v1",
+        "embodichain_tasks.il.open_drawer:OpenDrawerEnv",
+        300,
+        "open_drawer.json",
+        "IL: the W1 pulls the drawer open by its handle (scripted IK demo)",
+    ),
+    TaskSpec(
+        "PickFork-v1",
+        "embodichain_tasks.il.pick_fork:PickForkEnv",
+        300,
+        "pick_fork.json",
+        "IL: the W1 picks the fork from the table and lifts it (scripted IK demo)",
+    ),
 )
 
 
@@ -49,5 +69,10 @@ TASKS: tuple[TaskSpec, ...] = (
 def embodichain_register_tasks(register) -> None:  # noqa: ANN001 - typed by the hookspec
     """Register every task of :data:`TASKS` with its JSON gym config."""
     for task in TASKS:
-        register(task.task_id, task.entry_point, max_episode_steps=task.max_episode_steps,
-                 config=str(task.config_path), description=task.description)
+        register(
+            task.task_id,
+            task.entry_point,
+            max_episode_steps=task.max_episode_steps,
+            config=str(task.config_path),
+            description=task.description,
+        )

@@ -82,22 +82,34 @@ tests can stop it. Everything else — the config classes, `from_dict`, `Extrins
 """
 
 SECTIONS = (
-    ("ExampleEventCfg", "## Events",
-     "Four events: `replace_obj` gives each env a random fork mesh of the folder at every reset "
-     "(`env.scene.current_mesh[\"fork\"]` lists them), `randomize_fork_mass` draws the fork's mass "
-     "at every reset, `randomize_light` moves and recolours the point light every 5 steps of each "
-     "episode and `randomize_table_mat` changes the table's colour or texture every 10 steps. "
-     "Interval counters are per env and restart with each episode."),
-    ("ObsCfg", "## Observations",
-     "Besides `robot/qpos`, `robot/qvel`, `robot/qf` and the camera data under `sensor`, the "
-     "observation gets `fork_pose`: the fork's (N, 4, 4) pose in the env frame."),
-    ("ExampleCfg", "## The scene",
-     "The W1 (`version` v021, anthropomorphic arms) at the origin; the stereo camera `eye_in_head` "
-     "(960x540 per eye, depth and mask, 6 cm baseline) mounted on the head frame `eyes`; the "
-     "kinematic round table, the fork scaled (0.75, 0.75, 1.0) above it and the drawer."),
-    ("ModularEnv", "## The environment class",
-     "All behaviour comes from the config, so the class only registers the id. `max_episode_steps=100` "
-     "becomes the env's own limit (no gymnasium `TimeLimit`)."),
+    (
+        "ExampleEventCfg",
+        "## Events",
+        "Four events: `replace_obj` gives each env a random fork mesh of the folder at every reset "
+        '(`env.scene.current_mesh["fork"]` lists them), `randomize_fork_mass` draws the fork\'s mass '
+        "at every reset, `randomize_light` moves and recolours the point light every 5 steps of each "
+        "episode and `randomize_table_mat` changes the table's colour or texture every 10 steps. "
+        "Interval counters are per env and restart with each episode.",
+    ),
+    (
+        "ObsCfg",
+        "## Observations",
+        "Besides `robot/qpos`, `robot/qvel`, `robot/qf` and the camera data under `sensor`, the "
+        "observation gets `fork_pose`: the fork's (N, 4, 4) pose in the env frame.",
+    ),
+    (
+        "ExampleCfg",
+        "## The scene",
+        "The W1 (`version` v021, anthropomorphic arms) at the origin; the stereo camera `eye_in_head` "
+        "(960x540 per eye, depth and mask, 6 cm baseline) mounted on the head frame `eyes`; the "
+        "kinematic round table, the fork scaled (0.75, 0.75, 1.0) above it and the drawer.",
+    ),
+    (
+        "ModularEnv",
+        "## The environment class",
+        "All behaviour comes from the config, so the class only registers the id. `max_episode_steps=100` "
+        "becomes the env's own limit (no gymnasium `TimeLimit`).",
+    ),
 )
 
 FOOTER = """
@@ -123,9 +135,9 @@ def _segments(source: str) -> dict[str, str]:
     for node in tree.body:
         if isinstance(node, ast.ClassDef):
             start = min([d.lineno for d in node.decorator_list] + [node.lineno])
-            out[node.name] = "\n".join(lines[start - 1:node.end_lineno])
+            out[node.name] = "\n".join(lines[start - 1 : node.end_lineno])
         elif isinstance(node, ast.If) and "__main__" in ast.unparse(node.test):
-            out["__main__"] = "\n".join(lines[node.lineno - 1:node.end_lineno])
+            out["__main__"] = "\n".join(lines[node.lineno - 1 : node.end_lineno])
     return out
 
 
@@ -137,9 +149,11 @@ def render() -> str:
     body = [HEADER + rows + DEVIATION, "## The code\n", f"```python\n{source.rstrip()}\n```\n"]
     for name, title, text in SECTIONS:
         body.append(f"{title}\n\n{text}\n\n```python\n{parts[name]}\n```\n")
-    body.append("## Running it\n\nThe `__main__` block builds the config from the launcher arguments, "
-                "makes the env and runs episodes of 100 zero-action steps:\n\n"
-                f"```python\n{parts['__main__']}\n```\n")
+    body.append(
+        "## Running it\n\nThe `__main__` block builds the config from the launcher arguments, "
+        "makes the env and runs episodes of 100 zero-action steps:\n\n"
+        f"```python\n{parts['__main__']}\n```\n"
+    )
     config = CONFIG.read_text(encoding="utf-8").rstrip()
     body.append(FOOTER + f"```json\n{config}\n```\n")
     return "\n".join(body)

@@ -71,10 +71,10 @@ def parse_path(path: str) -> list[Any]:
             while end + 1 < len(path) and path[end + 1] not in ".[":
                 end = path.index(")", end + 1)
             keys.append(path[2:end])
-            path = path[end + 1:]
+            path = path[end + 1 :]
             continue
         match = _TOKEN.match(path.lstrip("."))
-        path = path.lstrip(".")[match.end():]
+        path = path.lstrip(".")[match.end() :]
         keys.append(match.group(1) if match.group(1) is not None else int(match.group(2)))
     return keys
 
@@ -104,8 +104,9 @@ _WRONG_TYPES = [("str", "x"), ("none", None), ("list", [1.0]), ("dict", {"v": 1}
 
 
 def _muts(path: str, errors: list, oks: list = (), names: tuple = ()) -> list[Mutation]:
-    return ([Mutation(path, label, value, "error", names) for label, value in errors]
-            + [Mutation(path, label, value, "ok") for label, value in oks])
+    return [Mutation(path, label, value, "error", names) for label, value in errors] + [
+        Mutation(path, label, value, "ok") for label, value in oks
+    ]
 
 
 def positive(path: str, ok: float, zero_ok: bool = False) -> list[Mutation]:
@@ -122,9 +123,16 @@ def unit(path: str, ok: float) -> list[Mutation]:
 
 
 def vec(path: str, base: list, low: float = None, high: float = None, low_open: bool = False) -> list[Mutation]:
-    errors = [("short", base[:-1]), ("long", [*base, base[-1]]), ("nan", [NAN, *base[1:]]),
-              ("inf", [*base[:-1], INF]), ("str", "x"), ("dict", {"x": 1}), ("none", None),
-              ("str_item", ["a", *base[1:]])]
+    errors = [
+        ("short", base[:-1]),
+        ("long", [*base, base[-1]]),
+        ("nan", [NAN, *base[1:]]),
+        ("inf", [*base[:-1], INF]),
+        ("str", "x"),
+        ("dict", {"x": 1}),
+        ("none", None),
+        ("str_item", ["a", *base[1:]]),
+    ]
     if low is not None:
         errors.append(("below", [low if low_open else low - 1.0, *base[1:]]))
     if high is not None:
@@ -133,16 +141,26 @@ def vec(path: str, base: list, low: float = None, high: float = None, low_open: 
 
 
 def size(path: str, ok: int, huge: int) -> list[Mutation]:
-    return _muts(path, [("zero", 0), ("negative", -1), ("float", 1.5), ("str", "8"), ("none", None),
-                        ("huge", huge)], [("other", ok)])
+    return _muts(
+        path,
+        [("zero", 0), ("negative", -1), ("float", 1.5), ("str", "8"), ("none", None), ("huge", huge)],
+        [("other", ok)],
+    )
 
 
 def range_pair(path: str, low: Any, high: Any, optional: bool, bounded: tuple = ()) -> list[Mutation]:
     def nan_of(v: Any) -> Any:
         return [NAN, *v[1:]] if isinstance(v, list) else NAN
 
-    errors = [("swapped", [high, low]), ("one", [low]), ("three", [low, high, high]), ("str", "x"),
-              ("dict", {"low": low}), ("nan", [nan_of(low), high]), ("strs", ["a", "b"])]
+    errors = [
+        ("swapped", [high, low]),
+        ("one", [low]),
+        ("three", [low, high, high]),
+        ("str", "x"),
+        ("dict", {"low": low}),
+        ("nan", [nan_of(low), high]),
+        ("strs", ["a", "b"]),
+    ]
     if isinstance(low, list):
         errors.append(("short_bound", [low[:-1], high[:-1]]))
     errors += [(f"bound_{label}", value) for label, value in bounded]
@@ -153,9 +171,19 @@ def range_pair(path: str, low: Any, high: Any, optional: bool, bounded: tuple = 
 
 
 def event_mode(path: str) -> list[Mutation]:
-    return _muts(path, [("typo_rset", "rset"), ("typo_intervall", "intervall"), ("case", "Reset"),
-                        ("typo_startp", "startp"), ("int", 3), ("none", None), ("empty", "")],
-                 [("startup", "startup")])
+    return _muts(
+        path,
+        [
+            ("typo_rset", "rset"),
+            ("typo_intervall", "intervall"),
+            ("case", "Reset"),
+            ("typo_startp", "startp"),
+            ("int", 3),
+            ("none", None),
+            ("empty", ""),
+        ],
+        [("startup", "startup")],
+    )
 
 
 def delete(path: str, names: tuple = ()) -> list[Mutation]:
@@ -172,13 +200,17 @@ _FINGERS = "((LEFT|RIGHT)_FINGER[12])"
 
 
 def run_and_sim() -> Iterator[Mutation]:
-    yield from size("num_envs", 3, 10 ** 7)
-    yield from _muts("max_episode_steps", [("str", "300"), ("float", 1.5), ("huge", 10 ** 10), ("none", None)],
-                     [("unlimited", -1)])
+    yield from size("num_envs", 3, 10**7)
+    yield from _muts(
+        "max_episode_steps", [("str", "300"), ("float", 1.5), ("huge", 10**10), ("none", None)], [("unlimited", -1)]
+    )
     yield from _muts("max_episodes", [("zero", 0), ("str", "x")])
-    yield from _muts("physics_dt", [("zero", 0.0), ("negative", -0.01), ("nan", NAN), ("inf", INF),
-                                    ("str", "fast"), ("huge", 10.0)], [("other", 0.005)])
-    yield from _muts("physics_substeps", [("zero", 0), ("huge", 10 ** 6), ("float", 2.5)], [("other", 2)])
+    yield from _muts(
+        "physics_dt",
+        [("zero", 0.0), ("negative", -0.01), ("nan", NAN), ("inf", INF), ("str", "fast"), ("huge", 10.0)],
+        [("other", 0.005)],
+    )
+    yield from _muts("physics_substeps", [("zero", 0), ("huge", 10**6), ("float", 2.5)], [("other", 2)])
     yield from single("physics_config.cone", "typo", "eliptic")
     yield from _muts("physics_config.iterations", [("zero", 0), ("negative", -5)], [("other", 100)])
     yield from vec("physics_config.gravity", [0.0, 0.0, -9.81])
@@ -186,9 +218,12 @@ def run_and_sim() -> Iterator[Mutation]:
     yield from single("device", "int", 3)
     yield from single("env.control_parts", "str", "right_arm")
     yield from single("env.control_parts", "unknown_part", ["right_arm", "no_such_part"], names=("control_parts",))
-    yield from _muts("env.custom_event_modes", [("str", "attach"), ("int_item", [3]), ("builtin", ["reset"])],
-                     [("declared", ["attach"])])
-    yield from single("env.sim_steps_per_control", "huge", 10 ** 7)
+    yield from _muts(
+        "env.custom_event_modes",
+        [("str", "attach"), ("int_item", [3]), ("builtin", ["reset"])],
+        [("declared", ["attach"])],
+    )
+    yield from single("env.sim_steps_per_control", "huge", 10**7)
     yield from single("env.seed", "str", "zero")
 
 
@@ -207,20 +242,35 @@ def events() -> Iterator[Mutation]:
     yield from single(f"{_EV}.fork_mass", "disabled", None, "ok")
     yield from single(f"{_EV}.fork_mass", "str", "x")
     yield from single(f"{_EV}.fork_mass.params.relative", "str", "yes")
-    yield from range_pair(f"{_EV}.fork_mass.params.mass_range", 0.03, 0.1, optional=False,
-                          bounded=[("zero", [0.0, 0.1]), ("negative", [-0.1, 0.1]), ("inf", [0.03, INF])])
+    yield from range_pair(
+        f"{_EV}.fork_mass.params.mass_range",
+        0.03,
+        0.1,
+        optional=False,
+        bounded=[("zero", [0.0, 0.1]), ("negative", [-0.1, 0.1]), ("inf", [0.03, INF])],
+    )
     low, high = [-0.04, -0.05, 0.0], [0.04, 0.05, 0.0]
     yield from range_pair(f"{_EV}.fork_pose.params.position_range", low, high, optional=True)
     yield from range_pair(f"{_EV}.fork_pose.params.rotation_range", [0.0, 0.0, -30.0], [0.0, 0.0, 30.0], True)
     yield from single(f"{_EV}.fork_pose.params.relative_rotation", "str", "true")
     grey, white = [0.7, 0.7, 0.7], [1.0, 1.0, 1.0]
-    yield from range_pair(f"{_EV}.light.params.color_range", grey, white, optional=True,
-                          bounded=[("above_one", [grey, [1.5, 1.0, 1.0]]), ("negative", [[-0.1, 0.7, 0.7], white])])
+    yield from range_pair(
+        f"{_EV}.light.params.color_range",
+        grey,
+        white,
+        optional=True,
+        bounded=[("above_one", [grey, [1.5, 1.0, 1.0]]), ("negative", [[-0.1, 0.7, 0.7], white])],
+    )
     yield from range_pair(f"{_EV}.light.params.intensity_range", 15.0, 30.0, optional=True)
     yield from single(f"{_EV}.light.params.intensity_range", "relative_negative", [-5.0, 10.0], "ok")
     yield from unit(f"{_EV}.table_material.params.random_texture_prob", 1.0)
-    yield from range_pair(f"{_EV}.table_material.params.base_color_range", [0.2] * 3, [1.0] * 3, optional=True,
-                          bounded=[("above_one", [[0.2] * 3, [1.2, 1.0, 1.0]])])
+    yield from range_pair(
+        f"{_EV}.table_material.params.base_color_range",
+        [0.2] * 3,
+        [1.0] * 3,
+        optional=True,
+        bounded=[("above_one", [[0.2] * 3, [1.2, 1.0, 1.0]])],
+    )
     yield from single(f"{_EV}.table_material.params.texture_path", "int", 3)
     yield from single(f"{_EV}.table_material.params.texture_path", "missing", "NoSuchTextures/none")
     yield from delete(f"{_EV}.replace_fork.params.folder_path")
@@ -250,10 +300,14 @@ def robot() -> Iterator[Mutation]:
     yield from _muts("robot.init_rot", [("four", [0.0, 0.0, 0.0, 1.0]), ("nan", [0.0, NAN, 0.0])])
     yield from _muts("robot.init_qpos", [("nan_item", [NAN] + [0.0] * 23), ("str", "x")])
     drive, key = "robot.drive_pros", _FINGERS[1:-1]
-    yield from _muts(f"{drive}.stiffness.{_FINGERS}", [("negative", -3000.0), ("nan", NAN), ("str", "stiff")],
-                     names=(f"{drive}.stiffness.{key}",))
-    yield from _muts(f"{drive}.damping.{_FINGERS}", [("negative", -100.0), ("inf", INF)],
-                     names=(f"{drive}.damping.{key}",))
+    yield from _muts(
+        f"{drive}.stiffness.{_FINGERS}",
+        [("negative", -3000.0), ("nan", NAN), ("str", "stiff")],
+        names=(f"{drive}.stiffness.{key}",),
+    )
+    yield from _muts(
+        f"{drive}.damping.{_FINGERS}", [("negative", -100.0), ("inf", INF)], names=(f"{drive}.damping.{key}",)
+    )
     yield from _muts(f"{drive}.max_effort.{_FINGERS}", [("negative", -40.0)], names=(f"{drive}.max_effort.{key}",))
     # the W1 config merges a drive mapping into its per-joint defaults: {} keeps them
     yield from single(f"{drive}.stiffness", "empty_mapping", {}, "ok")
@@ -265,11 +319,12 @@ def robot() -> Iterator[Mutation]:
 
 def sensors_and_lights() -> Iterator[Mutation]:
     cam = "sensor[0]"
-    yield from size(f"{cam}.width", 160, 10 ** 6)
-    yield from single(f"{cam}.height", "huge", 10 ** 6)
+    yield from size(f"{cam}.width", 160, 10**6)
+    yield from single(f"{cam}.height", "huge", 10**6)
     intr = [150.0, 150.0, 160.0, 90.0]
-    yield from _muts(f"{cam}.intrinsics", [("short", intr[:3]), ("zero_fx", [0.0, *intr[1:]]),
-                                           ("nan", [NAN, *intr[1:]])])
+    yield from _muts(
+        f"{cam}.intrinsics", [("short", intr[:3]), ("zero_fx", [0.0, *intr[1:]]), ("nan", [NAN, *intr[1:]])]
+    )
     yield from single(f"{cam}.intrinsics_right", "short", intr[:2])
     yield from _muts(f"{cam}.left_to_right_pos", [("short", [0.06, 0.0]), ("nan", [NAN, 0.0, 0.0])])
     # the mount is resolved when the sensor is built: the error names the sensor's uid and the key
@@ -305,8 +360,12 @@ def objects() -> Iterator[Mutation]:
     yield from vec(f"{fork}.body_scale", [0.75, 0.75, 1.0], low=0.0, low_open=True)
     yield from vec(f"{fork}.init_pos", [0.5, -0.2, 0.8225])
     yield from single(f"{fork}.max_convex_hull_num", "zero", 0)
-    yield from single(f"{fork}.shape.visual_material", "rgb_only", {"base_color": [1.0, 0.0, 0.0]},
-                      names=(f"{fork}.shape.visual_material.base_color",))
+    yield from single(
+        f"{fork}.shape.visual_material",
+        "rgb_only",
+        {"base_color": [1.0, 0.0, 0.0]},
+        names=(f"{fork}.shape.visual_material.base_color",),
+    )
     yield from single(f"{fork}.mass", "unknown_key", 1.0)
     yield from _muts("rigid_object", [("str", "fork"), ("dict", {}), ("none", None)])
     yield from single("sensor", "dict", {})

@@ -32,7 +32,9 @@ def run_cli(command: Sequence[str], timeout: float = 300.0) -> subprocess.Comple
     """Run ``command`` from the repository root; fail with its output on a non-zero exit."""
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     out = subprocess.run(list(command), cwd=REPO, capture_output=True, text=True, timeout=timeout, env=env)
-    assert out.returncode == 0, f"{' '.join(command)} exited {out.returncode}:\n{out.stdout[-3000:]}\n{out.stderr[-3000:]}"
+    assert out.returncode == 0, (
+        f"{' '.join(command)} exited {out.returncode}:\n{out.stdout[-3000:]}\n{out.stderr[-3000:]}"
+    )
     return out
 
 
@@ -40,8 +42,6 @@ def embodichain_command() -> list[str]:
     """The ``embodichain`` console script of this interpreter's environment (or ``python -m``)."""
     script = Path(sys.executable).with_name("embodichain")
     return [str(script)] if script.exists() else [sys.executable, "-m", "embodichain_core.cli.main"]
-
-
 
 
 _PATH_KEYS = ("fpath", "folder_path", "texture_path")
@@ -71,11 +71,21 @@ def _normalize(node: Any) -> Any:
     from embodichain_core.sim.data import get_data_path
 
     if isinstance(node, dict):
-        if "uid" in node and set(node) <= {"uid", "joint_names", "joint_ids", "link_names", "control_parts",
-                                           "body_names", "body_ids", "preserve_order"}:
+        if "uid" in node and set(node) <= {
+            "uid",
+            "joint_names",
+            "joint_ids",
+            "link_names",
+            "control_parts",
+            "body_names",
+            "body_ids",
+            "preserve_order",
+        }:
             return {k: v for k, v in node.items() if v not in (None, False)}
-        return {k: (os.path.realpath(get_data_path(v)) if k in _PATH_KEYS and isinstance(v, str) else _normalize(v))
-                for k, v in node.items()}
+        return {
+            k: (os.path.realpath(get_data_path(v)) if k in _PATH_KEYS and isinstance(v, str) else _normalize(v))
+            for k, v in node.items()
+        }
     if isinstance(node, (list, tuple)):
         return [_normalize(v) for v in node]
     return node

@@ -80,8 +80,20 @@ def test_corpus_is_large_and_deterministic() -> None:
     assert [m.id for m in CORPUS] == [m.id for m in mutations()]
     assert len({m.id for m in CORPUS}) == len(CORPUS)
     kinds = {m.label for m in CORPUS}
-    assert {"delete", "str", "none", "nan", "inf", "negative", "zero", "swapped", "short", "huge",
-            "typo_rset", "typo_intervall"} <= kinds
+    assert {
+        "delete",
+        "str",
+        "none",
+        "nan",
+        "inf",
+        "negative",
+        "zero",
+        "swapped",
+        "short",
+        "huge",
+        "typo_rset",
+        "typo_intervall",
+    } <= kinds
 
 
 def test_unmutated_main_job_builds(base_config: dict) -> None:

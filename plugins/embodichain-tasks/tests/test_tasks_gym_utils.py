@@ -28,11 +28,12 @@ def test_defaults_are_embodichain_s() -> None:
 
 def test_only_given_values_override_a_config() -> None:
     args = parse("--num_envs", "1", "--headless", "--renderer", "rt", "--max_episodes", "3", "--seed", "7")
-    assert launcher_overrides(args) == {"num_envs": 1, "headless": True, "renderer": "rt", "max_episodes": 3,
-                                        "seed": 7}
+    assert launcher_overrides(args) == {"num_envs": 1, "headless": True, "renderer": "rt", "max_episodes": 3, "seed": 7}
     assert launcher_overrides(parse("--preview")) == {"filter_dataset_saving": True}
     assert launcher_overrides(parse("--filter_visual_rand", "--device", "cuda")) == {
-        "filter_visual_rand": True, "device": "cuda"}
+        "filter_visual_rand": True,
+        "device": "cuda",
+    }
 
 
 def test_renderer_choices_and_required_gym_config(capsys) -> None:

@@ -34,8 +34,9 @@ def test_top_down_grasp_frame_closes_across_the_object() -> None:
 @pytest.mark.parametrize("yaw", [0.3, 2.0, -2.5, math.pi / 2])
 def test_yaw_of_folds_half_turns(yaw: float) -> None:
     rot = common.top_down_grasp_frame(torch.tensor([yaw]))
-    z_rot = torch.tensor([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0, 0, 1]],
-                         dtype=torch.float64)
+    z_rot = torch.tensor(
+        [[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0, 0, 1]], dtype=torch.float64
+    )
     folded = float(common.yaw_of(z_rot.unsqueeze(0))[0])
     assert abs(folded) <= math.pi / 2 + 1e-9
     assert math.isclose(math.cos(2 * folded), math.cos(2 * yaw), abs_tol=1e-9)
@@ -70,14 +71,20 @@ def test_w1_robot_cfg_and_tune_contacts_compile_into_the_model() -> None:
     from embodichain_core.sim.cfg import RigidObjectCfg
     from embodichain_core.sim.shapes import CubeCfg
 
-    cfg = EmbodiedEnvCfg(robot=common.w1_robot_cfg(), control_parts=["right_arm", "right_eef"],
-                         sim_cfg=common.il_sim_cfg(), verbose=False,
-                         rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.04, 0.04, 0.04]),
-                                                      init_pos=(0.5, -0.2, 0.02))],
-                         events={"contacts": EventCfg(func="embodichain_tasks.il.common:tune_contacts",
-                                                      mode="startup",
-                                                      params={"impratio": 20.0, "entity_cfg": {"uid": "cube"},
-                                                              "condim": 4, "friction": [1.2, 0.01, 0.0001]})})
+    cfg = EmbodiedEnvCfg(
+        robot=common.w1_robot_cfg(),
+        control_parts=["right_arm", "right_eef"],
+        sim_cfg=common.il_sim_cfg(),
+        verbose=False,
+        rigid_object=[RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.04, 0.04, 0.04]), init_pos=(0.5, -0.2, 0.02))],
+        events={
+            "contacts": EventCfg(
+                func="embodichain_tasks.il.common:tune_contacts",
+                mode="startup",
+                params={"impratio": 20.0, "entity_cfg": {"uid": "cube"}, "condim": 4, "friction": [1.2, 0.01, 0.0001]},
+            )
+        },
+    )
     env = EmbodiedEnv(cfg, num_envs=1)
     model = env.sim.get_model(0)
     assert model.opt.impratio == 20.0

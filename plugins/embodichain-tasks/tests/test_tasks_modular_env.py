@@ -21,7 +21,10 @@ from embodichain_tasks.tutorials.modular_env import ExampleCfg
 SCRIPT = PLUGIN / "embodichain_tasks" / "tutorials" / "modular_env.py"
 SEED = PLUGIN / "tests" / "data" / "seed_modular_env.py"
 #: The one non-import change: the seed's endless loop, bounded by ``--max_episodes``.
-LOOP_CHANGE = (["    while True:"], ["    for _ in episode_loop(args):  # the seed's `while True:`, bounded by --max_episodes"])
+LOOP_CHANGE = (
+    ["    while True:"],
+    ["    for _ in episode_loop(args):  # the seed's `while True:`, bounded by --max_episodes"],
+)
 
 
 def _import_lines(source: str) -> set[int]:
@@ -140,8 +143,19 @@ def test_run_env_one_episode(embodichain_cli: Any) -> None:
 @pytest.mark.slow
 def test_tutorial_script_runs_two_episodes_headless() -> None:
     """The script itself, as documented (960x540 stereo, two envs, two episodes)."""
-    out = run_cli([_python(), "-m", "embodichain_tasks.tutorials.modular_env", "--headless", "--num_envs", "2",
-                   "--max_episodes", "2"], timeout=600)
+    out = run_cli(
+        [
+            _python(),
+            "-m",
+            "embodichain_tasks.tutorials.modular_env",
+            "--headless",
+            "--num_envs",
+            "2",
+            "--max_episodes",
+            "2",
+        ],
+        timeout=600,
+    )
     assert "Environment initialized: ModularEnv" in out.stdout
 
 

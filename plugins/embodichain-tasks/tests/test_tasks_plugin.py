@@ -36,8 +36,10 @@ def test_task_is_registered_with_its_config(task_id: str) -> None:
 
 
 def test_loading_the_plugin_imports_no_task_module() -> None:
-    code = ("import sys, embodichain_core, gymnasium as gym; assert 'PushCube-v1' in gym.registry; "
-            "print(sorted(m for m in sys.modules if m.startswith('embodichain_tasks')))")
+    code = (
+        "import sys, embodichain_core, gymnasium as gym; assert 'PushCube-v1' in gym.registry; "
+        "print(sorted(m for m in sys.modules if m.startswith('embodichain_tasks')))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert out.stdout.strip() == "['embodichain_tasks', 'embodichain_tasks.plugin']"
 
@@ -53,8 +55,13 @@ def test_configs_are_package_data() -> None:
     text = (PLUGIN / "pyproject.toml").read_text()
     assert '"configs/*.json"' in text
     assert 'embodichain-tasks = "embodichain_tasks.plugin"' in text
-    for dep in ("embodichain-core", "embodichain-functors", "embodichain-robots", "embodichain-sensors",
-                "embodichain-assets"):
+    for dep in (
+        "embodichain-core",
+        "embodichain-functors",
+        "embodichain-robots",
+        "embodichain-sensors",
+        "embodichain-assets",
+    ):
         assert f'"{dep}"' in text
 
 

@@ -38,8 +38,7 @@ def test_gym_make_default_cfg(num_envs: int, check_batched_env: Any) -> None:
 
 @pytest.mark.parametrize("num_envs", [1, 3])
 def test_builds_from_the_json_config(num_envs: int, check_batched_env: Any) -> None:
-    task_id, cfg, extras = load_gym_config(str(CONFIG), {"num_envs": num_envs, "verbose": False},
-                                           cfg_cls=PushCubeCfg)
+    task_id, cfg, extras = load_gym_config(str(CONFIG), {"num_envs": num_envs, "verbose": False}, cfg_cls=PushCubeCfg)
     env = gym.make(task_id, cfg=cfg)
     assert env.unwrapped.num_envs == num_envs
     check_batched_env(env)
@@ -90,7 +89,7 @@ def test_reward_is_the_sum_of_the_weighted_functors(env: Any) -> None:
     assert set(terms) == set(WEIGHTS)
     assert torch.allclose(reward, sum(WEIGHTS[k] * v for k, v in terms.items()), atol=1e-5)
     distance = info["metrics"]["distance_to_goal"]
-    assert torch.allclose(terms["place_reward"], torch.exp(-distance ** 2 / (2 * 0.12 ** 2)), atol=1e-4)
+    assert torch.allclose(terms["place_reward"], torch.exp(-(distance**2) / (2 * 0.12**2)), atol=1e-4)
     assert ((terms["reaching_reward"] >= 0) & (terms["reaching_reward"] <= 1)).all()
     assert (terms["action_penalty"] <= 0).all()
 

@@ -82,12 +82,19 @@ def test_push_cube_steps_as_on_mujoco_batch(pair: tuple) -> None:
 
 def test_randomization_functors_give_per_env_values_on_warp() -> None:
     cube, arm = SceneEntityCfg(uid="cube"), SceneEntityCfg(uid="arm", joint_names=["joint[1-3]"])
-    events = {"mass": EventCfg(func=rand.randomize_rigid_object_mass, mode="test",
-                               params={"entity_cfg": cube, "mass_range": [0.1, 1.0]}),
-              "friction": EventCfg(func=rand.randomize_rigid_object_friction, mode="test",
-                                   params={"entity_cfg": cube, "friction_range": [0.2, 1.0]}),
-              "damping": EventCfg(func=rand.randomize_joint_damping, mode="test",
-                                  params={"entity_cfg": arm, "damping_range": [0.5, 2.0]})}
+    events = {
+        "mass": EventCfg(
+            func=rand.randomize_rigid_object_mass, mode="test", params={"entity_cfg": cube, "mass_range": [0.1, 1.0]}
+        ),
+        "friction": EventCfg(
+            func=rand.randomize_rigid_object_friction,
+            mode="test",
+            params={"entity_cfg": cube, "friction_range": [0.2, 1.0]},
+        ),
+        "damping": EventCfg(
+            func=rand.randomize_joint_damping, mode="test", params={"entity_cfg": arm, "damping_range": [0.5, 2.0]}
+        ),
+    }
     env = _push_cube("warp", num_envs=4, events=events)
     try:
         sim, body = env.sim, env.scene["cube"].body_id
@@ -117,8 +124,13 @@ def test_gpu_throughput_smoke_run_writes_json(tmp_path: Any) -> None:
 
     root = Path(__file__).resolve().parents[3]
     out = tmp_path / "gpu.json"
-    proc = subprocess.run([sys.executable, str(root / "benchmarks" / "gpu_throughput.py"), "--smoke", "--out", str(out)],
-                          cwd=root, capture_output=True, text=True, timeout=280)
+    proc = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "gpu_throughput.py"), "--smoke", "--out", str(out)],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        timeout=280,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "| num_envs |" in proc.stdout
     data = json.loads(out.read_text())
@@ -128,7 +140,12 @@ def test_gpu_throughput_smoke_run_writes_json(tmp_path: Any) -> None:
     assert row["raw_steps_per_s"] > 0
     assert row["ratio"] == pytest.approx(row["env_steps_per_s"] / row["raw_steps_per_s"])
     assert data["meets_targets"] is None  # no 4 096-env row in a smoke run
-    bad = subprocess.run([sys.executable, str(root / "benchmarks" / "gpu_throughput.py"), "--steps", "0"],
-                         cwd=root, capture_output=True, text=True, timeout=120)
+    bad = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "gpu_throughput.py"), "--steps", "0"],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert bad.returncode == 2
     assert "--steps must be positive" in bad.stderr

@@ -14,13 +14,25 @@ from embodichain_core.sim.data import get_data_path
 from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.scene_build.mesh import MESH_SUFFIXES
 
-from embodichain_functors._common import ParamError, as_range, check_positive, entity_of, env_ids_of, randint, \
-    uniform, validated
+from embodichain_functors._common import (
+    ParamError,
+    as_range,
+    check_positive,
+    entity_of,
+    env_ids_of,
+    randint,
+    uniform,
+    validated,
+)
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._sim import step_envs, write_model
 
-__all__ = ["replace_assets_from_group", "set_detached_uids_for_env_reset", "drop_rigid_object_group_sequentially",
-           "mesh_files"]
+__all__ = [
+    "replace_assets_from_group",
+    "set_detached_uids_for_env_reset",
+    "drop_rigid_object_group_sequentially",
+    "mesh_files",
+]
 
 _USE_MATERIAL_RGBA = [0.5, 0.5, 0.5, 1.0]
 
@@ -39,8 +51,7 @@ def mesh_files(folder_path: str, functor: str = "replace_assets_from_group") -> 
         raise ParamError(functor, "folder_path", str(err).splitlines()[0]) from None
     if not os.path.isdir(folder):
         raise ParamError(functor, "folder_path", f"{folder!r} is not a folder")
-    files = sorted(f for f in os.listdir(folder)
-                   if f.lower().endswith(MESH_SUFFIXES) and fnmatch.fnmatch(f, pattern))
+    files = sorted(f for f in os.listdir(folder) if f.lower().endswith(MESH_SUFFIXES) and fnmatch.fnmatch(f, pattern))
     if not files:
         raise ParamError(functor, "folder_path", f"no mesh files ({', '.join(MESH_SUFFIXES)}) in {folder_path!r}")
     return [os.path.join(folder, f) for f in files]
@@ -78,8 +89,9 @@ class replace_assets_from_group(CheckedFunctor):
         uid = cfg.params["entity_cfg"].uid
         variants = env.scene.builder.record(uid).extra.get("variants", {})
         model = env.scene.model
-        self._visual = {f: [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in v["visual"]]
-                        for f, v in variants.items()}
+        self._visual = {
+            f: [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in v["visual"]] for f, v in variants.items()
+        }
 
     def check(self, env: Any, entity_cfg: Any = None, folder_path: Any = None) -> None:
         from embodichain_core.sim.entities.rigid_object import RigidObject
@@ -124,8 +136,13 @@ def set_detached_uids_for_env_reset(env: Any, env_ids: Any, uids: Any) -> None:
     env.add_detached_uids_for_reset([u for u in names if u not in already])
 
 
-def _check_drop(env: Any, entity_cfg: SceneEntityCfg, drop_position: Sequence[float] = (0.0, 0.0, 1.0),
-                position_range: Any = None, physics_step: int = 2) -> None:
+def _check_drop(
+    env: Any,
+    entity_cfg: SceneEntityCfg,
+    drop_position: Sequence[float] = (0.0, 0.0, 1.0),
+    position_range: Any = None,
+    physics_step: int = 2,
+) -> None:
     name = "drop_rigid_object_group_sequentially"
     entity_of(env, entity_cfg, name, (RigidObjectGroup,))
     if len(drop_position) != 3:
@@ -136,10 +153,14 @@ def _check_drop(env: Any, entity_cfg: SceneEntityCfg, drop_position: Sequence[fl
 
 
 @validated(_check_drop)
-def drop_rigid_object_group_sequentially(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg,
-                                         drop_position: Sequence[float] = (0.0, 0.0, 1.0),
-                                         position_range: Any = ((-0.1, -0.1, 0.0), (0.1, 0.1, 0.0)),
-                                         physics_step: int = 2) -> None:
+def drop_rigid_object_group_sequentially(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    drop_position: Sequence[float] = (0.0, 0.0, 1.0),
+    position_range: Any = ((-0.1, -0.1, 0.0), (0.1, 0.1, 0.0)),
+    physics_step: int = 2,
+) -> None:
     """Drop the members of a group one by one at a random point around ``drop_position``.
 
     Each member is placed (keeping its orientation, velocities cleared), then only

@@ -74,14 +74,27 @@ class create_rigid_constraint(CheckedFunctor):
             record = scene.builder.records.get(_uid(params[key]))
             if record is None or record.kind not in ("rigid_object", "background"):
                 raise ParamError(cls.__name__, key, f"{_uid(params[key])!r} is not a rigid object")
-        weld = spec.add_equality(name=name, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                                 name1=_uid(params["obj_a_cfg"]), name2=_uid(params["obj_b_cfg"]), active=False)
+        weld = spec.add_equality(
+            name=name,
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=_uid(params["obj_a_cfg"]),
+            name2=_uid(params["obj_b_cfg"]),
+            active=False,
+        )
         data = np.zeros(len(weld.data))
         data[10] = 1.0  # anchor 0, relpose from the initial poses, torquescale 1
         weld.data = data
 
-    def check(self, env: Any, obj_a_cfg: Any = None, obj_b_cfg: Any = None, name: Any = None,
-              local_frame_a: Any = None, local_frame_b: Any = None) -> None:
+    def check(
+        self,
+        env: Any,
+        obj_a_cfg: Any = None,
+        obj_b_cfg: Any = None,
+        name: Any = None,
+        local_frame_a: Any = None,
+        local_frame_b: Any = None,
+    ) -> None:
         functor = type(self).__name__
         for key, cfg in (("obj_a_cfg", obj_a_cfg), ("obj_b_cfg", obj_b_cfg)):
             if not isinstance(env.scene.get(_uid(cfg)), RigidObject):
@@ -92,9 +105,16 @@ class create_rigid_constraint(CheckedFunctor):
         if not isinstance(name, str) or not name:
             raise ParamError(functor, "name", f"must be a non-empty string, got {name!r}")
 
-    def __call__(self, env: Any, env_ids: Any, obj_a_cfg: Any, obj_b_cfg: Any, name: str,
-                 local_frame_a: Optional[Sequence[float]] = None,
-                 local_frame_b: Optional[Sequence[float]] = None) -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        obj_a_cfg: Any,
+        obj_b_cfg: Any,
+        name: str,
+        local_frame_a: Optional[Sequence[float]] = None,
+        local_frame_b: Optional[Sequence[float]] = None,
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         eq = mujoco.mj_name2id(env.scene.model, mujoco.mjtObj.mjOBJ_EQUALITY, weld_name(name))
         if local_frame_b is None:
@@ -103,8 +123,13 @@ class create_rigid_constraint(CheckedFunctor):
             rel = _relative(a, b)
         else:  # T_b = T_a F_a F_b^-1
             fa, fb = _frame(local_frame_a)[None], _frame(local_frame_b)[None]
-            rel = torch.cat((quat_rotate(fa[:, 3:], -quat_rotate(quat_conjugate(fb[:, 3:]), fb[:, :3])) + fa[:, :3],
-                             quat_mul(fa[:, 3:], quat_conjugate(fb[:, 3:]))), -1).expand(len(ids), 7)
+            rel = torch.cat(
+                (
+                    quat_rotate(fa[:, 3:], -quat_rotate(quat_conjugate(fb[:, 3:]), fb[:, :3])) + fa[:, :3],
+                    quat_mul(fa[:, 3:], quat_conjugate(fb[:, 3:])),
+                ),
+                -1,
+            ).expand(len(ids), 7)
         # no mj_setConst: it would recompute the relative pose from the initial configuration
         write_model(env.sim, ids, [("eq_data", (eq, slice(3, 10)), rel)], set_const=False)
         env.sim.eq_active[ids, eq] = 1.0
@@ -114,8 +139,9 @@ class create_rigid_constraint(CheckedFunctor):
 def _check_remove(env: Any, name: Any) -> None:
     eq = mujoco.mj_name2id(env.scene.model, mujoco.mjtObj.mjOBJ_EQUALITY, weld_name(str(name)))
     if eq < 0:
-        raise ParamError("remove_rigid_constraint", "name", f"no rigid constraint {name!r}; declare it with "
-                                                           "create_rigid_constraint")
+        raise ParamError(
+            "remove_rigid_constraint", "name", f"no rigid constraint {name!r}; declare it with create_rigid_constraint"
+        )
 
 
 @validated(_check_remove)

@@ -22,8 +22,15 @@ from embodichain_functors._entities import resolve_uids as _resolve_uids
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._kinematics import default_part, eef_pose
 
-__all__ = ["prepare_extra_attr", "register_entity_attrs", "register_entity_pose", "register_info_to_env",
-           "resolve_uids", "resolve_dict", "get_pose"]
+__all__ = [
+    "prepare_extra_attr",
+    "register_entity_attrs",
+    "register_entity_pose",
+    "register_info_to_env",
+    "resolve_uids",
+    "resolve_dict",
+    "get_pose",
+]
 
 
 def resolve_uids(env: Any, entity_uids: Any) -> list[str]:
@@ -138,8 +145,9 @@ class prepare_extra_attr(CheckedFunctor):
                 store.setdefault(uid, {})[spec["name"]] = self._value(env, ids, uid, spec)
 
 
-def _check_attrs(env: Any, entity_cfg: Any, registration: str = "affordance_datas", attrs: Sequence[str] = (),
-                 prefix: bool = True) -> None:
+def _check_attrs(
+    env: Any, entity_cfg: Any, registration: str = "affordance_datas", attrs: Sequence[str] = (), prefix: bool = True
+) -> None:
     if _uid(entity_cfg) not in env.scene:
         raise ParamError("register_entity_attrs", "entity_cfg", f"no entity {_uid(entity_cfg)!r} in the scene")
     if not isinstance(registration, str) or not registration.isidentifier():
@@ -147,8 +155,14 @@ def _check_attrs(env: Any, entity_cfg: Any, registration: str = "affordance_data
 
 
 @validated(_check_attrs)
-def register_entity_attrs(env: Any, env_ids: Any, entity_cfg: Any, registration: str = "affordance_datas",
-                          attrs: Sequence[str] = (), prefix: bool = True) -> None:
+def register_entity_attrs(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: Any,
+    registration: str = "affordance_datas",
+    attrs: Sequence[str] = (),
+    prefix: bool = True,
+) -> None:
     """Copy entity attributes (or ``prepare_extra_attr`` values) into ``env.<registration>``.
 
     A prepared extra attribute wins over an entity attribute of the same name;
@@ -185,9 +199,15 @@ def _check_pose(env: Any, entity_cfg: Any, registration: str = "affordance_datas
 
 
 @validated(_check_pose)
-def register_entity_pose(env: Any, env_ids: Any, entity_cfg: Any, registration: str = "affordance_datas",
-                         compute_relative: Any = "all_robots", compute_pose_object_to_arena: bool = True,
-                         to_matrix: bool = True) -> None:
+def register_entity_pose(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: Any,
+    registration: str = "affordance_datas",
+    compute_relative: Any = "all_robots",
+    compute_pose_object_to_arena: bool = True,
+    to_matrix: bool = True,
+) -> None:
     """Register an entity's pose, other poses relative to it, and its object-frame poses in the env frame.
 
     Keys: ``<uid>_pose`` (robots: ``<part>_pose``, the part's end effector);
@@ -219,7 +239,7 @@ def register_entity_pose(env: Any, env_ids: Any, entity_cfg: Any, registration: 
         for attr, value in _extra(env, uid).items():
             if attr.endswith("_pose_object"):
                 local = torch.as_tensor(value, dtype=torch.float64)
-                store[f"{uid}_{attr[:-len('_object')]}"] = (mat.double() @ local).float()
+                store[f"{uid}_{attr[: -len('_object')]}"] = (mat.double() @ local).float()
 
 
 def _check_info(env: Any, registry: Any, registration: str = "affordance_datas", sim_update: bool = True) -> None:
@@ -231,8 +251,9 @@ def _check_info(env: Any, registry: Any, registration: str = "affordance_datas",
 
 
 @validated(_check_info)
-def register_info_to_env(env: Any, env_ids: Any, registry: Sequence[dict], registration: str = "affordance_datas",
-                         sim_update: bool = True) -> None:
+def register_info_to_env(
+    env: Any, env_ids: Any, registry: Sequence[dict], registration: str = "affordance_datas", sim_update: bool = True
+) -> None:
     """Run :func:`register_entity_attrs` and :func:`register_entity_pose` for several entities.
 
     Args:

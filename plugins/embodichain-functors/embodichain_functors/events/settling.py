@@ -49,15 +49,29 @@ def _speeds(env: Any, entity: Any, bodies: Any) -> tuple[torch.Tensor, torch.Ten
     return lin.masked_fill(bad, float("inf")), ang.masked_fill(bad, float("inf"))
 
 
-def _check(env: Any, entity_cfgs: Any = None, linear_velocity_threshold: Any = 0.03,
-           angular_velocity_threshold: Any = 0.2, min_steps: Any = 10, max_steps: Any = 240,
-           check_interval_steps: Any = 2, required_stable_checks: Any = 3, timeout_behavior: Any = "warn",
-           allow_partial_envs: Any = True) -> None:
-    for key, value in (("linear_velocity_threshold", linear_velocity_threshold),
-                       ("angular_velocity_threshold", angular_velocity_threshold)):
+def _check(
+    env: Any,
+    entity_cfgs: Any = None,
+    linear_velocity_threshold: Any = 0.03,
+    angular_velocity_threshold: Any = 0.2,
+    min_steps: Any = 10,
+    max_steps: Any = 240,
+    check_interval_steps: Any = 2,
+    required_stable_checks: Any = 3,
+    timeout_behavior: Any = "warn",
+    allow_partial_envs: Any = True,
+) -> None:
+    for key, value in (
+        ("linear_velocity_threshold", linear_velocity_threshold),
+        ("angular_velocity_threshold", angular_velocity_threshold),
+    ):
         check_positive(value, _NAME, key)
-    counts = (("min_steps", min_steps), ("max_steps", max_steps), ("check_interval_steps", check_interval_steps),
-              ("required_stable_checks", required_stable_checks))
+    counts = (
+        ("min_steps", min_steps),
+        ("max_steps", max_steps),
+        ("check_interval_steps", check_interval_steps),
+        ("required_stable_checks", required_stable_checks),
+    )
     for key, value in counts:
         if isinstance(value, bool) or not isinstance(value, int) or value < (0 if key == "min_steps" else 1):
             raise ParamError(_NAME, key, f"must be an int >= {0 if key == 'min_steps' else 1}, got {value!r}")
@@ -74,11 +88,19 @@ def _check(env: Any, entity_cfgs: Any = None, linear_velocity_threshold: Any = 0
 
 
 @validated(_check)
-def wait_for_dynamic_objects_to_settle(env: Any, env_ids: Any, entity_cfgs: Optional[Sequence[Any]] = None,
-                                       linear_velocity_threshold: float = 0.03, angular_velocity_threshold: float = 0.2,
-                                       min_steps: int = 10, max_steps: int = 240, check_interval_steps: int = 2,
-                                       required_stable_checks: int = 3, timeout_behavior: str = "warn",
-                                       allow_partial_envs: bool = True) -> None:
+def wait_for_dynamic_objects_to_settle(
+    env: Any,
+    env_ids: Any,
+    entity_cfgs: Optional[Sequence[Any]] = None,
+    linear_velocity_threshold: float = 0.03,
+    angular_velocity_threshold: float = 0.2,
+    min_steps: int = 10,
+    max_steps: int = 240,
+    check_interval_steps: int = 2,
+    required_stable_checks: int = 3,
+    timeout_behavior: str = "warn",
+    allow_partial_envs: bool = True,
+) -> None:
     """Simulate ``env_ids`` (only them) until every dynamic object rests.
 
     An env has settled once all its bodies stay below both speed thresholds for
@@ -122,8 +144,9 @@ def wait_for_dynamic_objects_to_settle(env: Any, env_ids: Any, entity_cfgs: Opti
         active = active[calm[active] < required_stable_checks]
     if len(active):
         speeds = [tuple(round(float(v[active].max()), 4) for v in _speeds(env, e, b)) for e, b in targets]
-        message = (f"{_NAME}: envs {active.tolist()} still moving after {steps} steps "
-                   f"(max lin/ang speed per entity: {speeds})")
+        message = (
+            f"{_NAME}: envs {active.tolist()} still moving after {steps} steps (max lin/ang speed per entity: {speeds})"
+        )
         if timeout_behavior == "raise":
             raise RuntimeError(message)
         warnings.warn(message, RuntimeWarning, stacklevel=2)

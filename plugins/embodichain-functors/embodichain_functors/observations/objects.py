@@ -13,8 +13,13 @@ from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_functors._common import ParamError, entity_of, validated
 from embodichain_functors.randomization.geometry import body_scale_factor
 
-__all__ = ["get_object_pose", "get_rigid_object_pose", "get_rigid_object_velocity", "get_object_body_scale",
-           "target_position"]
+__all__ = [
+    "get_object_pose",
+    "get_rigid_object_pose",
+    "get_rigid_object_velocity",
+    "get_object_body_scale",
+    "target_position",
+]
 
 
 def _check_object_pose(env: Any, entity_cfg: Any, to_matrix: bool = True) -> None:
@@ -48,6 +53,7 @@ def get_object_pose(env: Any, obs: Any, entity_cfg: Any, to_matrix: bool = True)
 def _check_rigid(functor: str) -> Any:
     def check(env: Any, entity_cfg: Any, **_: Any) -> None:
         entity_of(env, entity_cfg, functor, (RigidObject, RigidObjectGroup))
+
     return check
 
 

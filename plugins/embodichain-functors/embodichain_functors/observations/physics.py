@@ -73,9 +73,13 @@ class get_rigid_object_physics_attributes(_CachedObservation):
         sim, n = env.sim, env.num_envs
         damping = torch.zeros(n, 6)
         if obj.is_dynamic:
-            damping = _t(sim.model_field("dof_damping")[:, obj.dof_adr: obj.dof_adr + 6])
-        return {"mass": obj.get_mass(), "friction": obj.get_friction(), "damping": damping,
-                "inertia": _t(sim.model_field("body_inertia")[:, obj.body_id])}
+            damping = _t(sim.model_field("dof_damping")[:, obj.dof_adr : obj.dof_adr + 6])
+        return {
+            "mass": obj.get_mass(),
+            "friction": obj.get_friction(),
+            "damping": damping,
+            "inertia": _t(sim.model_field("body_inertia")[:, obj.body_id]),
+        }
 
 
 class get_articulation_joint_drive(_CachedObservation):
@@ -105,6 +109,11 @@ class get_articulation_joint_drive(_CachedObservation):
             stiffness[:, driven] = _t(gain[:, art.pos_act[driven].numpy()])
             damping[:, driven] = _t(gain[:, art.vel_act[driven].numpy()])
         dofs = art.dof_adr.numpy()
-        return {"stiffness": stiffness, "damping": damping, "max_effort": art.get_qf_limits(),
-                "max_velocity": art.get_qvel_limits(), "friction": _t(sim.model_field("dof_frictionloss")[:, dofs]),
-                "armature": _t(sim.model_field("dof_armature")[:, dofs])}
+        return {
+            "stiffness": stiffness,
+            "damping": damping,
+            "max_effort": art.get_qf_limits(),
+            "max_velocity": art.get_qvel_limits(),
+            "friction": _t(sim.model_field("dof_frictionloss")[:, dofs]),
+            "armature": _t(sim.model_field("dof_armature")[:, dofs]),
+        }

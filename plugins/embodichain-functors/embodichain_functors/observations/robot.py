@@ -14,8 +14,9 @@ from embodichain_functors._kinematics import check_ik, check_part, default_part,
 __all__ = ["normalize_robot_joint_data", "get_robot_eef_pose"]
 
 
-def _check_normalize(env: Any, joint_ids: Optional[Sequence[int]] = None, limit: str = "qpos_limits",
-                     range: Sequence[float] = (0.0, 1.0)) -> None:
+def _check_normalize(
+    env: Any, joint_ids: Optional[Sequence[int]] = None, limit: str = "qpos_limits", range: Sequence[float] = (0.0, 1.0)
+) -> None:
     name = "normalize_robot_joint_data"
     if limit not in ("qpos_limits", "qvel_limits"):
         raise ParamError(name, "limit", f"must be 'qpos_limits' or 'qvel_limits', got {limit!r}")
@@ -26,8 +27,13 @@ def _check_normalize(env: Any, joint_ids: Optional[Sequence[int]] = None, limit:
 
 
 @validated(_check_normalize)
-def normalize_robot_joint_data(env: Any, data: torch.Tensor, joint_ids: Optional[Sequence[int]] = None,
-                               limit: str = "qpos_limits", range: Sequence[float] = (0.0, 1.0)) -> torch.Tensor:
+def normalize_robot_joint_data(
+    env: Any,
+    data: torch.Tensor,
+    joint_ids: Optional[Sequence[int]] = None,
+    limit: str = "qpos_limits",
+    range: Sequence[float] = (0.0, 1.0),
+) -> torch.Tensor:
     """(modify) Map joint data from the robot's limits to ``range`` (returns a new tensor).
 
     Args:
@@ -61,8 +67,9 @@ def _check_eef(env: Any, part_name: Optional[str] = None, position_only: bool = 
 
 
 @validated(_check_eef)
-def get_robot_eef_pose(env: Any, obs: Any, part_name: Optional[str] = None,
-                       position_only: bool = False) -> torch.Tensor:
+def get_robot_eef_pose(
+    env: Any, obs: Any, part_name: Optional[str] = None, position_only: bool = False
+) -> torch.Tensor:
     """End-effector pose of a control part by forward kinematics: (N, 4, 4) or (N, 3).
 
     Args:

@@ -23,8 +23,9 @@ BACKGROUND, FOREGROUND, ROBOT_LEFT, ROBOT_RIGHT = 0, 1, 2, 3
 def _sensor(env: Any, entity_cfg: Any, functor: str, api: str) -> Any:
     sensor = env.scene.sensors.get(getattr(entity_cfg, "uid", None))
     if sensor is None or not callable(getattr(sensor, api, None)):
-        raise ParamError(functor, "entity_cfg", f"{getattr(entity_cfg, 'uid', entity_cfg)!r} is not a camera "
-                                                f"sensor with {api}()")
+        raise ParamError(
+            functor, "entity_cfg", f"{getattr(entity_cfg, 'uid', entity_cfg)!r} is not a camera sensor with {api}()"
+        )
     return sensor
 
 
@@ -38,8 +39,9 @@ def _check_pose(env: Any, entity_cfg: Any, robot_uid: Optional[str] = None, is_r
 
 
 @validated(_check_pose)
-def get_sensor_pose_in_robot_frame(env: Any, obs: Any, entity_cfg: Any, robot_uid: Optional[str] = None,
-                                   is_right: bool = False) -> torch.Tensor:
+def get_sensor_pose_in_robot_frame(
+    env: Any, obs: Any, entity_cfg: Any, robot_uid: Optional[str] = None, is_right: bool = False
+) -> torch.Tensor:
     """(N, 4, 4) camera pose in the robot's base frame (stereo: left or right view).
 
     Args:
@@ -112,8 +114,9 @@ class compute_semantic_mask(CheckedFunctor):
         super().__init__(cfg, env)
         self._table = self._side_table(env)
 
-    def check(self, env: Any, entity_cfg: Any = None, foreground_uids: Sequence[str] = (),
-              is_right: bool = False) -> None:
+    def check(
+        self, env: Any, entity_cfg: Any = None, foreground_uids: Sequence[str] = (), is_right: bool = False
+    ) -> None:
         name = type(self).__name__
         sensor = _sensor(env, entity_cfg, name, "mask_id_of")
         if not getattr(sensor.cfg, "enable_mask", False):
@@ -141,8 +144,9 @@ class compute_semantic_mask(CheckedFunctor):
             out[i] = renderer.render_segmentation(self._table)[::-1]
         return out
 
-    def __call__(self, env: Any, obs: Any, entity_cfg: Any, foreground_uids: Sequence[str] = (),
-                 is_right: bool = False) -> torch.Tensor:
+    def __call__(
+        self, env: Any, obs: Any, entity_cfg: Any, foreground_uids: Sequence[str] = (), is_right: bool = False
+    ) -> torch.Tensor:
         sensor = env.scene.sensors[entity_cfg.uid]
         mask = obs["sensor"][entity_cfg.uid]["mask_right" if is_right else "mask"]
         mask = mask[..., 0] if mask.dim() == 4 else mask

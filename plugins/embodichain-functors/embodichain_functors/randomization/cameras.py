@@ -34,8 +34,11 @@ def camera_sensor(env: Any, entity_cfg: Any, functor: str) -> Any:
     """The sensor named by ``entity_cfg`` (a camera)."""
     sensor = env.scene.sensors.get(getattr(entity_cfg, "uid", None))
     if sensor is None:
-        raise ParamError(functor, "entity_cfg", f"{getattr(entity_cfg, 'uid', entity_cfg)!r} is not a sensor "
-                                                f"(sensors: {list(env.scene.sensors)})")
+        raise ParamError(
+            functor,
+            "entity_cfg",
+            f"{getattr(entity_cfg, 'uid', entity_cfg)!r} is not a sensor (sensors: {list(env.scene.sensors)})",
+        )
     return sensor
 
 
@@ -61,8 +64,11 @@ def _check_extrinsics(env: Any, entity_cfg: SceneEntityCfg, **ranges: Any) -> No
     wrong = [k for k in given if k in (_POSE_KEYS if look else _LOOK_KEYS)]
     if wrong:
         mode = "look-at (eye/target/up)" if look else "offset (pos/quat, optionally attached to a parent)"
-        raise ParamError(name, wrong[0], f"camera {entity_cfg.uid!r} uses {mode} extrinsics; "
-                                         f"use {list(_LOOK_KEYS if look else _POSE_KEYS)}")
+        raise ParamError(
+            name,
+            wrong[0],
+            f"camera {entity_cfg.uid!r} uses {mode} extrinsics; use {list(_LOOK_KEYS if look else _POSE_KEYS)}",
+        )
     api = "look_at" if look else "set_local_pose"
     if not callable(getattr(sensor, api, None)) and (look or mj_camera(env, entity_cfg.uid) < 0):
         raise ParamError(name, "entity_cfg", f"sensor {entity_cfg.uid!r} has neither {api}() nor a MuJoCo camera")
@@ -73,9 +79,16 @@ def _draw(env: Any, rng: Optional[Any], ids: torch.Tensor) -> torch.Tensor:
 
 
 @validated(_check_extrinsics)
-def randomize_camera_extrinsics(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, pos_range: Any = None,
-                                euler_range: Any = None, eye_range: Any = None, target_range: Any = None,
-                                up_range: Any = None) -> None:
+def randomize_camera_extrinsics(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    pos_range: Any = None,
+    euler_range: Any = None,
+    eye_range: Any = None,
+    target_range: Any = None,
+    up_range: Any = None,
+) -> None:
     """Perturb a camera's configured extrinsics per env (offsets from the configuration).
 
     Offset cameras (``pos``/``quat``, attached to a ``parent`` or not) take
@@ -127,8 +140,11 @@ def _check_intrinsics(env: Any, entity_cfg: SceneEntityCfg, **ranges: Any) -> No
     if not callable(getattr(sensor, "set_intrinsics", None)):
         cam = mj_camera(env, entity_cfg.uid)
         if cam < 0 or env.scene.model.cam_sensorsize[cam][0] <= 0:
-            raise ParamError(name, "entity_cfg", f"sensor {entity_cfg.uid!r} has neither set_intrinsics() nor a "
-                                                 "MuJoCo camera with a sensor size")
+            raise ParamError(
+                name,
+                "entity_cfg",
+                f"sensor {entity_cfg.uid!r} has neither set_intrinsics() nor a MuJoCo camera with a sensor size",
+            )
 
 
 def _offsets(env: Any, ids: torch.Tensor, ranges: tuple) -> torch.Tensor:
@@ -139,8 +155,15 @@ def _offsets(env: Any, ids: torch.Tensor, ranges: tuple) -> torch.Tensor:
 
 
 @validated(_check_intrinsics)
-def randomize_camera_intrinsics(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, focal_x_range: Any = None,
-                                focal_y_range: Any = None, cx_range: Any = None, cy_range: Any = None) -> None:
+def randomize_camera_intrinsics(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    focal_x_range: Any = None,
+    focal_y_range: Any = None,
+    cx_range: Any = None,
+    cy_range: Any = None,
+) -> None:
     """Add per-env offsets (pixels) to a camera's configured intrinsics ``(fx, fy, cx, cy)``.
 
     A stereo camera gets the same offsets on both views.

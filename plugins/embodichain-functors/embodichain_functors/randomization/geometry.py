@@ -58,7 +58,7 @@ def _sizes(gtype: int, size: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.
 
 def _inertia_factor(half: np.ndarray) -> np.ndarray:
     """Box-like inertia factors ``(e_y^2 + e_z^2, ...)`` of (n, 3) half-extents."""
-    sq = half ** 2
+    sq = half**2
     return np.stack((sq[:, 1] + sq[:, 2], sq[:, 0] + sq[:, 2], sq[:, 0] + sq[:, 1]), 1)
 
 
@@ -67,8 +67,9 @@ def _is_mesh(scene: Any, uid: str) -> bool:
     return record is not None and "mesh_file" in record.extra
 
 
-def _check_scale(env: Any, entity_cfg: SceneEntityCfg, scale_factor_range: Any, functor: str,
-                 param: str = "entity_cfg") -> None:
+def _check_scale(
+    env: Any, entity_cfg: SceneEntityCfg, scale_factor_range: Any, functor: str, param: str = "entity_cfg"
+) -> None:
     obj = entity_of(env, entity_cfg, functor, (RigidObject,), param)
     low, _ = as_range(scale_factor_range, functor, "scale_factor_range", 3)
     if (low <= 0).any():
@@ -77,13 +78,20 @@ def _check_scale(env: Any, entity_cfg: SceneEntityCfg, scale_factor_range: Any, 
         variants = env.scene.builder.records[obj.uid].extra.get("variants", {})
         files = [k for k, v in variants.items() if v.get("factor") is None and "parts" in v]
         if files:
-            raise ParamError(functor, param, f"{obj.uid!r} also swaps meshes (replace_assets_from_group); "
-                                             "scale the meshes of its folder instead")
+            raise ParamError(
+                functor,
+                param,
+                f"{obj.uid!r} also swaps meshes (replace_assets_from_group); scale the meshes of its folder instead",
+            )
         return
     types = [int(env.scene.model.geom_type[g]) for g in obj.geom_ids]
     if not types or any(t not in _SCALABLE for t in types):
-        raise ParamError(functor, param, f"{entity_cfg.uid!r} has geoms that cannot be scaled per env "
-                                         "(boxes, spheres, cylinders, capsules and meshes can)")
+        raise ParamError(
+            functor,
+            param,
+            f"{entity_cfg.uid!r} has geoms that cannot be scaled per env "
+            "(boxes, spheres, cylinders, capsules and meshes can)",
+        )
 
 
 def mesh_levels(scale_factor_range: Any, same_scale_all_axes: bool, levels: int) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -108,8 +116,9 @@ def _centres(low: float, high: float, n: int) -> np.ndarray:
     return low + (np.arange(n) + 0.5) * (high - low) / n
 
 
-def draw_scale(env: Any, scale_factor_range: Any, ids: torch.Tensor, same_scale_all_axes: bool,
-               functor: str) -> torch.Tensor:
+def draw_scale(
+    env: Any, scale_factor_range: Any, ids: torch.Tensor, same_scale_all_axes: bool, functor: str
+) -> torch.Tensor:
     """(n, 3) scale factors of envs ``ids`` (one factor for all axes, from the x bounds, when
     ``same_scale_all_axes``)."""
     n = len(ids)
@@ -150,8 +159,11 @@ class _ScaleFunctor(CheckedFunctor):
         """Compile the scaled copies of mesh objects (bad params are reported by ``check``)."""
         params = cfg.params
         try:
-            factors, _ = mesh_levels(params.get("scale_factor_range"), bool(params.get("same_scale_all_axes", True)),
-                                     int(params.get("mesh_scale_levels", 8)))
+            factors, _ = mesh_levels(
+                params.get("scale_factor_range"),
+                bool(params.get("same_scale_all_axes", True)),
+                int(params.get("mesh_scale_levels", 8)),
+            )
             uids = cls._uids(params)
         except (ParamError, TypeError, ValueError, KeyError):
             return
@@ -172,7 +184,7 @@ class _ScaleFunctor(CheckedFunctor):
             return
         _, axes = mesh_levels(params["scale_factor_range"], params["same_scale_all_axes"], params["mesh_scale_levels"])
         f = factor.numpy()
-        snapped = np.stack([axis[np.abs(f[:, a:a + 1] - axis[None, :]).argmin(1)] for a, axis in enumerate(axes)], 1)
+        snapped = np.stack([axis[np.abs(f[:, a : a + 1] - axis[None, :]).argmin(1)] for a, axis in enumerate(axes)], 1)
         env.scene.set_mesh_variants(uid, [scale_key(tuple(v)) for v in snapped], ids)
         body_scale_factor(obj)[ids] = torch.from_numpy(snapped)
 
@@ -201,18 +213,39 @@ class randomize_rigid_object_scale(_ScaleFunctor):
         entity = params["entity_cfg"]
         return [entity["uid"] if isinstance(entity, dict) else entity.uid]
 
-    def check(self, env: Any, entity_cfg: Any = None, scale_factor_range: Any = None, same_scale_all_axes: bool = True,
-              mesh_scale_levels: Any = 8) -> None:
+    def check(
+        self,
+        env: Any,
+        entity_cfg: Any = None,
+        scale_factor_range: Any = None,
+        same_scale_all_axes: bool = True,
+        mesh_scale_levels: Any = 8,
+    ) -> None:
         self._check_levels(mesh_scale_levels)
         _check_scale(env, entity_cfg, scale_factor_range, type(self).__name__)
 
-    def __call__(self, env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, scale_factor_range: Any,
-                 same_scale_all_axes: bool = True, mesh_scale_levels: int = 8) -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        entity_cfg: SceneEntityCfg,
+        scale_factor_range: Any,
+        same_scale_all_axes: bool = True,
+        mesh_scale_levels: int = 8,
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         factor = draw_scale(env, scale_factor_range, ids, same_scale_all_axes, type(self).__name__)
-        self._apply(env, entity_cfg.uid, ids, factor, {"scale_factor_range": scale_factor_range,
-                                                       "same_scale_all_axes": same_scale_all_axes,
-                                                       "mesh_scale_levels": mesh_scale_levels})
+        self._apply(
+            env,
+            entity_cfg.uid,
+            ids,
+            factor,
+            {
+                "scale_factor_range": scale_factor_range,
+                "same_scale_all_axes": same_scale_all_axes,
+                "mesh_scale_levels": mesh_scale_levels,
+            },
+        )
 
 
 class randomize_rigid_objects_scale(_ScaleFunctor):
@@ -237,8 +270,15 @@ class randomize_rigid_objects_scale(_ScaleFunctor):
     def _uids(params: dict) -> list[str]:
         return [c["uid"] if isinstance(c, dict) else c.uid for c in params["entity_cfgs"]]
 
-    def check(self, env: Any, entity_cfgs: Any = None, scale_factor_range: Any = None, same_scale_all_axes: bool = True,
-              shared_sample: bool = False, mesh_scale_levels: Any = 8) -> None:
+    def check(
+        self,
+        env: Any,
+        entity_cfgs: Any = None,
+        scale_factor_range: Any = None,
+        same_scale_all_axes: bool = True,
+        shared_sample: bool = False,
+        mesh_scale_levels: Any = 8,
+    ) -> None:
         name = type(self).__name__
         if not isinstance(entity_cfgs, (list, tuple)) or not entity_cfgs:
             raise ParamError(name, "entity_cfgs", "must be a non-empty list of entities")
@@ -246,14 +286,26 @@ class randomize_rigid_objects_scale(_ScaleFunctor):
         for cfg in entity_cfgs:
             _check_scale(env, cfg, scale_factor_range, name, param="entity_cfgs")
 
-    def __call__(self, env: Any, env_ids: Any, entity_cfgs: Sequence[SceneEntityCfg], scale_factor_range: Any,
-                 same_scale_all_axes: bool = True, shared_sample: bool = False, mesh_scale_levels: int = 8) -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        entity_cfgs: Sequence[SceneEntityCfg],
+        scale_factor_range: Any,
+        same_scale_all_axes: bool = True,
+        shared_sample: bool = False,
+        mesh_scale_levels: int = 8,
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         name = type(self).__name__
-        params = {"scale_factor_range": scale_factor_range, "same_scale_all_axes": same_scale_all_axes,
-                  "mesh_scale_levels": mesh_scale_levels}
+        params = {
+            "scale_factor_range": scale_factor_range,
+            "same_scale_all_axes": same_scale_all_axes,
+            "mesh_scale_levels": mesh_scale_levels,
+        }
         shared = draw_scale(env, scale_factor_range, ids, same_scale_all_axes, name) if shared_sample else None
         for cfg in entity_cfgs:
-            factor = shared if shared is not None else draw_scale(env, scale_factor_range, ids,
-                                                                  same_scale_all_axes, name)
+            factor = (
+                shared if shared is not None else draw_scale(env, scale_factor_range, ids, same_scale_all_axes, name)
+            )
             self._apply(env, cfg["uid"] if isinstance(cfg, dict) else cfg.uid, ids, factor, params)

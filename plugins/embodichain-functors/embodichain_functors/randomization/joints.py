@@ -21,8 +21,9 @@ from embodichain_functors._sim import write_model
 __all__ = ["randomize_joint_damping", "randomize_joint_stiffness", "randomize_joint_drive"]
 
 
-def _joint_param(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, value_range: Any, relative: bool,
-                 field: str, name: str) -> None:
+def _joint_param(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, value_range: Any, relative: bool, field: str, name: str
+) -> None:
     """Draw one value per env and joint into ``field`` (``dof_damping`` or ``jnt_stiffness``)."""
     ids = env_ids_of(env, env_ids)
     art = env.scene[entity_cfg.uid]
@@ -43,12 +44,14 @@ def _check_joint(name: str, param: str) -> Any:
         low, _ = as_range(params[param], name, param)
         if not relative and (low < 0).any():
             raise ParamError(name, param, f"values must be >= 0, got {params[param]!r}")
+
     return check
 
 
 @validated(_check_joint("randomize_joint_damping", "damping_range"))
-def randomize_joint_damping(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, damping_range: Any,
-                            relative: bool = False) -> None:
+def randomize_joint_damping(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, damping_range: Any, relative: bool = False
+) -> None:
     """Draw passive joint damping (MuJoCo ``dof_damping``) per env and joint.
 
     Args:
@@ -66,8 +69,9 @@ def randomize_joint_damping(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, 
 
 
 @validated(_check_joint("randomize_joint_stiffness", "stiffness_range"))
-def randomize_joint_stiffness(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, stiffness_range: Any,
-                              relative: bool = False) -> None:
+def randomize_joint_stiffness(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, stiffness_range: Any, relative: bool = False
+) -> None:
     """Draw passive joint spring stiffness (MuJoCo ``jnt_stiffness``) per env and joint.
 
     Args:
@@ -111,8 +115,15 @@ def _drive_base(art: Articulation, key: str, joint: int) -> float:
 
 
 @validated(_check_drive)
-def randomize_joint_drive(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, stiffness_range: Any = None,
-                          damping_range: Any = None, max_effort_range: Any = None, relative: bool = False) -> None:
+def randomize_joint_drive(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    stiffness_range: Any = None,
+    damping_range: Any = None,
+    max_effort_range: Any = None,
+    relative: bool = False,
+) -> None:
     """Draw joint drive gains (PD stiffness, damping) and effort limits per env and joint.
 
     Only driven joints are changed (``drive_pros.drive_type="force"``).

@@ -41,14 +41,24 @@ class planner_grid_cell_sampler(CheckedFunctor):
         "grid_size": [4, 3]}}``
     """
 
-    def check(self, env: Any, position_range: Any = None, reference_height: Any = None, object_uid_list: Any = (),
-              grid_size: Any = (), **_: Any) -> None:
+    def check(
+        self,
+        env: Any,
+        position_range: Any = None,
+        reference_height: Any = None,
+        object_uid_list: Any = (),
+        grid_size: Any = (),
+        **_: Any,
+    ) -> None:
         name = type(self).__name__
         as_range(position_range, name, "position_range", 2)
         if isinstance(reference_height, bool) or not isinstance(reference_height, (int, float)):
             raise ParamError(name, "reference_height", f"must be a number, got {reference_height!r}")
-        if not isinstance(grid_size, (list, tuple)) or len(grid_size) != 2 or any(
-                isinstance(g, bool) or not isinstance(g, int) or g < 1 for g in grid_size):
+        if (
+            not isinstance(grid_size, (list, tuple))
+            or len(grid_size) != 2
+            or any(isinstance(g, bool) or not isinstance(g, int) or g < 1 for g in grid_size)
+        ):
             raise ParamError(name, "grid_size", f"must be [cols, rows] of ints >= 1, got {grid_size!r}")
         for uid in object_uid_list:
             if not isinstance(env.scene.get(uid), RigidObject):
@@ -56,8 +66,16 @@ class planner_grid_cell_sampler(CheckedFunctor):
         if len(object_uid_list) > grid_size[0] * grid_size[1]:
             raise ParamError(name, "grid_size", f"{grid_size} has fewer cells than {len(object_uid_list)} objects")
 
-    def __call__(self, env: Any, env_ids: Any, position_range: Sequence, reference_height: float,
-                 object_uid_list: Sequence[str], grid_size: Sequence[int], physics_update_step: int = -1) -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        position_range: Sequence,
+        reference_height: float,
+        object_uid_list: Sequence[str],
+        grid_size: Sequence[int],
+        physics_update_step: int = -1,
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         low, high = as_range(position_range, type(self).__name__, "position_range", 2)
         cols, rows = int(grid_size[0]), int(grid_size[1])
@@ -101,15 +119,23 @@ class randomize_anchor_height(CheckedFunctor):
         super().__init__(cfg, env)
         self._fixed_shift = torch.zeros(env.num_envs, dtype=torch.float64)  # applied to fixed-base roots
 
-    def check(self, env: Any, anchor_uid: Any = None, height_delta_range: Any = None,
-              height_delta_candidates: Any = None, include_groups: Sequence[str] = _GROUPS,
-              store_key: Any = "anchor_height_delta", **_: Any) -> None:
+    def check(
+        self,
+        env: Any,
+        anchor_uid: Any = None,
+        height_delta_range: Any = None,
+        height_delta_candidates: Any = None,
+        include_groups: Sequence[str] = _GROUPS,
+        store_key: Any = "anchor_height_delta",
+        **_: Any,
+    ) -> None:
         name = type(self).__name__
         if env.scene.get(anchor_uid) is None:
             raise ParamError(name, "anchor_uid", f"no entity {anchor_uid!r} in the scene")
         if (height_delta_range is None) == (height_delta_candidates is None):
-            raise ParamError(name, "height_delta_range", "give exactly one of height_delta_range and "
-                                                         "height_delta_candidates")
+            raise ParamError(
+                name, "height_delta_range", "give exactly one of height_delta_range and height_delta_candidates"
+            )
         if height_delta_range is not None:
             as_range(height_delta_range, name, "height_delta_range")
         elif not isinstance(height_delta_candidates, (list, tuple)) or not height_delta_candidates:
@@ -120,8 +146,11 @@ class randomize_anchor_height(CheckedFunctor):
         if not isinstance(store_key, str) or not store_key.isidentifier():
             raise ParamError(name, "store_key", f"must be an identifier, got {store_key!r}")
         if isinstance(env.scene.get(anchor_uid), RigidObjectGroup):
-            warnings.warn(f"{name}: anchor {anchor_uid!r} is a group; its members are shifted relatively",
-                          RuntimeWarning, stacklevel=2)
+            warnings.warn(
+                f"{name}: anchor {anchor_uid!r} is a group; its members are shifted relatively",
+                RuntimeWarning,
+                stacklevel=2,
+            )
 
     def _draw(self, env: Any, ids: torch.Tensor, height_delta_range: Any, height_delta_candidates: Any) -> torch.Tensor:
         n = len(ids)
@@ -133,8 +162,12 @@ class randomize_anchor_height(CheckedFunctor):
 
     def _members(self, env: Any, anchor_uid: str, include_groups: Sequence[str], exclude_uids: Sequence[str]) -> list:
         scene, out = env.scene, []
-        stores = {"background": scene.backgrounds, "rigid_object": scene.rigid_objects,
-                  "rigid_object_group": scene.groups, "articulation": scene.articulations}
+        stores = {
+            "background": scene.backgrounds,
+            "rigid_object": scene.rigid_objects,
+            "rigid_object_group": scene.groups,
+            "articulation": scene.articulations,
+        }
         for group in include_groups:
             out += [e for uid, e in stores[group].items() if uid != anchor_uid and uid not in exclude_uids]
         return out
@@ -150,8 +183,9 @@ class randomize_anchor_height(CheckedFunctor):
         elif isinstance(entity, Articulation) and not isinstance(entity, Robot):
             self._shift_articulation(env, entity, ids, dz, absolute)
 
-    def _shift_articulation(self, env: Any, art: Articulation, ids: torch.Tensor, dz: torch.Tensor,
-                            absolute: bool) -> None:
+    def _shift_articulation(
+        self, env: Any, art: Articulation, ids: torch.Tensor, dz: torch.Tensor, absolute: bool
+    ) -> None:
         if art.is_floating:
             pose = art.get_local_pose()[ids].to(torch.float64)
             pose[:, 2] = (float(art.scene.model.qpos0[art.root_qpos_adr + 2]) if absolute else pose[:, 2]) + dz
@@ -163,10 +197,18 @@ class randomize_anchor_height(CheckedFunctor):
         pos[:, 2] = base + dz
         write_model(env.sim, ids, [("body_pos", body, pos)])
 
-    def __call__(self, env: Any, env_ids: Any, anchor_uid: str, height_delta_range: Optional[Sequence] = None,
-                 height_delta_candidates: Optional[Sequence[float]] = None, include_groups: Sequence[str] = _GROUPS,
-                 exclude_uids: Sequence[str] = (), physics_update_step: int = 0,
-                 store_key: str = "anchor_height_delta") -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        anchor_uid: str,
+        height_delta_range: Optional[Sequence] = None,
+        height_delta_candidates: Optional[Sequence[float]] = None,
+        include_groups: Sequence[str] = _GROUPS,
+        exclude_uids: Sequence[str] = (),
+        physics_update_step: int = 0,
+        store_key: str = "anchor_height_delta",
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         dz = self._draw(env, ids, height_delta_range, height_delta_candidates)
         self._shift(env, env.scene[anchor_uid], ids, dz, absolute=True)

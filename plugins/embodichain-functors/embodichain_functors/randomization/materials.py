@@ -24,7 +24,14 @@ from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.shapes import VisualMaterialCfg
 
 from embodichain_functors._common import (
-    ParamError, as_range, check_optional_range, check_positive, check_probability, env_ids_of, randint, uniform_np,
+    ParamError,
+    as_range,
+    check_optional_range,
+    check_positive,
+    check_probability,
+    env_ids_of,
+    randint,
+    uniform_np,
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._sim import write_model
@@ -107,10 +114,9 @@ def material_groups(scene: Any, uid: str, functor: str) -> list[list[int]]:
         for m in range(model.nmat):
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_MATERIAL, m) or ""
             if name.startswith(prefix):
-                groups.setdefault(name[len(prefix):].rsplit("/", 1)[0], []).append(m)
+                groups.setdefault(name[len(prefix) :].rsplit("/", 1)[0], []).append(m)
         return list(groups.values())
-    raise ParamError(functor, "entity_cfg", f"{uid!r} is not a rigid object, group, articulation or "
-                                            f"{GROUND_UID!r}")
+    raise ParamError(functor, "entity_cfg", f"{uid!r} is not a rigid object, group, articulation or {GROUND_UID!r}")
 
 
 class randomize_visual_material(CheckedFunctor):
@@ -154,19 +160,31 @@ class randomize_visual_material(CheckedFunctor):
         super().__init__(cfg, env)
         params, model = cfg.params, env.scene.model
         self.groups = material_groups(env.scene, uid_of(params["entity_cfg"]), type(self).__name__)
-        files = texture_files(params["texture_path"], int(params.get("max_textures", 64)), type(self).__name__) \
-            if params.get("texture_path") else []
-        self.textures = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXTURE, texture_name(f))
-                                  for f in files], dtype=np.int64)
+        files = (
+            texture_files(params["texture_path"], int(params.get("max_textures", 64)), type(self).__name__)
+            if params.get("texture_path")
+            else []
+        )
+        self.textures = np.array(
+            [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXTURE, texture_name(f)) for f in files], dtype=np.int64
+        )
         mats = [m for group in self.groups for m in group]
         self._mats = np.asarray(mats, dtype=np.int64)
         self._part = np.array([g for g, group in enumerate(self.groups) for _ in group], dtype=np.int64)
         self._rgba0 = np.array(model.mat_rgba[mats], dtype=np.float64)
         self._tex0 = np.array(model.mat_texid[mats, RGB_ROLE], dtype=np.int64)
 
-    def check(self, env: Any, entity_cfg: Any = None, random_texture_prob: Any = 0.5, texture_path: Any = None,
-              base_color_range: Any = None, metallic_range: Any = None, roughness_range: Any = None,
-              max_textures: Any = 64) -> None:
+    def check(
+        self,
+        env: Any,
+        entity_cfg: Any = None,
+        random_texture_prob: Any = 0.5,
+        texture_path: Any = None,
+        base_color_range: Any = None,
+        metallic_range: Any = None,
+        roughness_range: Any = None,
+        max_textures: Any = 64,
+    ) -> None:
         name = type(self).__name__
         if not material_groups(env.scene, uid_of(entity_cfg), name):
             raise ParamError(name, "entity_cfg", f"{uid_of(entity_cfg)!r} has no visible geom to recolour")
@@ -178,9 +196,18 @@ class randomize_visual_material(CheckedFunctor):
         if texture_path and not texture_files(texture_path, int(max_textures), name):
             raise ParamError(name, "texture_path", f"no PNG textures in {texture_path!r}")
 
-    def __call__(self, env: Any, env_ids: Any, entity_cfg: Any, random_texture_prob: float = 0.5,
-                 texture_path: Optional[str] = None, base_color_range: Any = None, metallic_range: Any = None,
-                 roughness_range: Any = None, max_textures: int = 64) -> None:
+    def __call__(
+        self,
+        env: Any,
+        env_ids: Any,
+        entity_cfg: Any,
+        random_texture_prob: float = 0.5,
+        texture_path: Optional[str] = None,
+        base_color_range: Any = None,
+        metallic_range: Any = None,
+        roughness_range: Any = None,
+        max_textures: int = 64,
+    ) -> None:
         ids = env_ids_of(env, env_ids)
         n, parts = len(ids), len(self.groups)
         rgba = np.repeat(self._rgba0[None], n, axis=0)
@@ -195,8 +222,10 @@ class randomize_visual_material(CheckedFunctor):
             texid = np.where(use, pick, texid)
             rgba = np.where(use[..., None], 1.0, rgba)
         writes = [("mat_rgba", self._mats, rgba), ("mat_texid", (self._mats, RGB_ROLE), texid)]
-        for field, param, rng in (("mat_metallic", "metallic_range", metallic_range),
-                                  ("mat_roughness", "roughness_range", roughness_range)):
+        for field, param, rng in (
+            ("mat_metallic", "metallic_range", metallic_range),
+            ("mat_roughness", "roughness_range", roughness_range),
+        ):
             if rng is not None:
                 low, high = as_range(rng, type(self).__name__, param)
                 writes.append((field, self._mats, uniform_np(env, ids, low, high, (parts,))[:, self._part]))
@@ -259,9 +288,13 @@ class set_rigid_object_visual_material(CheckedFunctor):
             texid = mujoco.mj_name2id(env.scene.model, mujoco.mjtObj.mjOBJ_TEXTURE, name)
         rgba = list(mat.base_color) + [1.0] * (4 - len(mat.base_color))
         emission = float(mat.emissive_intensity) * max(float(c) for c in mat.emissive)
-        writes = [("mat_rgba", mats, np.array(rgba)), ("mat_texid", (mats, RGB_ROLE), texid),
-                  ("mat_metallic", mats, float(mat.metallic)), ("mat_roughness", mats, float(mat.roughness)),
-                  ("mat_emission", mats, emission)]
+        writes = [
+            ("mat_rgba", mats, np.array(rgba)),
+            ("mat_texid", (mats, RGB_ROLE), texid),
+            ("mat_metallic", mats, float(mat.metallic)),
+            ("mat_roughness", mats, float(mat.roughness)),
+            ("mat_emission", mats, emission),
+        ]
         write_model(env.sim, ids, writes)
 
 

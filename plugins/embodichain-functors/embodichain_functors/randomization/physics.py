@@ -15,7 +15,12 @@ from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.entities.rigid_object import RigidObject
 
 from embodichain_functors._common import (
-    ParamError, as_range, entity_of, env_ids_of, uniform_np, validated,
+    ParamError,
+    as_range,
+    entity_of,
+    env_ids_of,
+    uniform_np,
+    validated,
 )
 from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._entities import link_body_ids, rigid_bodies
@@ -27,8 +32,12 @@ from embodichain_functors.randomization.joints import (  # re-exported
 )
 
 __all__ = [
-    "randomize_rigid_object_mass", "randomize_rigid_object_center_of_mass", "randomize_articulation_mass",
-    "randomize_rigid_object_friction", "randomize_joint_damping", "randomize_joint_stiffness",
+    "randomize_rigid_object_mass",
+    "randomize_rigid_object_center_of_mass",
+    "randomize_articulation_mass",
+    "randomize_rigid_object_friction",
+    "randomize_joint_damping",
+    "randomize_joint_stiffness",
     "randomize_joint_drive",
 ]
 
@@ -46,13 +55,15 @@ def _check_mass(env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, relative:
     entity_of(env, entity_cfg, "randomize_rigid_object_mass", _OBJECTS)
     low, _ = as_range(mass_range, "randomize_rigid_object_mass", "mass_range")
     if not relative and (low <= 0).any():
-        raise ParamError("randomize_rigid_object_mass", "mass_range",
-                         f"absolute masses must be > 0, got {mass_range!r}")
+        raise ParamError(
+            "randomize_rigid_object_mass", "mass_range", f"absolute masses must be > 0, got {mass_range!r}"
+        )
 
 
 @validated(_check_mass)
-def randomize_rigid_object_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, mass_range: Any,
-                                relative: bool = False) -> None:
+def randomize_rigid_object_mass(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, mass_range: Any, relative: bool = False
+) -> None:
     """Draw a mass per env for a rigid object (or every member of a group).
 
     The inertia scales with the mass, so the density distribution is kept.
@@ -116,8 +127,9 @@ class randomize_rigid_object_center_of_mass(CheckedFunctor):
         low, high = as_range(com_pos_offset_range, type(self).__name__, "com_pos_offset_range", 3)
         bodies = [o.body_id for o in rigid_bodies(env.scene[entity_cfg.uid]) if o.is_dynamic]
         if not bodies:
-            warnings.warn(f"{type(self).__name__}: {entity_cfg.uid!r} is not dynamic; skipped", RuntimeWarning,
-                          stacklevel=2)
+            warnings.warn(
+                f"{type(self).__name__}: {entity_cfg.uid!r} is not dynamic; skipped", RuntimeWarning, stacklevel=2
+            )
             return
         offset = uniform_np(env, ids, low, high, (len(bodies),))
         com = env.scene.model.body_ipos[bodies][None] + offset
@@ -137,8 +149,9 @@ def _link_ranges(art: Articulation, mass_range: Any, link_names: Any) -> list[tu
     return out
 
 
-def _check_art_mass(env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, link_names: Any = None,
-                    relative: bool = False) -> None:
+def _check_art_mass(
+    env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, link_names: Any = None, relative: bool = False
+) -> None:
     name = "randomize_articulation_mass"
     art = entity_of(env, entity_cfg, name, (Articulation,))
     try:
@@ -152,9 +165,14 @@ def _check_art_mass(env: Any, entity_cfg: SceneEntityCfg, mass_range: Any, link_
 
 
 @validated(_check_art_mass)
-def randomize_articulation_mass(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg,
-                                mass_range: Union[list, tuple, dict], link_names: Optional[Any] = None,
-                                relative: bool = False) -> None:
+def randomize_articulation_mass(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    mass_range: Union[list, tuple, dict],
+    link_names: Optional[Any] = None,
+    relative: bool = False,
+) -> None:
     """Draw link masses per env and per link for an articulation or robot.
 
     Args:
@@ -186,8 +204,9 @@ def _check_friction(env: Any, entity_cfg: SceneEntityCfg, friction_range: Any, r
 
 
 @validated(_check_friction)
-def randomize_rigid_object_friction(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, friction_range: Any,
-                                    relative: bool = False) -> None:
+def randomize_rigid_object_friction(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, friction_range: Any, relative: bool = False
+) -> None:
     """Draw the sliding friction coefficient of a rigid object's collision geoms per env.
 
     Args:

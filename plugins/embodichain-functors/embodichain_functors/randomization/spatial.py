@@ -23,7 +23,13 @@ from embodichain_core.utils.math import pose_to_matrix, quat_mul
 from embodichain_core.utils.math import pose_to_matrix as pose_matrix
 
 from embodichain_functors._common import (
-    ParamError, as_range, check_optional_range, entity_of, env_ids_of, uniform_np, validated,
+    ParamError,
+    as_range,
+    check_optional_range,
+    entity_of,
+    env_ids_of,
+    uniform_np,
+    validated,
 )
 from embodichain_functors._entities import joint_ids_of
 from embodichain_functors._kinematics import check_ik, check_part, default_part, eef_pose, solve_ik
@@ -31,15 +37,26 @@ from embodichain_functors._sim import pose7_from_matrix, step_envs, write_model
 from embodichain_functors.randomization.layout import planner_grid_cell_sampler, randomize_anchor_height
 
 __all__ = [
-    "get_random_pose", "randomize_rigid_object_pose", "randomize_robot_qpos", "randomize_robot_eef_pose",
-    "randomize_articulation_root_pose", "randomize_target_pose", "planner_grid_cell_sampler",
+    "get_random_pose",
+    "randomize_rigid_object_pose",
+    "randomize_robot_qpos",
+    "randomize_robot_eef_pose",
+    "randomize_articulation_root_pose",
+    "randomize_target_pose",
+    "planner_grid_cell_sampler",
     "randomize_anchor_height",
 ]
 
 
-def get_random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
-                    rotation_range: Optional[Sequence] = None, relative_position: bool = True,
-                    relative_rotation: bool = False, env_ids: Any = None) -> torch.Tensor:
+def get_random_pose(
+    env: Any,
+    init_pose: Any,
+    position_range: Optional[Sequence] = None,
+    rotation_range: Optional[Sequence] = None,
+    relative_position: bool = True,
+    relative_rotation: bool = False,
+    env_ids: Any = None,
+) -> torch.Tensor:
     """Draw one pose per row of ``init_pose`` ((n, 7) xyz + wxyz); returns (n, 7) float64.
 
     Without ``position_range`` the position stays ``init_pose``'s; a relative
@@ -47,13 +64,20 @@ def get_random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence]
     a drawn rotation replaces it, or with ``relative_rotation`` composes with it.
     Row ``i`` draws from the episode stream of env ``env_ids[i]`` (default: env ``i``).
     """
-    return torch.from_numpy(random_pose(env, init_pose, position_range, rotation_range, relative_position,
-                                        relative_rotation, env_ids))
+    return torch.from_numpy(
+        random_pose(env, init_pose, position_range, rotation_range, relative_position, relative_rotation, env_ids)
+    )
 
 
-def random_pose(env: Any, init_pose: Any, position_range: Optional[Sequence] = None,
-                rotation_range: Optional[Sequence] = None, relative_position: bool = True,
-                relative_rotation: bool = False, env_ids: Any = None) -> np.ndarray:
+def random_pose(
+    env: Any,
+    init_pose: Any,
+    position_range: Optional[Sequence] = None,
+    rotation_range: Optional[Sequence] = None,
+    relative_position: bool = True,
+    relative_rotation: bool = False,
+    env_ids: Any = None,
+) -> np.ndarray:
     """:func:`get_random_pose` as a new (n, 7) float64 numpy array (the hot-path form)."""
     if isinstance(init_pose, torch.Tensor):
         init_pose = init_pose.detach().cpu().numpy()
@@ -79,16 +103,24 @@ def _check_pose_ranges(functor: str, position_range: Any, rotation_range: Any) -
     check_optional_range(rotation_range, functor, "rotation_range", 3)
 
 
-def _check_rigid_pose(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, rotation_range: Any = None,
-                      **_: Any) -> None:
+def _check_rigid_pose(
+    env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, rotation_range: Any = None, **_: Any
+) -> None:
     entity_of(env, entity_cfg, "randomize_rigid_object_pose", (RigidObject,))
     _check_pose_ranges("randomize_rigid_object_pose", position_range, rotation_range)
 
 
 @validated(_check_rigid_pose)
-def randomize_rigid_object_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position_range: Any = None,
-                                rotation_range: Any = None, relative_position: bool = True,
-                                relative_rotation: bool = False, physics_update_step: int = -1) -> None:
+def randomize_rigid_object_pose(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    position_range: Any = None,
+    rotation_range: Any = None,
+    relative_position: bool = True,
+    relative_rotation: bool = False,
+    physics_update_step: int = -1,
+) -> None:
     """Place a rigid object at a random pose per env around its configured initial pose.
 
     Velocities are cleared; with ``physics_update_step > 0`` only these envs are then
@@ -123,8 +155,13 @@ def _qpos_joints(art: Articulation, entity_cfg: SceneEntityCfg, joint_ids: Optio
     return joint_ids_of(art, entity_cfg)
 
 
-def _check_qpos(env: Any, entity_cfg: SceneEntityCfg, qpos_range: Any, relative_qpos: bool = True,
-                joint_ids: Optional[Sequence[int]] = None) -> None:
+def _check_qpos(
+    env: Any,
+    entity_cfg: SceneEntityCfg,
+    qpos_range: Any,
+    relative_qpos: bool = True,
+    joint_ids: Optional[Sequence[int]] = None,
+) -> None:
     name = "randomize_robot_qpos"
     art = entity_of(env, entity_cfg, name, (Articulation,))
     joints = _qpos_joints(art, entity_cfg, joint_ids)
@@ -134,8 +171,14 @@ def _check_qpos(env: Any, entity_cfg: SceneEntityCfg, qpos_range: Any, relative_
 
 
 @validated(_check_qpos)
-def randomize_robot_qpos(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, qpos_range: Any,
-                         relative_qpos: bool = True, joint_ids: Optional[Sequence[int]] = None) -> None:
+def randomize_robot_qpos(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    qpos_range: Any,
+    relative_qpos: bool = True,
+    joint_ids: Optional[Sequence[int]] = None,
+) -> None:
     """Draw joint positions per env (teleported, drive targets set along, clamped to the limits).
 
     Args:
@@ -180,8 +223,9 @@ def _check_eef(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None,
 
 
 @validated(_check_eef)
-def randomize_robot_eef_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position_range: Any = None,
-                             rotation_range: Any = None) -> None:
+def randomize_robot_eef_pose(
+    env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, rotation_range: Any = None
+) -> None:
     """Move a robot's end effector to a random pose around its current one, through IK.
 
     For each control part: forward kinematics of the current joints, a relative
@@ -210,8 +254,9 @@ def randomize_robot_eef_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg,
     robot.clear_dynamics(ids)
 
 
-def _check_root(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, rotation_range: Any = None,
-                **_: Any) -> None:
+def _check_root(
+    env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, rotation_range: Any = None, **_: Any
+) -> None:
     entity_of(env, entity_cfg, "randomize_articulation_root_pose", (Articulation,))
     _check_pose_ranges("randomize_articulation_root_pose", position_range, rotation_range)
 
@@ -219,15 +264,22 @@ def _check_root(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None
 def _initial_root_pose(art: Articulation) -> torch.Tensor:
     model = art.scene.model
     if art.is_floating:
-        return torch.as_tensor(model.qpos0[art.root_qpos_adr: art.root_qpos_adr + 7], dtype=torch.float64)
+        return torch.as_tensor(model.qpos0[art.root_qpos_adr : art.root_qpos_adr + 7], dtype=torch.float64)
     body = art.root_body_id
     return torch.as_tensor(list(model.body_pos[body]) + list(model.body_quat[body]), dtype=torch.float64)
 
 
 @validated(_check_root)
-def randomize_articulation_root_pose(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position_range: Any = None,
-                                     rotation_range: Any = None, relative_position: bool = True,
-                                     relative_rotation: bool = False, physics_update_step: int = -1) -> None:
+def randomize_articulation_root_pose(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    position_range: Any = None,
+    rotation_range: Any = None,
+    relative_position: bool = True,
+    relative_rotation: bool = False,
+    physics_update_step: int = -1,
+) -> None:
     """Place an articulation's root at a random pose per env around its configured pose.
 
     A floating base is teleported (velocities cleared); a fixed base is moved by
@@ -264,8 +316,14 @@ def randomize_articulation_root_pose(env: Any, env_ids: Any, entity_cfg: SceneEn
 _IDENTITY_POSE = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
 
 
-def _check_target(env: Any, position_range: Any = None, rotation_range: Any = None, store_key: str = "target_pose",
-                  reference_entity_cfg: Any = None, **_: Any) -> None:
+def _check_target(
+    env: Any,
+    position_range: Any = None,
+    rotation_range: Any = None,
+    store_key: str = "target_pose",
+    reference_entity_cfg: Any = None,
+    **_: Any,
+) -> None:
     _check_pose_ranges("randomize_target_pose", position_range, rotation_range)
     if not isinstance(store_key, str) or not store_key.isidentifier():
         raise ParamError("randomize_target_pose", "store_key", f"must be an identifier, got {store_key!r}")
@@ -273,15 +331,22 @@ def _check_target(env: Any, position_range: Any = None, rotation_range: Any = No
     if current is not None and not (isinstance(current, torch.Tensor) and current.shape == (env.num_envs, 4, 4)):
         raise ParamError("randomize_target_pose", "store_key", f"env.{store_key} exists and is not a (N, 4, 4) tensor")
     if reference_entity_cfg is not None:
-        entity_of(env, reference_entity_cfg, "randomize_target_pose", (RigidObject, Articulation),
-                  "reference_entity_cfg")
+        entity_of(
+            env, reference_entity_cfg, "randomize_target_pose", (RigidObject, Articulation), "reference_entity_cfg"
+        )
 
 
 @validated(_check_target)
-def randomize_target_pose(env: Any, env_ids: Any, position_range: Any = None, rotation_range: Any = None,
-                          relative_position: bool = False, relative_rotation: bool = False,
-                          reference_entity_cfg: Optional[SceneEntityCfg] = None,
-                          store_key: str = "target_pose") -> None:
+def randomize_target_pose(
+    env: Any,
+    env_ids: Any,
+    position_range: Any = None,
+    rotation_range: Any = None,
+    relative_position: bool = False,
+    relative_rotation: bool = False,
+    reference_entity_cfg: Optional[SceneEntityCfg] = None,
+    store_key: str = "target_pose",
+) -> None:
     """Draw a virtual goal pose per env into ``env.<store_key>`` ((N, 4, 4), created on first use).
 
     Args:

@@ -27,13 +27,23 @@ from embodichain_functors.randomization.materials import (
 VISUAL = "randomization.visual"
 
 __all__ = [
-    "randomize_light", "randomize_visual_material", "set_rigid_object_visual_material",
-    "set_rigid_object_group_visual_material", "randomize_camera_extrinsics", "randomize_camera_intrinsics",
+    "randomize_light",
+    "randomize_visual_material",
+    "set_rigid_object_visual_material",
+    "set_rigid_object_group_visual_material",
+    "randomize_camera_extrinsics",
+    "randomize_camera_intrinsics",
 ]
 
 
-def _check_light(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = None, color_range: Any = None,
-                 intensity_range: Any = None, direction_range: Any = None) -> None:
+def _check_light(
+    env: Any,
+    entity_cfg: SceneEntityCfg,
+    position_range: Any = None,
+    color_range: Any = None,
+    intensity_range: Any = None,
+    direction_range: Any = None,
+) -> None:
     name = "randomize_light"
     entity_of(env, entity_cfg, name, (Light,))
     check_optional_range(position_range, name, "position_range", 3)
@@ -42,8 +52,12 @@ def _check_light(env: Any, entity_cfg: SceneEntityCfg, position_range: Any = Non
     check_optional_range(direction_range, name, "direction_range", 3)
 
 
-_LIGHT_PARAMS = {"pos": ("position_range", 3), "color": ("color_range", 3), "intensity": ("intensity_range", None),
-                 "dir": ("direction_range", 3)}
+_LIGHT_PARAMS = {
+    "pos": ("position_range", 3),
+    "color": ("color_range", 3),
+    "intensity": ("intensity_range", None),
+    "dir": ("direction_range", 3),
+}
 
 
 def _light_draws(env: Any, light: Light, ids: Any, ranges: dict) -> dict[str, np.ndarray]:
@@ -62,8 +76,15 @@ def _light_draws(env: Any, light: Light, ids: Any, ranges: dict) -> dict[str, np
 
 
 @validated(_check_light)
-def randomize_light(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position_range: Any = None,
-                    color_range: Any = None, intensity_range: Any = None, direction_range: Any = None) -> None:
+def randomize_light(
+    env: Any,
+    env_ids: Any,
+    entity_cfg: SceneEntityCfg,
+    position_range: Any = None,
+    color_range: Any = None,
+    intensity_range: Any = None,
+    direction_range: Any = None,
+) -> None:
     """Randomize a light's position, colour, intensity and direction per env.
 
     Point and spot lights draw per env; sun/directional lights are global (as the
@@ -89,9 +110,17 @@ def randomize_light(env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, position
     ids = torch.arange(env.num_envs) if light.is_global else env_ids_of(env, env_ids)
     cfg = light.cfg
     point_like = not light.is_global
-    draws = _light_draws(env, light, ids, {
-        "pos": position_range if point_like else None, "color": color_range, "intensity": intensity_range,
-        "dir": direction_range if cfg.light_type != "point" else None})
+    draws = _light_draws(
+        env,
+        light,
+        ids,
+        {
+            "pos": position_range if point_like else None,
+            "color": color_range,
+            "intensity": intensity_range,
+            "dir": direction_range if cfg.light_type != "point" else None,
+        },
+    )
     pos = light.init_pos.numpy() + draws["pos"] if "pos" in draws else None
     direction = np.asarray(cfg.direction, dtype=np.float64) + draws["dir"] if "dir" in draws else None
     color = np.minimum(np.maximum(draws["color"], 0.0), 1.0) if "color" in draws else None

@@ -15,8 +15,16 @@ from embodichain_functors._functor import CheckedFunctor
 from embodichain_functors._kinematics import check_ik, default_part, eef_pose
 from embodichain_functors.rewards.penalty import robot_checker
 
-__all__ = ["distance_between_objects", "distance_to_target", "incremental_distance_to_target",
-           "reaching_behind_object", "orientation_alignment", "position_of", "rotation_of", "target_positions"]
+__all__ = [
+    "distance_between_objects",
+    "distance_to_target",
+    "incremental_distance_to_target",
+    "reaching_behind_object",
+    "orientation_alignment",
+    "position_of",
+    "rotation_of",
+    "target_positions",
+]
 
 
 def _pose_matrix(env: Any, entity_cfg: Any) -> torch.Tensor:
@@ -50,8 +58,10 @@ def target_positions(env: Any, key: str, functor: str) -> torch.Tensor:
     """(N, 3) positions of ``env.<key>`` ((N, 3), (N, 7) or (N, 4, 4)); a missing key raises."""
     target = getattr(env, key, None)
     if target is None:
-        raise KeyError(f"{functor}: env.{key} does not exist yet; set it (e.g. with randomize_target_pose, "
-                       f"store_key={key!r}) before rewards are computed")
+        raise KeyError(
+            f"{functor}: env.{key} does not exist yet; set it (e.g. with randomize_target_pose, "
+            f"store_key={key!r}) before rewards are computed"
+        )
     target = torch.as_tensor(target, dtype=torch.float32)
     return target[:, :3, 3] if target.dim() == 3 else target[:, :3]
 
@@ -64,16 +74,25 @@ def _check_entities(functor: str, *keys: str) -> Any:
                 raise ParamError(functor, key, f"no entity {getattr(cfg, 'uid', cfg)!r} in the scene")
         if "sigma" in params:
             check_positive(params["sigma"], functor, "sigma")
+
     return check
 
 
 def _shape(d: torch.Tensor, exponential: bool, sigma: float) -> torch.Tensor:
-    return torch.exp(-(d ** 2) / (2.0 * sigma ** 2)) if exponential else -d
+    return torch.exp(-(d**2) / (2.0 * sigma**2)) if exponential else -d
 
 
 @validated(_check_entities("distance_between_objects", "source_entity_cfg", "target_entity_cfg"), lead=3)
-def distance_between_objects(env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any,
-                             target_entity_cfg: Any, exponential: bool = False, sigma: float = 1.0) -> torch.Tensor:
+def distance_between_objects(
+    env: Any,
+    obs: Any,
+    action: Any,
+    info: dict,
+    source_entity_cfg: Any,
+    target_entity_cfg: Any,
+    exponential: bool = False,
+    sigma: float = 1.0,
+) -> torch.Tensor:
     """``-d`` (or ``exp(-d^2 / 2 sigma^2)``) of the distance between two entities.
 
     A robot entity with ``control_parts`` uses that part's end effector.
@@ -95,9 +114,17 @@ def distance_between_objects(env: Any, obs: Any, action: Any, info: dict, source
 
 
 @validated(_check_entities("distance_to_target", "source_entity_cfg"), lead=3)
-def distance_to_target(env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any,
-                       target_pose_key: str = "target_pose", exponential: bool = False, sigma: float = 1.0,
-                       use_xy_only: bool = False) -> torch.Tensor:
+def distance_to_target(
+    env: Any,
+    obs: Any,
+    action: Any,
+    info: dict,
+    source_entity_cfg: Any,
+    target_pose_key: str = "target_pose",
+    exponential: bool = False,
+    sigma: float = 1.0,
+    use_xy_only: bool = False,
+) -> torch.Tensor:
     """``-d`` (or ``exp(-d^2 / 2 sigma^2)``) of an entity's distance to ``env.<target_pose_key>``.
 
     Args:
@@ -152,9 +179,19 @@ class incremental_distance_to_target(CheckedFunctor):
         """Forget the previous distance of ``env_ids`` (all when ``None``)."""
         self._valid[slice(None) if env_ids is None else torch.as_tensor(env_ids).long()] = False
 
-    def __call__(self, env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any,
-                 target_pose_key: str = "target_pose", tanh_scale: float = 10.0, positive_weight: float = 1.0,
-                 negative_weight: float = 1.0, use_xy_only: bool = False) -> torch.Tensor:
+    def __call__(
+        self,
+        env: Any,
+        obs: Any,
+        action: Any,
+        info: dict,
+        source_entity_cfg: Any,
+        target_pose_key: str = "target_pose",
+        tanh_scale: float = 10.0,
+        positive_weight: float = 1.0,
+        negative_weight: float = 1.0,
+        use_xy_only: bool = False,
+    ) -> torch.Tensor:
         delta = position_of(env, source_entity_cfg) - target_positions(env, target_pose_key, type(self).__name__)
         d = (delta[:, :2] if use_xy_only else delta).norm(dim=-1)
         gain = torch.tanh(tanh_scale * (self._prev - d))
@@ -165,8 +202,9 @@ class incremental_distance_to_target(CheckedFunctor):
 
 
 @validated(_check_entities("orientation_alignment", "source_entity_cfg", "target_entity_cfg"), lead=3)
-def orientation_alignment(env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any,
-                          target_entity_cfg: Any) -> torch.Tensor:
+def orientation_alignment(
+    env: Any, obs: Any, action: Any, info: dict, source_entity_cfg: Any, target_entity_cfg: Any
+) -> torch.Tensor:
     """``(trace(R_s R_t^T) - 1) / 2`` in [-1, 1]: 1 when two entities are aligned.
 
     Args:
@@ -184,8 +222,9 @@ def orientation_alignment(env: Any, obs: Any, action: Any, info: dict, source_en
     return ((trace - 1.0) / 2.0).clamp(-1.0, 1.0)
 
 
-def _check_behind(env: Any, object_cfg: Any, part_name: Optional[str] = None, distance_scale: float = 5.0,
-                  **_: Any) -> None:
+def _check_behind(
+    env: Any, object_cfg: Any, part_name: Optional[str] = None, distance_scale: float = 5.0, **_: Any
+) -> None:
     if getattr(object_cfg, "uid", None) not in env.scene:
         raise ParamError("reaching_behind_object", "object_cfg", f"no entity {object_cfg!r} in the scene")
     check_positive(distance_scale, "reaching_behind_object", "distance_scale")
@@ -194,10 +233,18 @@ def _check_behind(env: Any, object_cfg: Any, part_name: Optional[str] = None, di
 
 
 @validated(_check_behind, lead=3)
-def reaching_behind_object(env: Any, obs: Any, action: Any, info: dict, object_cfg: Any,
-                           target_pose_key: str = "goal_pose", behind_offset: float = 0.015,
-                           height_offset: float = 0.015, distance_scale: float = 5.0,
-                           part_name: Optional[str] = None) -> torch.Tensor:
+def reaching_behind_object(
+    env: Any,
+    obs: Any,
+    action: Any,
+    info: dict,
+    object_cfg: Any,
+    target_pose_key: str = "goal_pose",
+    behind_offset: float = 0.015,
+    height_offset: float = 0.015,
+    distance_scale: float = 5.0,
+    part_name: Optional[str] = None,
+) -> torch.Tensor:
     """``1 - tanh(s * ||ee - p||)``: reach the point behind the object, seen from the goal.
 
     ``p = obj - behind_offset * dir_xy(obj -> goal) + height_offset * z``, so pushing

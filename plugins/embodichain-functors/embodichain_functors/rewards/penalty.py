@@ -21,12 +21,14 @@ def _robot(env: Any, robot_uid: Optional[str]) -> Robot:
 
 def robot_checker(functor: str) -> Any:
     """A param check of ``robot_uid`` (a robot of the scene) and ``part_name`` (one of its control parts)."""
+
     def check(env: Any, robot_uid: Optional[str] = None, part_name: Optional[str] = None, **_: Any) -> None:
         if robot_uid is not None and robot_uid not in env.scene.robots:
             raise ParamError(functor, "robot_uid", f"no robot {robot_uid!r} (robots: {list(env.scene.robots)})")
         robot = _robot(env, robot_uid)
         if part_name is not None and part_name not in (robot.control_parts or {}):
             raise ParamError(functor, "part_name", f"robot {robot.uid!r} has no control part {part_name!r}")
+
     return check
 
 
@@ -37,8 +39,15 @@ def _joints(robot: Robot, joint_ids: Any, part_name: Optional[str]) -> Any:
 
 
 @validated(robot_checker("joint_velocity_penalty"), lead=3)
-def joint_velocity_penalty(env: Any, obs: Any, action: Any, info: dict, robot_uid: Optional[str] = None,
-                           joint_ids: Optional[Sequence[int]] = None, part_name: Optional[str] = None) -> torch.Tensor:
+def joint_velocity_penalty(
+    env: Any,
+    obs: Any,
+    action: Any,
+    info: dict,
+    robot_uid: Optional[str] = None,
+    joint_ids: Optional[Sequence[int]] = None,
+    part_name: Optional[str] = None,
+) -> torch.Tensor:
     """``-||qvel||`` of a robot's joints (``joint_ids`` win over ``part_name``; all joints by default).
 
     Args:
@@ -56,8 +65,15 @@ def joint_velocity_penalty(env: Any, obs: Any, action: Any, info: dict, robot_ui
 
 
 @validated(robot_checker("joint_limit_penalty"), lead=3)
-def joint_limit_penalty(env: Any, obs: Any, action: Any, info: dict, robot_uid: Optional[str] = None,
-                        joint_ids: Any = None, margin: float = 0.1) -> torch.Tensor:
+def joint_limit_penalty(
+    env: Any,
+    obs: Any,
+    action: Any,
+    info: dict,
+    robot_uid: Optional[str] = None,
+    joint_ids: Any = None,
+    margin: float = 0.1,
+) -> torch.Tensor:
     """Sum over joints of ``-(margin - dist)`` where the normalized distance to a limit is below ``margin``.
 
     Distances are fractions of each joint's range; unlimited joints never count.
@@ -85,8 +101,11 @@ def joint_limit_penalty(env: Any, obs: Any, action: Any, info: dict, robot_uid: 
 def _flat(action: Any) -> Optional[torch.Tensor]:
     """A (N, k) float tensor of an action (tensor or dict of tensors; flags are skipped)."""
     if isinstance(action, dict):
-        parts = [torch.as_tensor(action[k]).float().flatten(1) for k in sorted(action)
-                 if torch.as_tensor(action[k]).dtype != torch.bool]
+        parts = [
+            torch.as_tensor(action[k]).float().flatten(1)
+            for k in sorted(action)
+            if torch.as_tensor(action[k]).dtype != torch.bool
+        ]
         return torch.cat(parts, -1) if parts else None
     return None if action is None else torch.as_tensor(action).float().flatten(1)
 

@@ -24,4 +24,3 @@ def success_reward(env: Any, obs: Any, action: Any, info: dict) -> torch.Tensor:
     if success is None:
         return torch.zeros(env.num_envs)
     return torch.as_tensor(success).reshape(-1).float().expand(env.num_envs).clone()
-

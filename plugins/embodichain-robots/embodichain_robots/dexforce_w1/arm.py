@@ -29,8 +29,14 @@ def build_arm(waist: mujoco.MjsBody, side: str, kind: P.DexforceW1ArmKind) -> mu
     upper = side.upper()
     for i in range(7):
         length = {2: P.UPPER_ARM, 4: P.FOREARM, 6: P.WRIST_TO_FLANGE}.get(i, 0.1)
-        link = add_body(parent, f"{side}_link{i + 1}", (0, 0, _OFFSETS[i]), mass=P.ARM_LINK_MASSES[i],
-                        inertia_box=(0.08, 0.08, length), ipos=(0, 0, length / 2 if i in (2, 4, 6) else 0.0))
+        link = add_body(
+            parent,
+            f"{side}_link{i + 1}",
+            (0, 0, _OFFSETS[i]),
+            mass=P.ARM_LINK_MASSES[i],
+            inertia_box=(0.08, 0.08, length),
+            ipos=(0, 0, length / 2 if i in (2, 4, 6) else 0.0),
+        )
         joint = f"{upper}_J{i + 1}"
         add_hinge(link, joint, axes[i], limits[i], *P.drive_group(joint))
         _link_shell(link, i)
@@ -70,5 +76,11 @@ def _wrist_camera(ee: mujoco.MjsBody, side: str) -> None:
     # housing behind the lens (the camera looks along its -z) on a bracket over the wrist
     add_geom(body, "box", size=(0.02, 0.013, 0.014), pos=(0, 0, 0.015), colour="black", visual=True)
     add_geom(body, "cylinder", size=(0.007, 0.002), pos=(0, 0, 0.0), colour="glass", visual=True)
-    add_geom(ee, "box", size=(0.012, 0.022, 0.012), pos=(0, -0.05 if side == "left" else 0.05, 0.035),
-             colour="black", visual=True)
+    add_geom(
+        ee,
+        "box",
+        size=(0.012, 0.022, 0.012),
+        pos=(0, -0.05 if side == "left" else 0.05, 0.035),
+        colour="black",
+        visual=True,
+    )

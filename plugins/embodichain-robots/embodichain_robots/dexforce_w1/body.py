@@ -15,16 +15,37 @@ def build_chassis(world: mujoco.MjsBody) -> mujoco.MjsBody:
     base = add_body(world, "base_link", mass=P.CHASSIS_MASS, inertia_box=(0.6, 0.56, 0.2), ipos=(0, 0, 0.12))
     add_geom(base, "box", size=(0.28, 0.26, 0.075), pos=(0, 0, 0.135), colour="yellow", name="chassis")
     for sx in (-1, 1):  # rounded front/back edges
-        add_geom(base, "cylinder", size=(0.075, 0.26), pos=(sx * 0.28, 0, 0.135), quat=axis_quat("y"),
-                 colour="yellow", visual=True)
+        add_geom(
+            base,
+            "cylinder",
+            size=(0.075, 0.26),
+            pos=(sx * 0.28, 0, 0.135),
+            quat=axis_quat("y"),
+            colour="yellow",
+            visual=True,
+        )
     add_geom(base, "box", size=(0.30, 0.28, 0.03), pos=(0, 0, 0.055), colour="black", name="bumper")
     add_geom(base, "box", size=(0.20, 0.16, 0.004), pos=(0, 0, 0.212), colour="black", visual=True)
     for sx in (-1, 1):
         for sy in (-1, 1):
-            add_geom(base, "cylinder", size=(0.05, 0.02), pos=(sx * 0.2, sy * 0.295, 0.05),
-                     quat=axis_quat("y"), colour="black", name=f"wheel_{'fb'[sx > 0]}{'rl'[sy > 0]}")
-            add_geom(base, "cylinder", size=(0.025, 0.021), pos=(sx * 0.2, sy * 0.295, 0.05),
-                     quat=axis_quat("y"), colour="silver", visual=True)
+            add_geom(
+                base,
+                "cylinder",
+                size=(0.05, 0.02),
+                pos=(sx * 0.2, sy * 0.295, 0.05),
+                quat=axis_quat("y"),
+                colour="black",
+                name=f"wheel_{'fb'[sx > 0]}{'rl'[sy > 0]}",
+            )
+            add_geom(
+                base,
+                "cylinder",
+                size=(0.025, 0.021),
+                pos=(sx * 0.2, sy * 0.295, 0.05),
+                quat=axis_quat("y"),
+                colour="silver",
+                visual=True,
+            )
     add_geom(base, "box", size=(0.08, 0.08, 0.025), pos=(0, 0, 0.225), colour="black", name="ankle_mount")
     return base
 
@@ -70,12 +91,14 @@ def _torso_shell(waist: mujoco.MjsBody) -> None:
 def build_head(waist: mujoco.MjsBody) -> mujoco.MjsBody:
     """NECK1 (yaw) and NECK2 (pitch about -y), a head shell and the ``eyes`` frame."""
     neck_spec, head_spec = P.HEAD_CHAIN
-    neck1 = add_body(waist, neck_spec.body, neck_spec.pos, mass=neck_spec.mass, inertia_box=(0.07, 0.07, 0.07),
-                     ipos=(0, 0, 0.035))
+    neck1 = add_body(
+        waist, neck_spec.body, neck_spec.pos, mass=neck_spec.mass, inertia_box=(0.07, 0.07, 0.07), ipos=(0, 0, 0.035)
+    )
     add_hinge(neck1, neck_spec.joint, neck_spec.axis, neck_spec.limits, *P.drive_group(neck_spec.joint))
     add_geom(neck1, "cylinder", size=(0.035,), fromto=(0, 0, -0.04, 0, 0, 0.07), colour="black")
-    neck2 = add_body(neck1, head_spec.body, head_spec.pos, mass=head_spec.mass, inertia_box=(0.18, 0.18, 0.22),
-                     ipos=(0, 0, 0.07))
+    neck2 = add_body(
+        neck1, head_spec.body, head_spec.pos, mass=head_spec.mass, inertia_box=(0.18, 0.18, 0.22), ipos=(0, 0, 0.07)
+    )
     add_hinge(neck2, head_spec.joint, head_spec.axis, head_spec.limits, *P.drive_group(head_spec.joint))
     _head_shell(neck2)
     build_eyes(neck2)
@@ -87,8 +110,15 @@ def _head_shell(neck2: mujoco.MjsBody) -> None:
     add_geom(neck2, "ellipsoid", size=(0.09, 0.095, 0.105), pos=(-0.006, 0, 0.075), colour="yellow", name="head")
     add_geom(neck2, "box", size=(0.006, 0.07, 0.028), pos=(0.078, 0, 0.052), colour="glass", visual=True)
     for sy in (-1, 1):
-        add_geom(neck2, "cylinder", size=(0.03, 0.008), pos=(-0.006, sy * 0.095, 0.075), quat=axis_quat("y"),
-                 colour="black", visual=True)
+        add_geom(
+            neck2,
+            "cylinder",
+            size=(0.03, 0.008),
+            pos=(-0.006, sy * 0.095, 0.075),
+            quat=axis_quat("y"),
+            colour="black",
+            visual=True,
+        )
 
 
 def build_eyes(neck2: mujoco.MjsBody) -> mujoco.MjsBody:

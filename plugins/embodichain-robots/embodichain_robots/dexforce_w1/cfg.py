@@ -57,8 +57,9 @@ class DexforceW1Cfg(ProceduralRobotCfg):
     drive_pros: JointDrivePropertiesCfg = default_drive_pros()
     control_parts: Optional[Dict[str, List[str]]] = None
     solver_cfg: Optional[Dict[str, Any]] = None
-    attrs: RigidBodyAttributesCfg = RigidBodyAttributesCfg(static_friction=0.95, dynamic_friction=0.9,
-                                                           contact_offset=0.001)
+    attrs: RigidBodyAttributesCfg = RigidBodyAttributesCfg(
+        static_friction=0.95, dynamic_friction=0.9, contact_offset=0.001
+    )
     min_position_iters: int = 32
     min_velocity_iters: int = 8
 

@@ -28,8 +28,9 @@ THUMB_ROT_RANGE, THUMB_FLEX_RANGE = (0.0, 1.54), (0.0, 1.0)
 GRIPPER_STROKE = 0.025
 
 
-def build_eef(spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, brand: DexforceW1HandBrand,
-              mount: Optional[np.ndarray]) -> None:
+def build_eef(
+    spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, brand: DexforceW1HandBrand, mount: Optional[np.ndarray]
+) -> None:
     """Mount ``brand`` on ``ee`` at the 4x4 ``mount`` (identity when None)."""
     mount = np.eye(4) if mount is None else np.asarray(mount, dtype=float)
     if brand == DexforceW1HandBrand.BRAINCO_HAND:
@@ -39,8 +40,15 @@ def build_eef(spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, brand: Dexforc
 
 
 def _mount_body(ee: mujoco.MjsBody, name: str, mount: np.ndarray, mass: float, ext: Sequence[float]) -> mujoco.MjsBody:
-    return add_body(ee, name, mount[:3, 3].tolist(), matrix_to_quat(mount[:3, :3]).tolist(), mass=mass, inertia_box=ext,
-                    ipos=(0, 0, ext[2] / 2))
+    return add_body(
+        ee,
+        name,
+        mount[:3, 3].tolist(),
+        matrix_to_quat(mount[:3, :3]).tolist(),
+        mass=mass,
+        inertia_box=ext,
+        ipos=(0, 0, ext[2] / 2),
+    )
 
 
 def build_brainco_hand(spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, mount: np.ndarray) -> None:
@@ -52,12 +60,24 @@ def build_brainco_hand(spec: mujoco.MjSpec, ee: mujoco.MjsBody, side: str, mount
     add_geom(hand, "box", size=(0.04, 0.002, 0.045), pos=(0, s * -0.0055, 0.057), colour="black", visual=True)
     curl = (-1.0, 0.0, 0.0) if side == "left" else (1.0, 0.0, 0.0)
     for finger, x in FINGERS:
-        prox = add_body(hand, f"{side}_{finger}_prox", (x, s * 0.01, 0.105), mass=0.02,
-                        inertia_box=(0.018, 0.018, 0.045), ipos=(0, 0, 0.022))
+        prox = add_body(
+            hand,
+            f"{side}_{finger}_prox",
+            (x, s * 0.01, 0.105),
+            mass=0.02,
+            inertia_box=(0.018, 0.018, 0.045),
+            ipos=(0, 0, 0.022),
+        )
         add_hinge(prox, f"{up}_HAND_{finger.upper()}", curl, FINGER_RANGE, *drive_group(f"{up}_HAND_INDEX"))
         add_geom(prox, "capsule", size=(0.009,), fromto=(0, 0, 0, 0, 0, 0.045), colour="grey")
-        dist = add_body(prox, f"{side}_{finger}_dist", (0, 0, 0.045), mass=0.01, inertia_box=(0.016, 0.016, 0.035),
-                        ipos=(0, 0, 0.017))
+        dist = add_body(
+            prox,
+            f"{side}_{finger}_dist",
+            (0, 0, 0.045),
+            mass=0.01,
+            inertia_box=(0.016, 0.016, 0.035),
+            ipos=(0, 0, 0.017),
+        )
         add_hinge(dist, f"{up}_{finger.upper()}_PIP", curl, PIP_RANGE, *drive_group(f"{up}_HAND_INDEX"))
         add_geom(dist, "capsule", size=(0.008,), fromto=(0, 0, 0.002, 0, 0, 0.035), colour="black")
         dist.add_site(name=f"{side}_{finger}_tip", pos=[0, 0, 0.043], size=[0.004, 0, 0])
@@ -69,13 +89,25 @@ def _thumb(hand: mujoco.MjsBody, side: str, s: float) -> None:
     """THUMB2 rotates the thumb toward the palm side; THUMB1 flexes it."""
     up = side.upper()
     direction = np.array([0.6, 0.0, 0.8])
-    prox = add_body(hand, f"{side}_thumb_prox", (0.03, s * 0.02, 0.035), mass=0.02,
-                    inertia_box=(0.02, 0.02, 0.04), ipos=(direction * 0.02).tolist())
+    prox = add_body(
+        hand,
+        f"{side}_thumb_prox",
+        (0.03, s * 0.02, 0.035),
+        mass=0.02,
+        inertia_box=(0.02, 0.02, 0.04),
+        ipos=(direction * 0.02).tolist(),
+    )
     add_hinge(prox, f"{up}_HAND_THUMB2", (0, 0, s), THUMB_ROT_RANGE, *drive_group(f"{up}_HAND_THUMB2"))
     add_geom(prox, "capsule", size=(0.0105,), fromto=[0, 0, 0] + (direction * 0.04).tolist(), colour="grey")
     flex = np.cross(direction, [0.0, s, 0.0])
-    dist = add_body(prox, f"{side}_thumb_dist", (direction * 0.04).tolist(), mass=0.01,
-                    inertia_box=(0.016, 0.016, 0.035), ipos=(direction * 0.017).tolist())
+    dist = add_body(
+        prox,
+        f"{side}_thumb_dist",
+        (direction * 0.04).tolist(),
+        mass=0.01,
+        inertia_box=(0.016, 0.016, 0.035),
+        ipos=(direction * 0.017).tolist(),
+    )
     add_hinge(dist, f"{up}_HAND_THUMB1", flex.tolist(), THUMB_FLEX_RANGE, *drive_group(f"{up}_HAND_THUMB1"))
     add_geom(dist, "capsule", size=(0.009,), fromto=[0, 0, 0] + (direction * 0.035).tolist(), colour="black")
     dist.add_site(name=f"{side}_thumb_tip", pos=(direction * 0.044).tolist(), size=[0.004, 0, 0])
@@ -100,7 +132,8 @@ def build_gripper(ee: mujoco.MjsBody, side: str, brand: DexforceW1HandBrand, mou
     joints, links = gripper_names(side, brand)
     for k, (joint, link) in enumerate(zip(joints, links)):
         sy = 1.0 if k == 0 else -1.0
-        finger = add_body(base, link, (0, sy * 0.03, 0.10), mass=0.05, inertia_box=(0.02, 0.012, 0.05),
-                          ipos=(0, 0, 0.025))
+        finger = add_body(
+            base, link, (0, sy * 0.03, 0.10), mass=0.05, inertia_box=(0.02, 0.012, 0.05), ipos=(0, 0, 0.025)
+        )
         add_slide(finger, joint, (0, -sy, 0), (0.0, GRIPPER_STROKE), *drive_group(joint))
         add_geom(finger, "box", size=(0.01, 0.006, 0.025), pos=(0, 0, 0.025), colour="black")

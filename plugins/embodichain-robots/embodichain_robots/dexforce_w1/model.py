@@ -75,5 +75,11 @@ def _add_tcp_site(ee: mujoco.MjsBody, side: str, tcp: Optional[np.ndarray]) -> N
     if tcp is None:
         return
     tcp = np.asarray(tcp, dtype=float)
-    ee.add_site(name=f"{side}_tcp", pos=tcp[:3, 3].tolist(), quat=matrix_to_quat(tcp[:3, :3]).tolist(),
-                size=[0.008, 0, 0], rgba=[0.1, 0.8, 0.2, 0.6], group=4)
+    ee.add_site(
+        name=f"{side}_tcp",
+        pos=tcp[:3, 3].tolist(),
+        quat=matrix_to_quat(tcp[:3, :3]).tolist(),
+        size=[0.008, 0, 0],
+        rgba=[0.1, 0.8, 0.2, 0.6],
+        group=4,
+    )

@@ -165,8 +165,12 @@ DRIVE_GROUPS = {
     "hand": (HAND_RE, 1e2, 1e1, 20.0, 0.005, 0.05),
 }
 #: EmbodiChain's own values (PhysX): kept for reference in the docs.
-EMBODICHAIN_DRIVES = {"arm": (1e4, 1e3, 1e5), "torso": (1e7, 1e4, 1e10), "head": (1e4, 1e3, 1e5),
-                      "hand": (1e2, 1e1, 1e3)}
+EMBODICHAIN_DRIVES = {
+    "arm": (1e4, 1e3, 1e5),
+    "torso": (1e7, 1e4, 1e10),
+    "head": (1e4, 1e3, 1e5),
+    "hand": (1e2, 1e1, 1e3),
+}
 
 
 def drive_group(joint: str) -> tuple:

@@ -52,16 +52,21 @@ def parse_hands(hand_types: dict) -> dict[str, Brand]:
     """``{side: brand}`` with sides and brands normalised; None values drop the side."""
     if not isinstance(hand_types, dict):
         raise ConfigError("hand_types", f"expected a {{side: brand}} mapping, got {hand_types!r}")
-    return {_side(k, "hand_types"): _enum(Brand, v, f"hand_types.{k}", upper=True)
-            for k, v in hand_types.items() if v is not None}
+    return {
+        _side(k, "hand_types"): _enum(Brand, v, f"hand_types.{k}", upper=True)
+        for k, v in hand_types.items()
+        if v is not None
+    }
 
 
 def parse_hand_versions(versions: Optional[dict]) -> Optional[dict]:
     """``{side: "v021"}`` (the only hand version)."""
     if versions is None:
         return None
-    return {_side(k, "hand_versions"): _enum(P.DexforceW1HandVersion, v, f"hand_versions.{k}").value
-            for k, v in versions.items()}
+    return {
+        _side(k, "hand_versions"): _enum(P.DexforceW1HandVersion, v, f"hand_versions.{k}").value
+        for k, v in versions.items()
+    }
 
 
 def parse_attach(xposes: Optional[dict]) -> Optional[dict]:
@@ -90,8 +95,13 @@ def eef_joints(side: str, brand: Brand) -> list[str]:
 def control_parts(hand_types: dict) -> dict[str, list[str]]:
     """EmbodiChain's W1 control parts; ``{side}_eef`` only where a hand is mounted."""
     arm = {side: [f"{side.upper()}_J{i}" for i in range(1, 8)] for side in SIDES}
-    parts = {"torso": ["ANKLE", "KNEE", "BUTTOCK", "WAIST"], "head": ["NECK1", "NECK2"],
-             "left_arm": arm["left"], "right_arm": arm["right"], "dual_arm": arm["left"] + arm["right"]}
+    parts = {
+        "torso": ["ANKLE", "KNEE", "BUTTOCK", "WAIST"],
+        "head": ["NECK1", "NECK2"],
+        "left_arm": arm["left"],
+        "right_arm": arm["right"],
+        "dual_arm": arm["left"] + arm["right"],
+    }
     for side, brand in parse_hands(hand_types).items():
         parts[f"{side}_eef"] = eef_joints(side, brand)
     parts["full_body"] = parts["torso"] + parts["head"] + arm["left"] + arm["right"]
@@ -114,9 +124,14 @@ def default_tcp(side: str, version: Any, arm_kind: Any, brand: Optional[Brand]) 
 def default_solvers(version: Any, arm_kind: Any, hand_types: dict) -> dict[str, IKSolverCfg]:
     """One :class:`IKSolverCfg` per arm: ``{side}_arm_base`` -> ``{side}_ee`` with the TCP."""
     hands = parse_hands(hand_types)
-    return {f"{side}_arm": IKSolverCfg(root_link_name=f"{side}_arm_base", end_link_name=f"{side}_ee",
-                                       tcp=default_tcp(side, version, arm_kind, hands.get(side)).tolist())
-            for side in SIDES}
+    return {
+        f"{side}_arm": IKSolverCfg(
+            root_link_name=f"{side}_arm_base",
+            end_link_name=f"{side}_ee",
+            tcp=default_tcp(side, version, arm_kind, hands.get(side)).tolist(),
+        )
+        for side in SIDES
+    }
 
 
 def options(cfg: Any) -> Any:
@@ -130,5 +145,10 @@ def options(cfg: Any) -> Any:
             tcp = solver.tcp if isinstance(solver, IKSolverCfg) else solver.get("tcp")
             tcps[side] = np.asarray(tcp, dtype=float).reshape(4, 4)
     attach = {k: np.asarray(v, dtype=float) for k, v in (cfg.hand_attach_xposes or {}).items()}
-    return W1Options(version=parse_version(cfg.version), arm_kind=parse_arm_kind(cfg.arm_kind),
-                     hands=parse_hands(cfg.hand_types or {}), hand_attach=attach, tcps=tcps)
+    return W1Options(
+        version=parse_version(cfg.version),
+        arm_kind=parse_arm_kind(cfg.arm_kind),
+        hands=parse_hands(cfg.hand_types or {}),
+        hand_attach=attach,
+        tcps=tcps,
+    )

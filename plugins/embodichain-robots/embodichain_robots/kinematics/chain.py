@@ -46,8 +46,9 @@ class SerialChain:
         limits: (n, 2) joint limits.
     """
 
-    def __init__(self, consts: np.ndarray, axes: np.ndarray, hinge: np.ndarray, limits: np.ndarray,
-                 joint_names: Sequence[str]):
+    def __init__(
+        self, consts: np.ndarray, axes: np.ndarray, hinge: np.ndarray, limits: np.ndarray, joint_names: Sequence[str]
+    ):
         self.consts = torch.as_tensor(consts, dtype=_F64)
         self.axes = torch.as_tensor(axes, dtype=_F64)
         self.hinge = torch.as_tensor(hinge, dtype=torch.bool)
@@ -107,7 +108,7 @@ class SerialChain:
                 hinge.append(kind == _HINGE)
                 limited = bool(model.jnt_limited[j])
                 limits.append(model.jnt_range[j].copy() if limited else np.array([-np.inf, np.inf]))
-                names.append(model.joint(j).name[len(prefix):])
+                names.append(model.joint(j).name[len(prefix) :])
         if not names:
             raise ValueError(f"no joint between {root_body!r} and {end_body!r}")
         consts.append(current)
@@ -121,8 +122,9 @@ class SerialChain:
         slide = (q * (1.0 - self._hinge_f))[..., None, None]
         return self._next + s * self._a + (1.0 - c) * self._b + slide * self._u
 
-    def forward(self, q: torch.Tensor, tip: Optional[torch.Tensor] = None
-                ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    def forward(
+        self, q: torch.Tensor, tip: Optional[torch.Tensor] = None
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """FK with the joint frames.
 
         Returns:
@@ -154,4 +156,3 @@ class SerialChain:
             lin = torch.where(self.hinge[None, :, None], lin, axes_w)
         ang = axes_w * self._hinge_f[None, :, None]
         return pose, torch.cat((lin, ang), -1).transpose(1, 2)
-

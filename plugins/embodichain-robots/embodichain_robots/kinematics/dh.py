@@ -18,8 +18,9 @@ import torch
 from embodichain_robots.dexforce_w1 import params as P
 
 
-def dh_fk(q: torch.Tensor, rows: Sequence[Sequence[float]], directions: Sequence[float],
-          base: torch.Tensor, tip: torch.Tensor) -> torch.Tensor:
+def dh_fk(
+    q: torch.Tensor, rows: Sequence[Sequence[float]], directions: Sequence[float], base: torch.Tensor, tip: torch.Tensor
+) -> torch.Tensor:
     """(N, 4, 4) poses of a DH chain at joint values ``q`` (N, n).
 
     Args:

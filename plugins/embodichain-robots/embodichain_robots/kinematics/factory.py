@@ -53,9 +53,12 @@ def solver_from_config(cls: Any, cfg: Mapping[str, Any], robot: Any, part: str) 
     ids = [robot.joint_names.index(name) for name in solver.joint_names]
     expected = robot.get_joint_ids(part, remove_mimic=True)
     if ids != expected:
-        raise ConfigError("", f"the chain {ik.root_link_name!r} -> {ik.end_link_name!r} has joints "
-                              f"{solver.joint_names}, but control part {part!r} has "
-                              f"{[robot.joint_names[i] for i in expected]}")
+        raise ConfigError(
+            "",
+            f"the chain {ik.root_link_name!r} -> {ik.end_link_name!r} has joints "
+            f"{solver.joint_names}, but control part {part!r} has "
+            f"{[robot.joint_names[i] for i in expected]}",
+        )
     solver.joint_ids = ids
     return solver
 
@@ -79,8 +82,11 @@ def build_part_solvers(robot: Any, solver_cfgs: Mapping[str, Any]) -> dict[str, 
         ids = [robot.joint_names.index(name) for name in solver.joint_names]
         expected = robot.get_joint_ids(part, remove_mimic=True)
         if ids != expected:
-            raise ConfigError(f"solver_cfg.{part}", f"the chain {cfg.root_link_name!r} -> {cfg.end_link_name!r} "
-                                                    f"has joints {ids}, but control part {part!r} has {expected}")
+            raise ConfigError(
+                f"solver_cfg.{part}",
+                f"the chain {cfg.root_link_name!r} -> {cfg.end_link_name!r} "
+                f"has joints {ids}, but control part {part!r} has {expected}",
+            )
         solver.joint_ids = ids
         out[part] = solver
     return out

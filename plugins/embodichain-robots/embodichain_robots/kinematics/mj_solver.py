@@ -23,8 +23,14 @@ _F64 = torch.float64
 class MjDLSSolver(DLSSolver):
     """:class:`DLSSolver` with FK and Jacobians from MuJoCo (slower; a reference)."""
 
-    def __init__(self, cfg: IKSolverCfg, chain: SerialChain, model: mujoco.MjModel, prefix: str = "",
-                 joint_ids: Optional[Sequence[int]] = None):
+    def __init__(
+        self,
+        cfg: IKSolverCfg,
+        chain: SerialChain,
+        model: mujoco.MjModel,
+        prefix: str = "",
+        joint_ids: Optional[Sequence[int]] = None,
+    ):
         super().__init__(cfg, chain, joint_ids)
         self.model = model
         self.data = mujoco.MjData(model)
@@ -35,8 +41,9 @@ class MjDLSSolver(DLSSolver):
         self.dof_adr = np.array([j.dofadr[0] for j in joints])
 
     @classmethod
-    def from_model(cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "",
-                   joint_ids: Optional[Sequence[int]] = None) -> "MjDLSSolver":
+    def from_model(
+        cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "", joint_ids: Optional[Sequence[int]] = None
+    ) -> "MjDLSSolver":
         chain = SerialChain.from_model(model, cfg.root_link_name, cfg.end_link_name, prefix)
         return cls(cfg, chain, model, prefix, joint_ids)
 

@@ -123,8 +123,9 @@ class DLSSolver:
         self.tcp = torch.as_tensor(cfg.tcp, dtype=_F64).reshape(4, 4)
 
     @classmethod
-    def from_model(cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "",
-                   joint_ids: Optional[Sequence[int]] = None) -> "DLSSolver":
+    def from_model(
+        cls, cfg: IKSolverCfg, model: mujoco.MjModel, prefix: str = "", joint_ids: Optional[Sequence[int]] = None
+    ) -> "DLSSolver":
         """Build from a compiled model whose names carry ``prefix``."""
         chain = SerialChain.from_model(model, cfg.root_link_name, cfg.end_link_name, prefix)
         if cfg.joint_names is not None and list(cfg.joint_names) != chain.joint_names:
@@ -182,8 +183,9 @@ class DLSSolver:
         return pos, rotation_angle(target[:, :3, :3], pose[:, :3, :3])
 
     @_one_thread
-    def get_ik(self, target: torch.Tensor, qpos_seed: Optional[torch.Tensor] = None,
-               num_restarts: Optional[int] = None) -> tuple[torch.Tensor, torch.Tensor]:
+    def get_ik(
+        self, target: torch.Tensor, qpos_seed: Optional[torch.Tensor] = None, num_restarts: Optional[int] = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """Solve every target of the batch.
 
         Args:
@@ -235,8 +237,9 @@ class DLSSolver:
         """A generator seeded by ``cfg.seed``, the restart round and the target pose's bytes: an
         env's restarts depend on its own target alone, never on which other envs needed some."""
         data = target.to(_F64).contiguous().numpy().tobytes() + int(round_).to_bytes(4, "little")
-        digest = hashlib.blake2b(data, digest_size=8,
-                                 key=int(self.cfg.seed).to_bytes(8, "little", signed=True)).digest()
+        digest = hashlib.blake2b(
+            data, digest_size=8, key=int(self.cfg.seed).to_bytes(8, "little", signed=True)
+        ).digest()
         return torch.Generator().manual_seed(int.from_bytes(digest, "little") >> 1)
 
     def _middle(self) -> torch.Tensor:
@@ -245,8 +248,9 @@ class DLSSolver:
         return (lim[:, 0].clamp(min=-torch.pi) + lim[:, 1].clamp(max=torch.pi)) / 2
 
     @staticmethod
-    def _step(jac: torch.Tensor, err: torch.Tensor, q: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor,
-              eye: torch.Tensor) -> torch.Tensor:
+    def _step(
+        jac: torch.Tensor, err: torch.Tensor, q: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor, eye: torch.Tensor
+    ) -> torch.Tensor:
         """A DLS step with the joints pushed against a limit frozen (active set)."""
         grad = (jac.transpose(1, 2) @ err[..., None])[..., 0]
         blocked = ((q <= lo + 1e-9) & (grad < 0)) | ((q >= hi - 1e-9) & (grad > 0))
@@ -256,7 +260,7 @@ class DLSSolver:
     def _solve(self, target: torch.Tensor, q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """DLS iterations from ``q``: (qpos, converged, combined error)."""
         lo, hi = self.chain.limits[:, 0], self.chain.limits[:, 1]
-        eye = torch.eye(6, dtype=_F64) * self.cfg.damping ** 2
+        eye = torch.eye(6, dtype=_F64) * self.cfg.damping**2
         t_rot, t_pos = target[:, :3, :3], target[:, :3, 3]
         pose = None
         for _ in range(self.cfg.max_iterations):

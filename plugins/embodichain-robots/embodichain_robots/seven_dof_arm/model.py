@@ -97,8 +97,15 @@ _LINK_SHELLS = (_link1, _link2, _link3, _link4, _link5, _link6, _link7)
 
 def _hand(spec: mujoco.MjSpec, link7: mujoco.MjsBody) -> None:
     """Hand rotated -45 deg about z (as on the Panda), fingers closing along its y."""
-    hand = add_body(link7, "hand", (0, 0, FLANGE), (math.cos(-math.pi / 8), 0, 0, math.sin(-math.pi / 8)),
-                    mass=0.73, inertia_box=(0.05, 0.2, 0.07), ipos=(0, 0, 0.03))
+    hand = add_body(
+        link7,
+        "hand",
+        (0, 0, FLANGE),
+        (math.cos(-math.pi / 8), 0, 0, math.sin(-math.pi / 8)),
+        mass=0.73,
+        inertia_box=(0.05, 0.2, 0.07),
+        ipos=(0, 0, 0.03),
+    )
     hand.add_site(name="ee", size=[0.006, 0, 0])
     hand.add_site(name="tcp", pos=[0, 0, TCP_OFFSET], size=[0.008, 0, 0], rgba=[0.1, 0.8, 0.2, 0.6], group=4)
     add_geom(hand, "box", size=(0.025, 0.095, 0.025), pos=(0, 0, 0.03), colour="white", name="hand")
@@ -107,6 +114,7 @@ def _hand(spec: mujoco.MjSpec, link7: mujoco.MjsBody) -> None:
         finger = add_body(hand, name, (0, 0, 0.0584), mass=0.015, inertia_box=(0.02, 0.02, 0.05), ipos=(0, 0, 0.025))
         add_slide(finger, joint, (0, sign, 0), FINGER_RANGE, armature=0.01, damping=0.1)
         add_geom(finger, "box", size=(0.01, 0.01, 0.026), pos=(0, sign * 0.01, 0.026), colour="grey")
-        add_geom(finger, "box", size=(0.0085, 0.003, 0.012), pos=(0, sign * 0.003, 0.039), colour="black",
-                 name=f"{name}_pad")
+        add_geom(
+            finger, "box", size=(0.0085, 0.003, 0.012), pos=(0, sign * 0.003, 0.039), colour="black", name=f"{name}_pad"
+        )
     add_mimic(spec, "finger_joint2", "finger_joint1")

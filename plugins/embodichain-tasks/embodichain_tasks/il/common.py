@@ -31,9 +31,24 @@ import torch
 
 from embodichain_core.managers.functor import Functor
 
-__all__ = ["DemoBuilder", "frame_from_axes", "top_down_grasp_frame", "make_pose", "smooth_step",
-           "interpolate_joints", "yaw_of", "w1_init_qpos", "w1_robot_cfg", "il_sim_cfg", "eye_in_head_cfg",
-           "round_table_cfg", "point_light_cfg", "light_event", "table_material_event", "tune_contacts"]
+__all__ = [
+    "DemoBuilder",
+    "frame_from_axes",
+    "top_down_grasp_frame",
+    "make_pose",
+    "smooth_step",
+    "interpolate_joints",
+    "yaw_of",
+    "w1_init_qpos",
+    "w1_robot_cfg",
+    "il_sim_cfg",
+    "eye_in_head_cfg",
+    "round_table_cfg",
+    "point_light_cfg",
+    "light_event",
+    "table_material_event",
+    "tune_contacts",
+]
 
 
 def frame_from_axes(approach: torch.Tensor, closing: torch.Tensor) -> torch.Tensor:
@@ -202,11 +217,16 @@ def w1_robot_cfg(right_ready: Sequence[float] = W1_RIGHT_READY_DOWN) -> Any:
     from embodichain_robots import DexforceW1Cfg
 
     fingers = "(LEFT|RIGHT)_FINGER[12]"
-    return DexforceW1Cfg.from_dict({
-        "uid": "dexforce_w1", "version": "v021", "arm_kind": "industrial", "init_pos": [0.0, 0.0, 0.0],
-        "init_qpos": w1_init_qpos(right_ready),
-        "drive_pros": {"stiffness": {fingers: 3000.0}, "damping": {fingers: 100.0}, "max_effort": {fingers: 40.0}},
-    })
+    return DexforceW1Cfg.from_dict(
+        {
+            "uid": "dexforce_w1",
+            "version": "v021",
+            "arm_kind": "industrial",
+            "init_pos": [0.0, 0.0, 0.0],
+            "init_qpos": w1_init_qpos(right_ready),
+            "drive_pros": {"stiffness": {fingers: 3000.0}, "damping": {fingers: 100.0}, "max_effort": {fingers: 40.0}},
+        }
+    )
 
 
 def il_sim_cfg() -> Any:
@@ -223,10 +243,15 @@ def eye_in_head_cfg(width: int = 320, height: int = 180) -> Any:
     from embodichain_sensors.cfg import StereoCameraCfg
 
     f = 450.0 * width / 960.0
-    return StereoCameraCfg(uid="eye_in_head", width=width, height=height, left_to_right_pos=(0.06, 0.0, 0.0),
-                           intrinsics=(f, f, width / 2.0, height / 2.0),
-                           intrinsics_right=(f, f, width / 2.0, height / 2.0),
-                           extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"))
+    return StereoCameraCfg(
+        uid="eye_in_head",
+        width=width,
+        height=height,
+        left_to_right_pos=(0.06, 0.0, 0.0),
+        intrinsics=(f, f, width / 2.0, height / 2.0),
+        intrinsics_right=(f, f, width / 2.0, height / 2.0),
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"),
+    )
 
 
 def round_table_cfg() -> Any:
@@ -235,10 +260,14 @@ def round_table_cfg() -> Any:
     from embodichain_core.sim.shapes import MeshCfg
 
     mesh = MeshCfg(fpath="CircleTableSimple/circle_table_simple.ply", compute_uv=True)
-    return RigidObjectCfg(uid="table", shape=mesh,
-                          attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85,
-                                                       restitution=0.01),
-                          body_type="kinematic", init_pos=(0.80, 0.0, 0.8), init_rot=(0.0, 90.0, 0.0))
+    return RigidObjectCfg(
+        uid="table",
+        shape=mesh,
+        attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85, restitution=0.01),
+        body_type="kinematic",
+        init_pos=(0.80, 0.0, 0.8),
+        init_rot=(0.0, 90.0, 0.0),
+    )
 
 
 #: Table top height over the table body origin (the slab's half thickness).
@@ -256,19 +285,32 @@ def table_material_event() -> Any:
     """``randomize_visual_material`` of the table at every reset (the seed's textures)."""
     from embodichain_core.managers.cfg import EventCfg
 
-    return EventCfg(func="randomize_visual_material", mode="reset",
-                    params={"entity_cfg": {"uid": "table"}, "random_texture_prob": 0.5,
-                            "texture_path": "CocoBackground/coco",
-                            "base_color_range": [[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]]})
+    return EventCfg(
+        func="randomize_visual_material",
+        mode="reset",
+        params={
+            "entity_cfg": {"uid": "table"},
+            "random_texture_prob": 0.5,
+            "texture_path": "CocoBackground/coco",
+            "base_color_range": [[0.2, 0.2, 0.2], [1.0, 1.0, 1.0]],
+        },
+    )
 
 
 def light_event() -> Any:
     """``randomize_light`` on the ``point`` light at every reset."""
     from embodichain_core.managers.cfg import EventCfg
 
-    return EventCfg(func="randomize_light", mode="reset",
-                    params={"entity_cfg": {"uid": "point"}, "position_range": [[-0.5, -0.5, 1.8], [0.5, 0.5, 2.2]],
-                            "color_range": [[0.7, 0.7, 0.7], [1.0, 1.0, 1.0]], "intensity_range": [15.0, 30.0]})
+    return EventCfg(
+        func="randomize_light",
+        mode="reset",
+        params={
+            "entity_cfg": {"uid": "point"},
+            "position_range": [[-0.5, -0.5, 1.8], [0.5, 0.5, 2.2]],
+            "color_range": [[0.7, 0.7, 0.7], [1.0, 1.0, 1.0]],
+            "intensity_range": [15.0, 30.0],
+        },
+    )
 
 
 class tune_contacts(Functor):

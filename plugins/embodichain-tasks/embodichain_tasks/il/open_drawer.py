@@ -62,13 +62,19 @@ STEPS = {"reach": 25, "align": 5, "descend": 15, "settle": 5, "close": 12, "sque
 def drawer_events() -> dict:
     """Startup contact settings; reset events: drawer pose, light, table material."""
     return {
-        "grip_contacts": EventCfg(func="embodichain_tasks.il.common:tune_contacts", mode="startup",
-                                  params={"impratio": 20.0}),
-        "drawer_pose": EventCfg(func="randomize_articulation_root_pose", mode="reset",
-                                params={"entity_cfg": {"uid": "drawer"},
-                                        "position_range": [[-0.03, -0.05, 0.0], [0.03, 0.05, 0.0]],
-                                        "rotation_range": [[0.0, 0.0, -10.0], [0.0, 0.0, 10.0]],
-                                        "relative_rotation": True}),
+        "grip_contacts": EventCfg(
+            func="embodichain_tasks.il.common:tune_contacts", mode="startup", params={"impratio": 20.0}
+        ),
+        "drawer_pose": EventCfg(
+            func="randomize_articulation_root_pose",
+            mode="reset",
+            params={
+                "entity_cfg": {"uid": "drawer"},
+                "position_range": [[-0.03, -0.05, 0.0], [0.03, 0.05, 0.0]],
+                "rotation_range": [[0.0, 0.0, -10.0], [0.0, 0.0, 10.0]],
+                "relative_rotation": True,
+            },
+        ),
         "light": common.light_event(),
         "table_material": common.table_material_event(),
     }
@@ -85,14 +91,19 @@ class OpenDrawerCfg(EmbodiedEnvCfg):
     light: EmbodiedEnvCfg.EnvLightCfg = EmbodiedEnvCfg.EnvLightCfg(direct=[common.point_light_cfg()])
     background: List[RigidObjectCfg] = [common.round_table_cfg()]
     articulation: List[ArticulationCfg] = [
-        ArticulationCfg(uid="drawer", fpath="SlidingBoxDrawer/SlidingBoxDrawer.urdf", init_pos=DRAWER_POS,
-                        init_rot=DRAWER_ROT),
+        ArticulationCfg(
+            uid="drawer", fpath="SlidingBoxDrawer/SlidingBoxDrawer.urdf", init_pos=DRAWER_POS, init_rot=DRAWER_ROT
+        ),
     ]
     events: Any = drawer_events()
-    observations: Any = {"handle_pose": ObservationCfg(func="embodichain_tasks.il.open_drawer:handle_pose",
-                                                       mode="add", name="handle_pose"),
-                         "drawer_opening": ObservationCfg(func="embodichain_tasks.il.open_drawer:drawer_opening",
-                                                       mode="add", name="drawer_opening")}
+    observations: Any = {
+        "handle_pose": ObservationCfg(
+            func="embodichain_tasks.il.open_drawer:handle_pose", mode="add", name="handle_pose"
+        ),
+        "drawer_opening": ObservationCfg(
+            func="embodichain_tasks.il.open_drawer:drawer_opening", mode="add", name="drawer_opening"
+        ),
+    }
     extensions: Any = {"open_threshold": 0.15}
     max_episode_steps: int = MAX_EPISODE_STEPS
 

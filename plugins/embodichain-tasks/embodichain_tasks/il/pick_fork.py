@@ -55,16 +55,25 @@ def fork_events() -> dict:
     """Startup contact settings; reset events: fork mesh, mass and pose, light, table material."""
     fork = {"uid": "fork"}
     return {
-        "replace_fork": EventCfg(func="replace_assets_from_group", mode="reset",
-                                 params={"entity_cfg": fork, "folder_path": FORK_FOLDER}),
-        "grip_contacts": EventCfg(func="embodichain_tasks.il.common:tune_contacts", mode="startup",
-                                  params={"impratio": 20.0}),
-        "fork_mass": EventCfg(func="randomize_rigid_object_mass", mode="reset",
-                              params={"entity_cfg": fork, "mass_range": [0.03, 0.1]}),
-        "fork_pose": EventCfg(func="randomize_rigid_object_pose", mode="reset",
-                              params={"entity_cfg": fork, "position_range": [[-0.04, -0.05, 0.0], [0.04, 0.05, 0.0]],
-                                      "rotation_range": [[0.0, 0.0, -30.0], [0.0, 0.0, 30.0]],
-                                      "relative_rotation": True}),
+        "replace_fork": EventCfg(
+            func="replace_assets_from_group", mode="reset", params={"entity_cfg": fork, "folder_path": FORK_FOLDER}
+        ),
+        "grip_contacts": EventCfg(
+            func="embodichain_tasks.il.common:tune_contacts", mode="startup", params={"impratio": 20.0}
+        ),
+        "fork_mass": EventCfg(
+            func="randomize_rigid_object_mass", mode="reset", params={"entity_cfg": fork, "mass_range": [0.03, 0.1]}
+        ),
+        "fork_pose": EventCfg(
+            func="randomize_rigid_object_pose",
+            mode="reset",
+            params={
+                "entity_cfg": fork,
+                "position_range": [[-0.04, -0.05, 0.0], [0.04, 0.05, 0.0]],
+                "rotation_range": [[0.0, 0.0, -30.0], [0.0, 0.0, 30.0]],
+                "relative_rotation": True,
+            },
+        ),
         "light": common.light_event(),
         "table_material": common.table_material_event(),
     }
@@ -81,13 +90,20 @@ class PickForkCfg(EmbodiedEnvCfg):
     light: EmbodiedEnvCfg.EnvLightCfg = EmbodiedEnvCfg.EnvLightCfg(direct=[common.point_light_cfg()])
     background: List[RigidObjectCfg] = [common.round_table_cfg()]
     rigid_object: List[RigidObjectCfg] = [
-        RigidObjectCfg(uid="fork", shape=MeshCfg(fpath=FORK_FOLDER + "standard_fork_scale.ply"),
-                       attrs=RigidBodyAttributesCfg(mass=0.05, static_friction=1.0, dynamic_friction=0.9),
-                       body_scale=(0.75, 0.75, 1.0), init_pos=FORK_POS),
+        RigidObjectCfg(
+            uid="fork",
+            shape=MeshCfg(fpath=FORK_FOLDER + "standard_fork_scale.ply"),
+            attrs=RigidBodyAttributesCfg(mass=0.05, static_friction=1.0, dynamic_friction=0.9),
+            body_scale=(0.75, 0.75, 1.0),
+            init_pos=FORK_POS,
+        ),
     ]
     events: Any = fork_events()
-    observations: Any = {"fork_pose": ObservationCfg(func="get_rigid_object_pose", mode="add", name="fork_pose",
-                                                     params={"entity_cfg": {"uid": "fork"}})}
+    observations: Any = {
+        "fork_pose": ObservationCfg(
+            func="get_rigid_object_pose", mode="add", name="fork_pose", params={"entity_cfg": {"uid": "fork"}}
+        )
+    }
     extensions: Any = {"lift_height": 0.1, "hold_distance": 0.04}
     max_episode_steps: int = MAX_EPISODE_STEPS
 

@@ -112,8 +112,9 @@ def make_env(cfg: PPOConfig) -> Any:
     return gym.make(cfg.task, **kwargs).unwrapped
 
 
-def collect(env: Any, agent: ActorCritic, norm: RunningNorm, obs: torch.Tensor, cfg: PPOConfig,
-            stats: EpisodeStats) -> tuple[Rollout, torch.Tensor]:
+def collect(
+    env: Any, agent: ActorCritic, norm: RunningNorm, obs: torch.Tensor, cfg: PPOConfig, stats: EpisodeStats
+) -> tuple[Rollout, torch.Tensor]:
     """Step ``cfg.num_steps`` times; return the rollout and the next (normalised) observation."""
     buf: dict[str, list[torch.Tensor]] = {k: [] for k in ("obs", "actions", "logprobs", "rewards", "dones", "values")}
     low, high = env.single_action_space.low, env.single_action_space.high
@@ -155,15 +156,17 @@ def compute_gae(batch: Rollout, next_value: torch.Tensor, cfg: PPOConfig) -> Non
 
 def update(agent: ActorCritic, optim: torch.optim.Optimizer, batch: Rollout, cfg: PPOConfig) -> dict[str, float]:
     """PPO epochs over shuffled minibatches; return the last losses."""
-    flat = {k: getattr(batch, k).reshape(-1, *getattr(batch, k).shape[2:])
-            for k in ("obs", "actions", "logprobs", "advantages", "returns")}
+    flat = {
+        k: getattr(batch, k).reshape(-1, *getattr(batch, k).shape[2:])
+        for k in ("obs", "actions", "logprobs", "advantages", "returns")
+    }
     size = flat["obs"].shape[0]
     mb = max(1, size // cfg.minibatches)
     out: dict[str, float] = {}
     for _ in range(cfg.update_epochs):
         perm = torch.randperm(size)
         for start in range(0, size, mb):
-            idx = perm[start:start + mb]
+            idx = perm[start : start + mb]
             logprob, entropy, value = agent.evaluate(flat["obs"][idx], flat["actions"][idx])
             ratio = (logprob - flat["logprobs"][idx]).exp()
             adv = flat["advantages"][idx]
@@ -201,15 +204,24 @@ def train(cfg: PPOConfig) -> list[dict[str, Any]]:
             compute_gae(batch, agent.value(obs), cfg)
         losses = update(agent, optim, batch, cfg)
         mean_return, success, episodes = stats.pop()
-        row = {"iteration": it, "env_steps": it * cfg.num_steps * cfg.num_envs,
-               "wall_s": round(time.perf_counter() - started, 2), "episodes": episodes,
-               "mean_return": mean_return, "success_rate": success, **losses}
+        row = {
+            "iteration": it,
+            "env_steps": it * cfg.num_steps * cfg.num_envs,
+            "wall_s": round(time.perf_counter() - started, 2),
+            "episodes": episodes,
+            "mean_return": mean_return,
+            "success_rate": success,
+            **losses,
+        }
         curve.append(row)
         if not cfg.quiet:
             ret = "-" if mean_return is None else f"{mean_return:8.2f}"
             rate = "-" if success is None else f"{success:5.2f}"
-            print(f"iter {it:4d}/{iterations}  steps {row['env_steps']:8d}  {row['wall_s']:7.1f}s  "
-                  f"return {ret}  success {rate}  episodes {episodes}", flush=True)
+            print(
+                f"iter {it:4d}/{iterations}  steps {row['env_steps']:8d}  {row['wall_s']:7.1f}s  "
+                f"return {ret}  success {rate}  episodes {episodes}",
+                flush=True,
+            )
     env.close()
     save_outputs(cfg, curve, agent, norm)
     return curve
@@ -221,8 +233,7 @@ def save_outputs(cfg: PPOConfig, curve: list[dict[str, Any]], agent: ActorCritic
     out.mkdir(parents=True, exist_ok=True)
     write_curve(out, curve, f"PPO {cfg.task} ({cfg.num_envs} envs)")
     (out / "config.json").write_text(json.dumps(asdict(cfg), indent=2) + "\n", encoding="utf-8")
-    torch.save({"agent": agent.state_dict(), "obs_norm": norm.state_dict(), "config": asdict(cfg)},
-               out / "policy.pt")
+    torch.save({"agent": agent.state_dict(), "obs_norm": norm.state_dict(), "config": asdict(cfg)}, out / "policy.pt")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -76,10 +76,12 @@ class ActorCritic(nn.Module):
 
     def __init__(self, obs_dim: int, act_dim: int, hidden: int = 256, init_log_std: float = -0.5):
         super().__init__()
-        self.critic = nn.Sequential(_layer(obs_dim, hidden), nn.Tanh(), _layer(hidden, hidden), nn.Tanh(),
-                                    _layer(hidden, 1, 1.0))
-        self.actor = nn.Sequential(_layer(obs_dim, hidden), nn.Tanh(), _layer(hidden, hidden), nn.Tanh(),
-                                   _layer(hidden, act_dim, 0.01))
+        self.critic = nn.Sequential(
+            _layer(obs_dim, hidden), nn.Tanh(), _layer(hidden, hidden), nn.Tanh(), _layer(hidden, 1, 1.0)
+        )
+        self.actor = nn.Sequential(
+            _layer(obs_dim, hidden), nn.Tanh(), _layer(hidden, hidden), nn.Tanh(), _layer(hidden, act_dim, 0.01)
+        )
         self.log_std = nn.Parameter(torch.full((act_dim,), init_log_std))
 
     def value(self, obs: torch.Tensor) -> torch.Tensor:
@@ -140,8 +142,16 @@ def plot_curve(path: Path, curve: list[dict[str, Any]], title: str) -> None:
     except ImportError:
         from embodichain_tasks.rl.png_plot import line_plot_png
 
-        Path(path).write_bytes(line_plot_png([x, x], [y, smooth], title=title, xlabel="env steps",
-                                             ylabel="mean episode return", labels=["per iteration", "smoothed"]))
+        Path(path).write_bytes(
+            line_plot_png(
+                [x, x],
+                [y, smooth],
+                title=title,
+                xlabel="env steps",
+                ylabel="mean episode return",
+                labels=["per iteration", "smoothed"],
+            )
+        )
         return
     fig, ax = plt.subplots(figsize=(9, 5.6), dpi=100)
     ax.plot(x, y, label="per iteration", alpha=0.6)

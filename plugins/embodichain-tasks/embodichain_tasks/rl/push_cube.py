@@ -62,13 +62,24 @@ class PushCubeEventCfg:
     """Reset events: the cube's position, then the goal relative to it."""
 
     randomize_cube: EventCfg = EventCfg(
-        func=rand.randomize_rigid_object_pose, mode="reset",
-        params={"entity_cfg": _entity("cube"), "position_range": [[-0.05, -0.1, 0.0], [0.05, 0.1, 0.0]],
-                "relative_position": True})
+        func=rand.randomize_rigid_object_pose,
+        mode="reset",
+        params={
+            "entity_cfg": _entity("cube"),
+            "position_range": [[-0.05, -0.1, 0.0], [0.05, 0.1, 0.0]],
+            "relative_position": True,
+        },
+    )
     randomize_goal: EventCfg = EventCfg(
-        func=rand.randomize_target_pose, mode="reset",
-        params={"position_range": [[0.15, -0.1, 0.0], [0.25, 0.1, 0.0]], "relative_position": True,
-                "reference_entity_cfg": _entity("cube"), "store_key": "goal_pose"})
+        func=rand.randomize_target_pose,
+        mode="reset",
+        params={
+            "position_range": [[0.15, -0.1, 0.0], [0.25, 0.1, 0.0]],
+            "relative_position": True,
+            "reference_entity_cfg": _entity("cube"),
+            "store_key": "goal_pose",
+        },
+    )
 
 
 @configclass
@@ -76,13 +87,20 @@ class PushCubeObsCfg:
     """Task observations added to ``robot/{qpos,qvel,qf}``."""
 
     cube_pose: ObservationCfg = ObservationCfg(
-        func=observations.get_rigid_object_pose, mode="add", name="cube_pose",
-        params={"entity_cfg": _entity("cube"), "to_matrix": False})
+        func=observations.get_rigid_object_pose,
+        mode="add",
+        name="cube_pose",
+        params={"entity_cfg": _entity("cube"), "to_matrix": False},
+    )
     goal_position: ObservationCfg = ObservationCfg(
-        func=observations.target_position, mode="add", name="goal_position", params={"target_pose_key": "goal_pose"})
+        func=observations.target_position, mode="add", name="goal_position", params={"target_pose_key": "goal_pose"}
+    )
     eef_position: ObservationCfg = ObservationCfg(
-        func=observations.get_robot_eef_pose, mode="add", name="eef_position",
-        params={"part_name": "arm", "position_only": True})
+        func=observations.get_robot_eef_pose,
+        mode="add",
+        name="eef_position",
+        params={"part_name": "arm", "position_only": True},
+    )
 
 
 @configclass
@@ -90,13 +108,29 @@ class PushCubeRewardCfg:
     """EmbodiChain's PushCubeRL reward functors and weights."""
 
     reaching_reward: RewardCfg = RewardCfg(
-        func=rewards.reaching_behind_object, mode="add", weight=0.03,
-        params={"object_cfg": _entity("cube"), "target_pose_key": "goal_pose", "behind_offset": 0.05,
-                "height_offset": 0.0, "part_name": "arm"})
+        func=rewards.reaching_behind_object,
+        mode="add",
+        weight=0.03,
+        params={
+            "object_cfg": _entity("cube"),
+            "target_pose_key": "goal_pose",
+            "behind_offset": 0.05,
+            "height_offset": 0.0,
+            "part_name": "arm",
+        },
+    )
     place_reward: RewardCfg = RewardCfg(
-        func=rewards.distance_to_target, mode="add", weight=0.8,
-        params={"source_entity_cfg": _entity("cube"), "target_pose_key": "goal_pose", "exponential": True,
-                "sigma": 0.12, "use_xy_only": True})
+        func=rewards.distance_to_target,
+        mode="add",
+        weight=0.8,
+        params={
+            "source_entity_cfg": _entity("cube"),
+            "target_pose_key": "goal_pose",
+            "exponential": True,
+            "sigma": 0.12,
+            "use_xy_only": True,
+        },
+    )
     action_penalty: RewardCfg = RewardCfg(func=rewards.action_smoothness_penalty, mode="add", weight=0.01)
     success_bonus: RewardCfg = RewardCfg(func=rewards.success_reward, mode="add", weight=10.0)
 
@@ -117,17 +151,25 @@ class PushCubeCfg(EmbodiedEnvCfg):
     max_episode_steps: int = 100
     ignore_terminations: bool = True
     light: EmbodiedEnvCfg.EnvLightCfg = EmbodiedEnvCfg.EnvLightCfg(
-        direct=[LightCfg(uid="lamp", light_type="point", intensity=30.0, init_pos=(0.5, 0.0, 2.0))])
+        direct=[LightCfg(uid="lamp", light_type="point", intensity=30.0, init_pos=(0.5, 0.0, 2.0))]
+    )
     background = [
-        RigidObjectCfg(uid="table", shape=CubeCfg(size=[1.2, 1.0, TABLE_TOP],
-                                                  visual_material=VisualMaterialCfg(base_color=(0.55, 0.4, 0.28, 1))),
-                       body_type="static", init_pos=(0.35, 0.0, TABLE_TOP / 2)),
+        RigidObjectCfg(
+            uid="table",
+            shape=CubeCfg(
+                size=[1.2, 1.0, TABLE_TOP], visual_material=VisualMaterialCfg(base_color=(0.55, 0.4, 0.28, 1))
+            ),
+            body_type="static",
+            init_pos=(0.35, 0.0, TABLE_TOP / 2),
+        ),
     ]
     rigid_object = [
-        RigidObjectCfg(uid="cube", shape=CubeCfg(size=[CUBE_SIZE] * 3,
-                                                 visual_material=VisualMaterialCfg(base_color=(0.9, 0.2, 0.2, 1))),
-                       attrs=RigidBodyAttributesCfg(mass=0.2, static_friction=0.6, dynamic_friction=0.5),
-                       init_pos=(0.45, 0.0, round(TABLE_TOP + CUBE_SIZE / 2, 6))),
+        RigidObjectCfg(
+            uid="cube",
+            shape=CubeCfg(size=[CUBE_SIZE] * 3, visual_material=VisualMaterialCfg(base_color=(0.9, 0.2, 0.2, 1))),
+            attrs=RigidBodyAttributesCfg(mass=0.2, static_friction=0.6, dynamic_friction=0.5),
+            init_pos=(0.45, 0.0, round(TABLE_TOP + CUBE_SIZE / 2, 6)),
+        ),
     ]
     events = PushCubeEventCfg()
     observations = PushCubeObsCfg()

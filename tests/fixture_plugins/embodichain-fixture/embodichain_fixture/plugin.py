@@ -7,14 +7,23 @@ from embodichain_core.plugins import hookimpl
 
 @hookimpl
 def embodichain_register_tasks(register):
-    register("FixtureReach-v0", "embodichain_fixture.tasks:FixtureReachEnv", max_episode_steps=15,
-             description="Fixture: a 3-joint arm and a cube")
+    register(
+        "FixtureReach-v0",
+        "embodichain_fixture.tasks:FixtureReachEnv",
+        max_episode_steps=15,
+        description="Fixture: a 3-joint arm and a cube",
+    )
 
 
 @hookimpl
 def embodichain_register_functors(register):
-    register("fixture_nudge_cube", "embodichain_fixture.functors:fixture_nudge_cube", kind="event",
-             category="spatial", description="Move a cube along x by a random offset")
+    register(
+        "fixture_nudge_cube",
+        "embodichain_fixture.functors:fixture_nudge_cube",
+        kind="event",
+        category="spatial",
+        description="Move a cube along x by a random offset",
+    )
 
 
 @hookimpl

@@ -44,12 +44,16 @@ class FixtureReachCfg(EmbodiedEnvCfg):
     rigid_object = [RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.04, 0.04, 0.04]), init_pos=(0.4, 0.0, 0.02))]
     light = EmbodiedEnvCfg.EnvLightCfg(direct=[LightCfg(uid="sun", light_type="point", init_pos=(0, 0, 2))])
     events = {
-        "nudge": EventCfg(func="fixture_nudge_cube", mode="reset",
-                          params={"entity_cfg": SceneEntityCfg(uid="cube"), "offset_range": (-0.05, 0.05)}),
+        "nudge": EventCfg(
+            func="fixture_nudge_cube",
+            mode="reset",
+            params={"entity_cfg": SceneEntityCfg(uid="cube"), "offset_range": (-0.05, 0.05)},
+        ),
     }
     observations = {
-        "cube": ObservationCfg(func=cube_position, mode="add", name="object/cube_pos",
-                               params={"entity_cfg": SceneEntityCfg(uid="cube")}),
+        "cube": ObservationCfg(
+            func=cube_position, mode="add", name="object/cube_pos", params={"entity_cfg": SceneEntityCfg(uid="cube")}
+        ),
     }
     extensions = {"success_threshold": 0.05}
 
