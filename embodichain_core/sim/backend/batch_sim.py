@@ -28,6 +28,7 @@ import torch
 
 from embodichain_core.sim.backend.batch_constants import BatchConstants
 from embodichain_core.sim.backend.batch_env_models import PerEnvModels
+from embodichain_core.sim.backend.field_views import FieldViews
 from embodichain_core.sim.backend.env_rows import batch_ids as _batch_ids
 from embodichain_core.sim.backend.env_rows import field_selector as _field_selector
 from embodichain_core.sim.backend.env_rows import np_ids as _np_ids
@@ -41,7 +42,7 @@ CAPABILITIES = SimCapabilities(
 )
 
 
-class BatchSim(BatchConstants, PerEnvModels):
+class BatchSim(FieldViews, BatchConstants, PerEnvModels):
     """``num_envs`` MuJoCo simulations of one compiled model.
 
     Args:
@@ -107,14 +108,6 @@ class BatchSim(BatchConstants, PerEnvModels):
                 except (ValueError, AttributeError):
                     continue
 
-    def __getattr__(self, name: str) -> torch.Tensor:
-        views = self.__dict__.get("_views")
-        if views is not None and name in views:
-            if self._maybe_dirty and name not in STATE_FIELDS:
-                self._forward_dirty()
-            return views[name]
-        raise AttributeError(f"BatchSim has no field {name!r}")
-
     @property
     def state(self) -> np.ndarray:
         """The raw (num_envs, nstate) integration state rows."""
@@ -135,10 +128,6 @@ class BatchSim(BatchConstants, PerEnvModels):
         self._maybe_dirty = False
 
     # -- stepping ------------------------------------------------------------------------------
-    def view(self, name: str) -> torch.Tensor:
-        """The persistent view of a state or derived field (same as ``sim.<name>``)."""
-        return self.__getattr__(name)
-
     def step(self, nstep: int = 1, env_ids: Any = None) -> list[int]:
         """Advance ``env_ids`` (``None``: every env) by ``nstep`` physics steps; return the
         envs that diverged (MuJoCo raised, or the state went non-finite).

@@ -31,6 +31,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.sim.backend.field_views import FieldViews
 from embodichain_core.sim.backend.env_rows import np_ids
 from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
 from embodichain_core.sim.backend.warp_device import StepGraphs, init_warp, resolve_device, torch_device
@@ -54,7 +55,7 @@ _KEPT = (
 )
 
 
-class WarpSim(WarpModelFields):
+class WarpSim(FieldViews, WarpModelFields):
     """``num_envs`` MuJoCo Warp worlds of one compiled model.
 
     Args:
@@ -144,18 +145,6 @@ class WarpSim(WarpModelFields):
             self.arrays: Any = {n: getattr(self.wp_data, n).numpy() for n in STATE_FIELDS}
         else:
             self.arrays = DeviceArrays({n: self._views[n] for n in STATE_FIELDS})
-
-    def __getattr__(self, name: str) -> torch.Tensor:
-        views = self.__dict__.get("_views")
-        if views is not None and name in views:
-            if self._maybe_dirty and name not in STATE_FIELDS:
-                self._forward_dirty()
-            return views[name]
-        raise AttributeError(f"WarpSim has no field {name!r}")
-
-    def view(self, name: str) -> torch.Tensor:
-        """The persistent view of a state or derived field (same as ``sim.<name>``)."""
-        return self.__getattr__(name)
 
     def mark_dirty(self, env_ids: Any = None) -> None:
         """Note a direct state write; derived views are refreshed before the next read."""
