@@ -30,15 +30,12 @@ __all__ = [
     "launcher_overrides",
     "episode_loop",
     "RENDERERS",
-    "BACKENDS",
     "LAUNCHER_DEFAULTS",
 ]
 
 #: Renderer names accepted by ``--renderer`` (EmbodiChain's; all render with MuJoCo here).
 RENDERERS = ("auto", "hybrid", "fast-rt", "rt")
 
-#: Simulation backends accepted by ``--backend`` (``sim_cfg.backend``; docs/backends.md).
-BACKENDS = ("mujoco_batch", "warp")
 
 #: The value of each launcher argument when it is not given (EmbodiChain's defaults). A
 #: default never overrides a gym config: only given values do (:func:`launcher_overrides`).
@@ -109,12 +106,18 @@ def _mark_given(namespace: argparse.Namespace, dest: str) -> None:
     setattr(namespace, GIVEN_ATTR, given | {dest})
 
 
+def _backends() -> tuple[str, ...]:
+    from embodichain_core.sim.cfg import BACKENDS  # not at import: importing the sim package configures GL
+
+    return BACKENDS
+
+
 def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_gym_config: bool = False) -> None:
     """Add the env launcher arguments to ``parser`` (in place).
 
     Arguments (defaults from :data:`LAUNCHER_DEFAULTS`): ``--num_envs`` (1), ``--device``
     ("cpu"), ``--headless``, ``--renderer`` (one of :data:`RENDERERS`; "auto"),
-    ``--gym_config`` (""), ``--backend`` (one of :data:`BACKENDS`; None: the config's),
+    ``--gym_config`` (""), ``--backend`` (one of ``embodichain_core.sim.cfg.BACKENDS``; None: the config's),
     ``--max_episodes`` (None: run until interrupted), ``--preview``,
     ``--filter_visual_rand``, ``--filter_dataset_saving``, ``--seed`` (None). The parsed
     namespace remembers which were given: :func:`launcher_overrides` returns only those,
@@ -161,7 +164,7 @@ def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_
         "--backend",
         action=_Value,
         default=d["backend"],
-        choices=BACKENDS,
+        choices=_backends(),
         help="simulation backend, sim_cfg.backend: mujoco_batch (CPU threads) or warp (MuJoCo Warp on "
         "--device cpu/cuda) (default: the config's, else mujoco_batch)",
     )

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 import textwrap
 from pathlib import Path
@@ -36,7 +37,7 @@ HEADER = f"""# CLI reference
 `embodichain --help` stays fast; `embodichain <command> --help` prints a command's own help.
 Plugins can add commands with the `embodichain_register_commands` hook (see
 [plugins.md](plugins.md)); `embodichain list commands` lists every installed one. This page
-covers the built-in commands and some commands of the bundled plugins.
+covers the built-in commands and those of the bundled plugins.
 """
 
 
@@ -166,14 +167,22 @@ def _top_level() -> list[str]:
     return lines + ["", "`--version` prints the installed version of `embodichain-core`.", ""]
 
 
-#: Commands of the bundled plugins documented here too: name -> (target, help, plugin).
-PLUGIN_COMMANDS: dict[str, tuple[str, str, str]] = {
-    "eval-policy": (
-        "embodichain_lerobot.eval_cli:main",
-        "Evaluate a trained LeRobot policy (lerobot-train folder) in a task",
-        "embodichain-lerobot",
-    ),
-}
+def bundled_plugin_commands() -> list[tuple[str, str, str, str]]:
+    """``(name, target, help, plugin)`` of every command the plugins under ``plugins/`` register.
+
+    Read from the installed plugins' ``commands`` registry, so a command a bundled plugin adds
+    is documented here without a second list to keep.
+    """
+    from embodichain_core.plugins import command_registry, load_plugins
+
+    load_plugins()
+    bundled = {
+        m.group(1)
+        for path in sorted((ROOT / "plugins").glob("*/pyproject.toml"))
+        if (m := re.search(r'^name\s*=\s*"([^"]+)"', path.read_text(encoding="utf-8"), re.MULTILINE))
+    }
+    entries = [e for e in command_registry().entries() if e.provider in bundled]
+    return sorted((e.name, str(e.target), str((e.meta or {}).get("help", "")), e.provider) for e in entries)
 
 
 def _command(name: str, target: str, help_text: str) -> list[str]:
@@ -192,8 +201,9 @@ def _command(name: str, target: str, help_text: str) -> list[str]:
 
 
 def _plugin_commands() -> list[str]:
-    """The table of the documented plugin commands and their sections."""
-    if not PLUGIN_COMMANDS:
+    """The table of the bundled plugins' commands and their sections."""
+    commands = bundled_plugin_commands()
+    if not commands:
         return []
     lines = [
         "## Commands of the bundled plugins",
@@ -203,10 +213,10 @@ def _plugin_commands() -> list[str]:
         "| Command | Plugin | What |",
         "|---|---|---|",
     ]
-    for name, (_, help_text, plugin) in PLUGIN_COMMANDS.items():
+    for name, _, help_text, plugin in commands:
         lines.append(f"| [`{name}`](#{_slug('embodichain ' + name)}) | `{plugin}` | {_escape(help_text)} |")
     lines.append("")
-    for name, (target, help_text, _) in PLUGIN_COMMANDS.items():
+    for name, target, help_text, _ in commands:
         lines += _command(name, target, help_text)
     return lines
 

@@ -90,7 +90,8 @@ def check_run_settings(cfg: Any, num_envs: Optional[int] = None) -> None:
 def check_backend(sim: Any, path: str) -> None:
     """``backend`` is one of the simulation backends; ``warp`` runs on cpu or cuda[:N] and
     not with the PGS solver (MuJoCo Warp has none)."""
-    backends = ("mujoco_batch", "warp")
+    from embodichain_core.sim.cfg import BACKENDS as backends
+
     backend = getattr(sim, "backend", "mujoco_batch")
     if backend not in backends:
         raise ConfigError(

@@ -56,8 +56,6 @@ class EmbodiedEnv(TaskApi, gym.Env):
     action_manager: Any
     dataset_manager: Any
     _active_qpos_adr: torch.Tensor
-    _active_dof_adr: torch.Tensor
-    _drive_targets: dict[str, tuple[torch.Tensor, torch.Tensor]]
     _robot_io: RobotIO
 
     def __init__(
@@ -82,12 +80,14 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self.step_dt = self.physics_dt * self.sim_steps_per_control
         self.metadata["render_fps"] = self.control_frequency
         sim_device = self.cfg.sim_cfg.sim_device
-        on_warp = getattr(self.cfg.sim_cfg, "backend", "mujoco_batch") == "warp"  # its tensors live on sim_device
+        on_warp = self.cfg.sim_cfg.backend == "warp"  # its tensors live on sim_device
         self.device = torch.device(sim_device if sim_device != "cuda" or on_warp else "cpu")
         self._seed_rng(self.cfg.seed)
         self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
         self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
         self._elapsed_np = self._elapsed_steps.numpy()  # same memory: the cheap increment of phase 5
+        # phase 10 asks the task for truncations only when it overrides check_truncated (the default has none)
+        self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
         # scene, managers, spaces, the action check
         env_build.build_managers(self, env_build.setup_scene(self, build_scene))
@@ -230,7 +230,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         else:
             terminated = success | info["fail"]
         truncated = torch.from_numpy(self._elapsed_np >= self.max_episode_steps)  # numpy: half a torch op
-        if getattr(self.check_truncated, "__func__", None) is not TaskApi.check_truncated:  # not the default (none)
+        if self._task_truncates:
             truncated = self.check_truncated(obs, info) | truncated
         mask = torch.zeros(self.num_envs, dtype=torch.bool)
         if diverged:

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any, Dict, List, Literal, Optional, Union
+from typing import Any, Dict, List, Literal, Optional, Union, get_args
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.shapes import CubeCfg, ShapeCfg
 from embodichain_core.utils.configclass import MISSING, configclass
 from embodichain_core.utils.suggest import did_you_mean
+
+#: Simulation backends of ``sim_cfg.backend`` (``run-env --backend``; docs/backends.md).
+BackendName = Literal["mujoco_batch", "warp"]
+BACKENDS: tuple[str, ...] = get_args(BackendName)
 
 
 @configclass
@@ -64,7 +68,7 @@ class SimulationManagerCfg:
     sim_device: str = "cpu"
     #: ``"mujoco_batch"`` (CPU threads, float64) or ``"warp"`` (MuJoCo Warp on ``sim_device``
     #: cpu/cuda, float32; docs/backends.md).
-    backend: Literal["mujoco_batch", "warp"] = "mujoco_batch"
+    backend: BackendName = "mujoco_batch"
     physics_config: PhysicsCfg = PhysicsCfg()
     persistent: bool = True
 

@@ -144,7 +144,7 @@ class Scene:
         self._model = self._b().compile()
         cfg = self.sim_cfg
         sim: SimBackend
-        if getattr(cfg, "backend", "mujoco_batch") == "warp":  # MuJoCo Warp (docs/backends.md)
+        if cfg.backend == "warp":  # MuJoCo Warp (docs/backends.md)
             from embodichain_core.sim.backend.warp_sim import WarpSim
 
             sim = WarpSim(self.model, self.num_envs, substeps=cfg.physics_substeps, device=cfg.sim_device)

@@ -61,17 +61,46 @@ def _embed_images_batched(dataset: Any) -> Any:
     return out.with_format(**fmt)
 
 
+_SWAPS: dict[tuple[int, str], list[Any]] = {}  # (id(module), name) -> [original, blocks inside]
+_SWAP_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _swapped(module: Any, name: str, replacement: Any) -> Iterator[None]:
+    """Within the block, ``module.name`` is ``replacement``.
+
+    Blocks may overlap (recorders saving on several threads): the original comes back
+    when the last open block ends.
+    """
+    key = (id(module), name)
+    with _SWAP_LOCK:
+        slot = _SWAPS.setdefault(key, [getattr(module, name), 0])
+        slot[1] += 1
+        setattr(module, name, replacement)
+    try:
+        yield
+    finally:
+        with _SWAP_LOCK:
+            slot[1] -= 1
+            if slot[1] == 0:
+                setattr(module, name, slot[0])
+                del _SWAPS[key]
+
+
+def _original(module: Any, name: str) -> Any:
+    """``module.name`` as lerobot defines it, also inside a :func:`_swapped` block."""
+    with _SWAP_LOCK:
+        slot = _SWAPS.get((id(module), name))
+        return slot[0] if slot is not None else getattr(module, name)
+
+
 @contextlib.contextmanager
 def batched_image_embedding() -> Iterator[None]:
     """Within the block, lerobot's ``save_episode`` embeds PNG bytes with :func:`_embed_images_batched`."""
     import lerobot.datasets.lerobot_dataset as lerobot_dataset
 
-    original = lerobot_dataset.embed_images
-    lerobot_dataset.embed_images = _embed_images_batched
-    try:
+    with _swapped(lerobot_dataset, "embed_images", _embed_images_batched):
         yield
-    finally:
-        lerobot_dataset.embed_images = original
 
 
 def video_frame_count(path: Path) -> int:
@@ -129,10 +158,10 @@ class SampledFrameStats:
     def get_statistics(self) -> dict:
         """lerobot's statistics (min, max, mean, std, count, quantiles) of the sampled batches."""
         import numpy as np
-        from lerobot.datasets.compute_stats import sample_indices
+        from lerobot.datasets import compute_stats
 
-        picked = [self._batches[i] for i in sample_indices(len(self._batches))]
-        running = _ORIGINAL_STATS["class"](*self._args)
+        picked = [self._batches[i] for i in compute_stats.sample_indices(len(self._batches))]
+        running = _original(compute_stats, "RunningQuantileStats")(*self._args)
         running.update(np.concatenate(picked).astype(np.float64))
         stats = running.get_statistics()
         if len(self._batches) > 1:
@@ -140,19 +169,10 @@ class SampledFrameStats:
         return stats
 
 
-_ORIGINAL_STATS: dict[str, Any] = {}
-_STATS_LOCK = threading.Lock()
-
-
 @contextlib.contextmanager
 def sampled_video_stats() -> Iterator[None]:
     """Within the block, lerobot's statistics class is :class:`SampledFrameStats` (see the module docstring)."""
     from lerobot.datasets import compute_stats
 
-    with _STATS_LOCK:
-        _ORIGINAL_STATS.setdefault("class", compute_stats.RunningQuantileStats)
-        compute_stats.RunningQuantileStats = SampledFrameStats
-    try:
+    with _swapped(compute_stats, "RunningQuantileStats", SampledFrameStats):
         yield
-    finally:
-        compute_stats.RunningQuantileStats = _ORIGINAL_STATS["class"]

@@ -191,3 +191,20 @@ def test_video_stats_come_from_the_frames_in_memory(make_env: Any, tmp_path: Pat
     np.testing.assert_allclose(np.ravel(stats["std"]), rendered.std(axis=(0, 1, 2)), atol=1e-4)
     np.testing.assert_allclose(np.ravel(stats["max"]), rendered.max(axis=(0, 1, 2)), atol=1e-6)
     assert stats["count"] == [7]  # sampled frames (all 7 of the two episodes)
+
+
+def test_overlapping_lerobot_swaps_restore_the_original_after_the_last_block() -> None:
+    """Two recorders saving on two threads: the first to finish must not undo the second's swap."""
+    import types
+
+    from embodichain_lerobot.encoding import _original, _swapped
+
+    module = types.SimpleNamespace(attr="lerobot's")
+    first, second = _swapped(module, "attr", "ours"), _swapped(module, "attr", "ours")
+    first.__enter__()
+    second.__enter__()
+    first.__exit__(None, None, None)
+    assert module.attr == "ours"
+    assert _original(module, "attr") == "lerobot's"
+    second.__exit__(None, None, None)
+    assert module.attr == "lerobot's"
