@@ -3,17 +3,24 @@
 A commit hands the episode (already an owned numpy copy, so later buffer changes
 cannot touch it) to one daemon worker thread, which does ``add_frame``,
 ``save_episode`` (PNG/video encoding) and the crash-safe publish in commit
-order. Stepping waits only when ``max_pending_episodes`` episodes are queued
+order. By default (``params.writer_process``) the worker thread only sends the
+episode to a child process that does that work
+(:mod:`embodichain_lerobot.writer_process`): lerobot's Python then never competes
+with stepping and rendering for this process's GIL, and lerobot is imported there
+while the first episodes run. Stepping waits only when ``max_pending_episodes`` episodes are queued
 (0: never). A worker error is raised at the next commit, step or ``finalize()`` (a
 :class:`~embodichain_lerobot.storage.DiskFullError` as itself, others wrapped);
 ``finalize()`` drains the queue first, so every committed episode is written
-(a ``SIGKILL`` loses the queued ones), and rejects later commits.
+(a ``SIGKILL`` of the recording process loses the episodes still queued in it; the
+writer process publishes the one it received and finalizes), and rejects later commits.
 """
 
 from __future__ import annotations
 
 import queue
 import threading
+from concurrent.futures import Future
+from concurrent.futures import wait as futures_wait
 from typing import Any, Optional
 
 from embodichain_lerobot.episodes import Episode
@@ -24,7 +31,10 @@ _STOP = object()
 
 
 class AsyncLeRobotRecorder(LeRobotRecorder):
-    """Same dataset as :class:`LeRobotRecorder`; writes on a worker thread."""
+    """Same dataset as :class:`LeRobotRecorder`; writes on a worker thread (by default
+    through a writer process, ``params.writer_process``)."""
+
+    default_writer_process = True
 
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
@@ -33,18 +43,46 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         self._reported = 0
         self._lock = threading.Lock()
         self._thread: Optional[threading.Thread] = None
+        self._futures: list[Future] = []  # episodes sent to the writer process, not written yet
 
     @property
     def pending_episodes(self) -> int:
         """Committed episodes not written yet."""
-        return self._queue.qsize()
+        return self._queue.qsize() + sum(not f.done() for f in self._futures)
 
     def _write(self, episode: Episode) -> None:
         self._raise_worker_errors()
+        if self._writer_process is not None:
+            return self._submit(episode)
         if self._thread is None:
             self._thread = threading.Thread(target=self._work, name="lerobot-recorder", daemon=True)
             self._thread.start()
         self._queue.put(episode)
+
+    def _submit(self, episode: Episode) -> None:
+        """Send the episode to the writer process now (in order with the streamed frames);
+        its reply completes a future (errors are reported like the worker thread's)."""
+        self._check_space(episode)
+        writer = self._ensure_writer()
+        task = self.params.task
+        subtask = writer.subtask_index(task)
+        record = self._episode_record(episode, subtask)
+        future = self._writer_process.submit_episode(episode.env_id, episode.frames(task, subtask), record)  # type: ignore[union-attr]
+        future.add_done_callback(lambda f: self._written(f, episode.env_id, len(episode)))
+        self._futures = [f for f in self._futures if not f.done()] + [future]
+        bound = self.params.max_pending_episodes
+        while bound and len(self._futures) > bound:  # stepping waits for the oldest
+            futures_wait(self._futures[:1])
+            self._futures = [f for f in self._futures if not f.done()]
+
+    def _written(self, future: Future, env_id: int, length: int) -> None:
+        err = future.exception()
+        if err is None:
+            log.info("saved episode %s of env %d (%d frames) to %s", future.result(), env_id, length, self.dataset_path)
+            return
+        log.error("writing an episode of env %s failed: %r", env_id, err)
+        with self._lock:
+            self._errors.append(err)
 
     def record_step(self, *args: Any, **kwargs: Any) -> None:
         self._raise_worker_errors()
@@ -79,6 +117,7 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         """Block until every queued episode is written (errors are raised)."""
         if self._thread is not None:
             self._queue.join()
+        futures_wait(self._futures)
         self._raise_worker_errors()
 
     def finalize(self) -> Optional[str]:
@@ -88,6 +127,7 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         if self._thread is not None:
             self._queue.put(_STOP)
             self._thread.join()
+        futures_wait(self._futures)  # the writer process also finishes them before it finalizes
         path = super().finalize()
         self._raise_worker_errors(final=True)
         return path

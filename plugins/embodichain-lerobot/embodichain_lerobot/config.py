@@ -61,6 +61,10 @@ class RecorderParams:
         image_writer_threads, image_writer_processes: lerobot's async PNG writer (``None``
             threads: 2 when the dataset has image features, PNG-stored depth/masks included).
         max_pending_episodes: async recorder queue bound (0: unbounded).
+        writer_process: write the dataset in a child process
+            (:mod:`embodichain_lerobot.writer_process`: lerobot is imported and runs there,
+            off this process's GIL). ``None`` lets the recorder choose: ``True`` for
+            ``AsyncLeRobotRecorder``, ``False`` for ``LeRobotRecorder``.
         min_free_mb: megabytes that must stay free on the dataset's filesystem: checked
             before the env is built and before each episode is saved (see
             :mod:`embodichain_lerobot.storage`).
@@ -79,6 +83,7 @@ class RecorderParams:
     image_writer_processes: int = 0
     max_pending_episodes: int = 64
     min_free_mb: int = DEFAULT_MIN_FREE_MB
+    writer_process: Optional[bool] = None
 
     @property
     def task(self) -> str:
@@ -122,6 +127,9 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     p.streaming_encoding = params.get("streaming_encoding", True)
     if not isinstance(p.streaming_encoding, bool):
         raise ConfigError("streaming_encoding", f"must be true or false, got {p.streaming_encoding!r}")
+    p.writer_process = params.get("writer_process")
+    if p.writer_process is not None and not isinstance(p.writer_process, bool):
+        raise ConfigError("writer_process", f"must be true, false or null, got {p.writer_process!r}")
     for name in ("encoder_threads", "image_writer_threads"):
         if params.get(name) is not None:
             setattr(p, name, _non_negative_int(params[name], name))

@@ -9,8 +9,8 @@ counts and a faster image embedding for ``save_episode``.
   of an episode against the episode length before publishing it).
 * :func:`sampled_video_stats` makes the streaming encoder's per-camera statistics
   lerobot's sampled image statistics (the frames ``sample_indices`` picks, computed once
-  at the end of the episode in floating point) instead of a 5000-bin histogram update
-  per frame (about 3.4 ms of CPU a frame, in uint8 arithmetic that wraps ``x**2``).
+  at the end of the episode from per-channel value counts) instead of a 5000-bin histogram
+  update per frame (about 3.4 ms of CPU a frame, in uint8 arithmetic that wraps ``x**2``).
 * :func:`batched_image_embedding` makes lerobot's ``save_episode`` embed PNG bytes into
   the parquet table in one batched ``datasets`` map instead of one map call per frame
   (which cost about 6 ms a frame, also for datasets without image features).
@@ -25,6 +25,10 @@ import threading
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, Iterator
+
+import numpy as np
+
+from embodichain_lerobot.frame_stats import stats_from_counts, value_counts
 
 _PRELOAD: dict[str, threading.Thread] = {}
 
@@ -139,31 +143,45 @@ def resolve_vcodec(vcodec: str) -> str:
 class SampledFrameStats:
     """Stands in for lerobot's ``RunningQuantileStats`` inside its streaming encoder threads.
 
-    :meth:`update` keeps each frame's (already downsampled) pixels ``(H*W, C)``;
+    :meth:`update` keeps each frame's (already downsampled) uint8 pixels ``(H*W, C)`` as
+    per-channel value counts (:mod:`embodichain_lerobot.frame_stats`);
     :meth:`get_statistics` computes lerobot's statistics over the frames lerobot's
-    ``sample_indices`` picks (as its non-streaming path does for images), in float64,
-    with ``count`` the number of sampled frames. Used for anything else (one ``update``
+    ``sample_indices`` picks (as its non-streaming path does for images), with
+    ``count`` the number of sampled frames. Used for anything else (one ``update``
     with all the data, as ``get_feature_stats`` does), it gives the same result as the
     class it stands in for.
     """
 
     def __init__(self, quantile_list: Any = None, num_quantile_bins: int = 5000):
         self._args = (quantile_list, num_quantile_bins)
-        self._batches: list = []
+        self._batches: list = []  # per frame: (C, 256) value counts (uint8 pixels) or (N, D) values
+        self._counted: bool | None = None
+
+    def _keep(self, item: np.ndarray, counted: bool) -> None:
+        if self._counted not in (None, counted):
+            raise ValueError("SampledFrameStats got uint8 frames and other batches in one feature")
+        self._counted = counted
+        self._batches.append(item)
 
     def update(self, batch: Any) -> None:
-        """Keep one frame's pixels (or one batch of vectors)."""
-        self._batches.append(batch.reshape(-1, batch.shape[-1]))
+        """Keep one frame's pixels (uint8: as value counts) or one batch of vectors."""
+        if batch.dtype == np.uint8:
+            self._keep(value_counts(batch), counted=True)
+        else:
+            self._keep(batch.reshape(-1, batch.shape[-1]), counted=False)
 
     def get_statistics(self) -> dict:
         """lerobot's statistics (min, max, mean, std, count, quantiles) of the sampled batches."""
-        import numpy as np
         from lerobot.datasets import compute_stats
 
         picked = [self._batches[i] for i in compute_stats.sample_indices(len(self._batches))]
-        running = _original(compute_stats, "RunningQuantileStats")(*self._args)
-        running.update(np.concatenate(picked).astype(np.float64))
-        stats = running.get_statistics()
+        quantiles, num_bins = self._args
+        if self._counted:
+            stats = stats_from_counts(sum(picked), quantiles or compute_stats.DEFAULT_QUANTILES, num_bins)
+        else:
+            running = _original(compute_stats, "RunningQuantileStats")(*self._args)
+            running.update(np.concatenate(picked).astype(np.float64))
+            stats = running.get_statistics()
         if len(self._batches) > 1:
             stats["count"] = np.array([len(picked)])
         return stats

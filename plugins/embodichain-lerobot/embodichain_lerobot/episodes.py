@@ -113,6 +113,14 @@ class EpisodeBuffers:
                 self._steps[i].append((self._pending[i], step))
             self._pending[i] = next_snapshot
 
+    def pending_groups(self) -> list[tuple[Snapshot, list[int]]]:
+        """The observations the envs acted on this step: ``(snapshot, env_ids)`` per distinct snapshot."""
+        groups: dict[int, tuple[Snapshot, list[int]]] = {}
+        for i, snap in enumerate(self._pending):
+            if snap is not None:
+                groups.setdefault(id(snap), (snap, []))[1].append(i)
+        return list(groups.values())
+
     def length(self, env_id: int) -> int:
         return len(self._steps[env_id])
 

@@ -49,6 +49,7 @@ from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
 from embodichain_lerobot.folders import clean_incomplete
 from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB, check_output_dir, ensure_space
 from embodichain_lerobot.writer import DatasetWriter
+from embodichain_lerobot.writer_process import WriterProcess
 
 log = logging.getLogger("embodichain_lerobot")
 
@@ -74,13 +75,17 @@ class LeRobotRecorder(DatasetFunctor):
     ``save_path``, ``robot_meta``, ``instruction``, ``extra``, ``use_videos``,
     ``vcodec``, ``streaming_encoding``, ``encoder_threads``, ``depth_format``,
     ``image_writer_threads``, ``image_writer_processes``, ``max_pending_episodes``
-    (async variant only), ``min_free_mb``. lerobot is imported on a thread once the
+    (async variant only), ``min_free_mb``, ``writer_process`` (write in a child process;
+    default off here, on in the async variant). lerobot is imported on a thread once the
     first observation is recorded (the env build does not wait for it).
 
     Raises:
         ValueError: the env control frequency is not a whole number of Hz.
         ConfigError: ``save_path`` is not writable or its filesystem has less than ``min_free_mb`` free.
     """
+
+    #: ``params.writer_process`` when the config leaves it out.
+    default_writer_process = False
 
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
@@ -94,7 +99,10 @@ class LeRobotRecorder(DatasetFunctor):
         clean_incomplete(self.params.save_path, dataset_prefix(*naming_parts(self.params, self._robot_uid)))
         self._spec: Optional[FeatureSpec] = None
         self._buffers = EpisodeBuffers(env.num_envs)
-        self._writer: Optional[DatasetWriter] = None
+        self._writer: Optional[DatasetWriter | WriterProcess] = None
+        self._writer_process: Optional[WriterProcess] = None
+        if self.params.writer_process is None:
+            self.params.writer_process = self.default_writer_process
         self._finalized = False
         self._path: Optional[str] = None
         self.discarded_episodes = 0
@@ -139,15 +147,20 @@ class LeRobotRecorder(DatasetFunctor):
     def _ensure_spec(self, obs: Any) -> FeatureSpec:
         if self._spec is None:
             self._spec = FeatureSpec(obs, self._env, self.params.depth_format)
-            preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
+            if self.params.writer_process:  # the child imports lerobot meanwhile
+                self._writer_process = WriterProcess()
+                self._writer_process.start()
+            else:
+                preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
         return self._spec
 
     def record_reset(self, obs: Any, env_ids: Any) -> None:
         """New episodes of ``env_ids`` start from ``obs``."""
         if self._finalized:
             return
-        spec = self._ensure_spec(obs)
-        self._buffers.start(spec.snapshot(obs), env_id_list(env_ids, self.num_envs))
+        spec, ids = self._ensure_spec(obs), env_id_list(env_ids, self.num_envs)
+        self._buffers.start(spec.snapshot(obs), ids)
+        self._restart(ids)
 
     def record_step(self, obs: Any, action: Any, reward: Any, terminated: Any, truncated: Any, info: dict) -> None:
         """Buffer one frame per env (the observation it acted on, the action, reward, flags)."""
@@ -163,7 +176,20 @@ class LeRobotRecorder(DatasetFunctor):
             _per_env(truncated, n, bool),
             _per_env((info or {}).get("success"), n, bool),
         )
+        if self._streaming():  # the frames this step completes go to the writer process now
+            for snapshot, ids in self._buffers.pending_groups():
+                self._ensure_writer().stream_frames(snapshot, ids)  # type: ignore[union-attr]
         self._buffers.add(spec.snapshot(obs), step)
+
+    def _streaming(self) -> bool:
+        """Whether colour videos go to the writer process while the episodes run."""
+        p = self.params
+        return self._writer_process is not None and p.use_videos and p.streaming_encoding
+
+    def _restart(self, env_ids: list[int]) -> None:
+        """The live episodes of ``env_ids`` ended without a commit (the writer process drops their frames)."""
+        if self._writer_process is not None:
+            self._writer_process.restart(env_ids)
 
     def __call__(
         self,
@@ -182,6 +208,7 @@ class LeRobotRecorder(DatasetFunctor):
         streaming_encoding: bool = True,
         encoder_threads: Optional[int] = None,
         depth_format: str = "png16",
+        writer_process: Optional[bool] = None,
     ) -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
 
@@ -198,19 +225,23 @@ class LeRobotRecorder(DatasetFunctor):
 
     def discard(self, env_ids: Any) -> None:
         """Drop the live episodes of ``env_ids``."""
-        for i in env_id_list(env_ids, self.num_envs):
+        ids = env_id_list(env_ids, self.num_envs)
+        for i in ids:
             self.discarded_episodes += int(self._buffers.drop([i]) > 0)
+        self._restart(ids)
 
     def reset(self, env_ids: Any = None) -> None:
         """After a reset nothing is left of the old episodes of ``env_ids``."""
-        self._buffers.drop(env_id_list(env_ids, self.num_envs))
+        ids = env_id_list(env_ids, self.num_envs)
+        self._buffers.drop(ids)
+        self._restart(ids)
 
     # -- writing ---------------------------------------------------------------------------------
     def _write(self, episode: Episode) -> None:
         """Write a committed episode (the async recorder queues it instead)."""
         self._write_now(episode)
 
-    def _write_now(self, episode: Episode) -> None:
+    def _check_space(self, episode: Episode) -> None:
         where = self._writer.root if self._writer is not None else self.params.save_path
         ensure_space(
             where,
@@ -218,13 +249,16 @@ class LeRobotRecorder(DatasetFunctor):
             self.params.min_free_mb,
             f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}",
         )
+
+    def _write_now(self, episode: Episode) -> None:
+        self._check_space(episode)
         writer = self._ensure_writer()
         task = self.params.task
         subtask = writer.subtask_index(task)
         index = writer.write_episode(episode.frames(task, subtask), self._episode_record(episode, subtask))
         log.info("saved episode %d of env %d (%d frames) to %s", index, episode.env_id, len(episode), writer.root)
 
-    def _ensure_writer(self) -> DatasetWriter:
+    def _ensure_writer(self) -> DatasetWriter | WriterProcess:
         if self._writer is not None:
             return self._writer
         if self._spec is None or self._spec.action_dim is None:
@@ -234,19 +268,16 @@ class LeRobotRecorder(DatasetFunctor):
         threads = p.image_writer_threads
         if threads is None:  # PNG features (depth, masks, colour without videos): write them on threads
             threads = 2 if self._spec.image_features(p.use_videos) else 0
+        args = (self.fps, self._spec.features(p.use_videos), robot_type_of(p, self._robot_uid), p.use_videos)
+        more = (p.vcodec, threads, p.image_writer_processes)
+        kwargs: dict[str, Any] = {"streaming_encoding": p.streaming_encoding, "encoder_threads": p.encoder_threads}
         try:
-            self._writer = DatasetWriter(
-                root,
-                self.fps,
-                self._spec.features(p.use_videos),
-                robot_type_of(p, self._robot_uid),
-                p.use_videos,
-                p.vcodec,
-                threads,
-                p.image_writer_processes,
-                streaming_encoding=p.streaming_encoding,
-                encoder_threads=p.encoder_threads,
-            )
+            if self._writer_process is not None:  # not waited for: an error comes with the first episode
+                streamed = [k for k, f in args[1].items() if f["dtype"] == "video"] if self._streaming() else []
+                self._writer_process.open(root, *args, *more, streamed=streamed, **kwargs)
+                self._writer = self._writer_process
+            else:
+                self._writer = DatasetWriter(root, *args, *more, **kwargs)
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
             raise

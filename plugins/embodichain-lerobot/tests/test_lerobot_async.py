@@ -1,10 +1,13 @@
-"""AsyncLeRobotRecorder: same dataset as the synchronous recorder, commits that do
-not wait for writing, worker errors at the next call and at finalize, no calls
-after finalize."""
+"""AsyncLeRobotRecorder: same dataset as the synchronous recorder (with the writer
+process, colour streamed to it while the episodes run, and with the worker thread),
+commits that do not wait for writing, worker errors at the next call and at finalize,
+no calls after finalize."""
 
 from __future__ import annotations
 
+import os
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +15,7 @@ import numpy as np
 import pytest
 import torch
 
-from lerobot_helpers import arm_cfg, as_np, load, recorder_cfg, reset, run_script
+from lerobot_helpers import arm_cfg, as_np, have_sensors, load, recorder_cfg, reset, run_script, stereo_camera
 
 from embodichain_lerobot.async_recorder import AsyncLeRobotRecorder
 from embodichain_lerobot.recorder import LeRobotRecorder
@@ -20,8 +23,10 @@ from embodichain_lerobot.recorder import LeRobotRecorder
 SCRIPT = [[".", "."], ["s", "."], [".", "f"], [".", "."], ["s", "s"], [".", "."]]
 
 
-def run(make_env: Any, tmp_path: Path, func: str) -> Any:
-    env = make_env(arm_cfg(2, dataset=recorder_cfg(tmp_path / func, func=func)))
+def run(make_env: Any, tmp_path: Path, func: str, cameras: bool = False, **params: Any) -> Any:
+    sensors = [stereo_camera(32, 24, depth=False, mask=False)] if cameras else None
+    folder = tmp_path / f"{func}{len(params)}"
+    env = make_env(arm_cfg(2, dataset=recorder_cfg(folder, func=func, **params), sensors=sensors))
     reset(env)
     run_script(env, SCRIPT)
     env.close()
@@ -38,6 +43,21 @@ def test_async_writes_the_same_dataset_as_sync(make_env: Any, tmp_path: Path) ->
         for key in ("observation.state", "observation.qf", "action", "episode_index", "frame_index"):
             np.testing.assert_array_equal(as_np(a[key]), as_np(s[key]))
         assert a["task"] == s["task"]
+
+
+@pytest.mark.skipif(not have_sensors(), reason="needs embodichain-sensors")
+@pytest.mark.parametrize("writer_process", [True, False])
+def test_async_videos_match_sync(make_env: Any, tmp_path: Path, writer_process: bool) -> None:
+    """With the writer process, colour is streamed while the episodes run (envs that fail,
+    succeed and reset at different steps); the decoded videos match the synchronous recorder's."""
+    sync = run(make_env, tmp_path, "LeRobotRecorder", cameras=True, use_videos=True)
+    asyn = run(make_env, tmp_path, "AsyncLeRobotRecorder", cameras=True, use_videos=True, writer_process=writer_process)
+    assert list(asyn.meta.episodes["length"]) == list(sync.meta.episodes["length"]) == [2, 3, 2]
+    for i in range(len(sync)):
+        for key in ("observation.images.head", "observation.images.head_right"):
+            a, s = as_np(asyn[i][key]), as_np(sync[i][key])
+            assert np.abs(a - s).mean() < 0.02, (i, key)  # the same frames (lossy codec, same settings)
+        np.testing.assert_array_equal(as_np(asyn[i]["observation.state"]), as_np(sync[i]["observation.state"]))
 
 
 class _Gate:
@@ -59,7 +79,7 @@ def test_commits_do_not_wait_for_writing_and_finalize_drains(
     make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     gate = _Gate(monkeypatch)
-    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", writer_process=False)))
     rec = env.dataset_manager.get_functor("rec")
     assert isinstance(rec, AsyncLeRobotRecorder)
     reset(env)
@@ -75,11 +95,53 @@ def test_commits_do_not_wait_for_writing_and_finalize_drains(
         rec(env, torch.tensor([0]))
 
 
+GATED_WRITER = """
+import os
+import time
+
+from embodichain_lerobot.writer import DatasetWriter
+
+_original = DatasetWriter.write_episode
+
+
+def write_episode(self, frames, record):
+    while not os.path.exists({gate!r}):  # the test opens the gate
+        time.sleep(0.02)
+    return _original(self, frames, record)
+
+
+DatasetWriter.write_episode = write_episode
+"""
+
+
+def test_commits_to_the_writer_process_do_not_wait_and_finalize_drains(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    hook, gate = tmp_path / "hook", tmp_path / "gate"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(GATED_WRITER.format(gate=str(gate)))  # runs in the writer process
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(hook), os.environ.get("PYTHONPATH")])))
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func="AsyncLeRobotRecorder")))
+    rec = env.dataset_manager.get_functor("rec")
+    assert rec.params.writer_process is True  # the async recorder's default
+    reset(env)
+    run_script(env, [["s"], ["."], ["s"], ["."], ["."]])  # two commits while the writer process waits
+    time.sleep(0.5)
+    assert rec.saved_episodes == 0
+    assert rec.pending_episodes == 2
+    gate.touch()
+    path = rec.finalize()  # waits for both; the live 2-frame episode is dropped
+    assert rec.saved_episodes == 2
+    assert load(path).num_episodes == 2
+    with pytest.raises(RuntimeError, match="finalized"):
+        rec(env, torch.tensor([0]))
+
+
 def test_episodes_are_copies_unaffected_by_later_steps(
     make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     gate = _Gate(monkeypatch)
-    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", writer_process=False)))
     obs = reset(env)
     first = obs["robot"]["qpos"][0].clone()
     run_script(env, [["."], ["s"]])
@@ -98,7 +160,7 @@ def test_worker_errors_surface_at_the_next_call_and_at_finalize(
         raise OSError("disk full")
 
     monkeypatch.setattr(LeRobotRecorder, "_write_now", broken)
-    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder")))
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path, func="AsyncLeRobotRecorder", writer_process=False)))
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
     run_script(env, [["s"]])

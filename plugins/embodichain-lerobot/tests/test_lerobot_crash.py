@@ -94,6 +94,19 @@ def test_sigkill_at_a_random_moment_leaves_a_loadable_dataset(tmp_path: Path, fu
     check_loads(the_dataset(tmp_path), rec.committed)
 
 
+def test_the_writer_process_finishes_the_dataset_of_a_killed_recording(tmp_path: Path) -> None:
+    rec = Recording("churn", tmp_path, "AsyncLeRobotRecorder")  # params.writer_process: on by default
+    rec.wait_for(3)
+    rec.finish(signal.SIGKILL)
+    path = the_dataset(tmp_path)
+    deadline = time.monotonic() + 60
+    while (path / ".embodichain_recording").exists():  # the orphaned writer finalizes on its own
+        assert time.monotonic() < deadline, "the writer process did not finalize the dataset"
+        time.sleep(0.1)
+    assert check_loads(path, rec.committed) >= rec.committed
+    assert not (path / ".embodichain_staging").exists()
+
+
 def test_ctrl_c_finalizes_with_every_committed_episode(tmp_path: Path) -> None:
     rec = Recording("churn", tmp_path, "AsyncLeRobotRecorder")
     rec.wait_for(3)

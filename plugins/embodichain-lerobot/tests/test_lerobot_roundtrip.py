@@ -170,6 +170,7 @@ def test_batched_image_embedding_writes_what_lerobot_writes(tmp_path: Path) -> N
         ),
         ({"streaming_encoding": "yes"}, r"params\.streaming_encoding: must be true or false, got 'yes'"),
         ({"encoder_threads": -1}, r"params\.encoder_threads: must be an int >= 0, got -1"),
+        ({"writer_process": "yes"}, r"params\.writer_process: must be true, false or null, got 'yes'"),
     ],
 )
 def test_bad_encoding_params_name_their_key(params: dict, message: str) -> None:
@@ -178,6 +179,30 @@ def test_bad_encoding_params_name_their_key(params: dict, message: str) -> None:
 
     with pytest.raises(ConfigError, match=message):
         LeRobotRecorder.preflight({"save_path": "/tmp", **params}, "env.dataset.rec")
+
+
+@pytest.mark.parametrize("low, high", [(0, 255), (37, 38), (90, 200)])
+def test_value_count_stats_equal_lerobots_running_stats(low: int, high: int) -> None:
+    from lerobot.datasets.compute_stats import DEFAULT_QUANTILES, RunningQuantileStats
+
+    from embodichain_lerobot.encoding import SampledFrameStats
+    from embodichain_lerobot.frame_stats import stats_from_counts, value_counts
+
+    rng = np.random.default_rng(low)
+    frames = [rng.integers(low, high + 1, (480, 3)).astype(np.uint8) for _ in range(12)]
+    reference = RunningQuantileStats()
+    reference.update(np.concatenate(frames).astype(np.float64))
+    expected = reference.get_statistics()
+    ours = stats_from_counts(sum(value_counts(f) for f in frames), DEFAULT_QUANTILES)
+    assert set(ours) == set(expected)
+    for key in expected:
+        np.testing.assert_allclose(ours[key], expected[key], rtol=1e-12, atol=1e-9, err_msg=key)
+    sampled = SampledFrameStats()
+    for frame in frames:
+        sampled.update(frame)
+    stats = sampled.get_statistics()  # every frame is sampled below 100 frames
+    np.testing.assert_allclose(stats["q50"], expected["q50"], rtol=1e-12)
+    assert int(stats["count"][0]) == len(frames)
 
 
 def test_video_stats_come_from_the_frames_in_memory(make_env: Any, tmp_path: Path) -> None:

@@ -5,6 +5,7 @@ the saved episodes finalized and loadable, and the summary printed."""
 from __future__ import annotations
 
 import errno
+import json
 import os
 import stat
 import tempfile
@@ -84,27 +85,64 @@ def test_a_save_path_below_a_file_is_refused(tmp_path: Path) -> None:
         LeRobotRecorder.preflight({"save_path": str(tmp_path / "file" / "data")}, "env.dataset.x")
 
 
-def fail_third_save(monkeypatch: pytest.MonkeyPatch) -> None:
-    """lerobot's 3rd ``save_episode`` writes its files, then the disk is full."""
+FAIL_THIRD_SAVE = """
+import errno
+from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+_original, _calls = LeRobotDataset.save_episode, []
+
+
+def save_episode(self, *args, **kwargs):
+    _calls.append(1)
+    _original(self, *args, **kwargs)
+    if len(_calls) == 3:  # the 3rd save writes its files, then the disk is full
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+
+LeRobotDataset.save_episode = save_episode
+"""
+
+
+def fail_third_save(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, writer_process: bool) -> None:
+    """lerobot's 3rd ``save_episode`` writes its files, then the disk is full: patched here,
+    or in the writer process (a ``sitecustomize`` module on its ``PYTHONPATH``)."""
+    if writer_process:
+        hook = tmp_path / "hook"
+        hook.mkdir()
+        (hook / "sitecustomize.py").write_text(FAIL_THIRD_SAVE + "\n")
+        monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(hook), os.environ.get("PYTHONPATH")])))
+        return
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
-    original, calls = LeRobotDataset.save_episode, []
-
-    def save_episode(self: Any, *args: Any, **kwargs: Any) -> None:
-        calls.append(1)
-        original(self, *args, **kwargs)
-        if len(calls) == 3:
-            raise OSError(errno.ENOSPC, "No space left on device")
-
-    monkeypatch.setattr(LeRobotDataset, "save_episode", save_episode)
+    original = LeRobotDataset.save_episode
+    exec(FAIL_THIRD_SAVE, {})  # patches the class
+    patched, LeRobotDataset.save_episode = LeRobotDataset.save_episode, original
+    monkeypatch.setattr(LeRobotDataset, "save_episode", patched)  # undone after the test
 
 
-@pytest.mark.parametrize("func", ["LeRobotRecorder", "AsyncLeRobotRecorder"])
+@pytest.mark.parametrize(
+    "func, writer_process",
+    [
+        ("LeRobotRecorder", False),
+        ("LeRobotRecorder", True),
+        ("AsyncLeRobotRecorder", False),
+        ("AsyncLeRobotRecorder", True),
+    ],
+)
 def test_a_disk_full_mid_run_keeps_the_saved_episodes(
-    tmp_path: Path, task_id: str, func: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+    tmp_path: Path,
+    task_id: str,
+    func: str,
+    writer_process: bool,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture,
 ) -> None:
-    fail_third_save(monkeypatch)
-    code, out, err = run(write_config(tmp_path / "c.json", task_id, tmp_path / "data", func), capsys)
+    fail_third_save(monkeypatch, tmp_path, writer_process)
+    config = write_config(tmp_path / "c.json", task_id, tmp_path / "data", func)
+    data = json.loads(config.read_text())
+    data["env"]["dataset"]["lerobot"]["params"]["writer_process"] = writer_process
+    config.write_text(json.dumps(data))
+    code, out, err = run(config, capsys)
     path = tmp_path / "data" / "arm7_empty_reach_000"
     assert code == 1
     last = err.strip().splitlines()[-1]

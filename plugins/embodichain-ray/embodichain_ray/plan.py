@@ -4,7 +4,7 @@ The config is loaded exactly as ``embodichain run-env`` loads it (its parser and
 :func:`~embodichain_core.cli.run_env.prepare`), so a bad config fails with the same
 :class:`~embodichain_core.config.errors.ConfigError` naming its key. On top of that a
 generation run needs a task with a scripted demo (``create_demo_action_list``) and
-exactly one ``LeRobotRecorder`` in the config's ``dataset`` section: each worker points
+exactly one ``LeRobotRecorder`` (or ``AsyncLeRobotRecorder``) in the config's ``dataset`` section: each worker points
 that recorder's ``save_path`` at its own shard folder.
 """
 
@@ -91,7 +91,7 @@ def _check_demo(task_id: str) -> None:
 
 
 def _recorder(cfg: Any) -> tuple[str, Any]:
-    """The one ``LeRobotRecorder`` entry of ``cfg.dataset``."""
+    """The one ``LeRobotRecorder`` (or ``AsyncLeRobotRecorder``) entry of ``cfg.dataset``."""
     from embodichain_lerobot.recorder import LeRobotRecorder
 
     from embodichain_core.managers.cfg import DatasetFunctorCfg
@@ -101,17 +101,13 @@ def _recorder(cfg: Any) -> tuple[str, Any]:
     others: list[tuple[str, Any]] = []
     for name, fcfg in iter_section(getattr(cfg, "dataset", None), DatasetFunctorCfg, "env.dataset"):
         func = resolve_func(fcfg.func, "dataset", f"env.dataset.{name}")
-        exact = (
-            inspect.isclass(func)
-            and func.__module__ == LeRobotRecorder.__module__
-            and func.__name__ == LeRobotRecorder.__name__
-        )
-        (found if exact else others).append((name, fcfg))
+        ours = inspect.isclass(func) and issubclass(func, LeRobotRecorder)  # or AsyncLeRobotRecorder
+        (found if ours else others).append((name, fcfg))
     if len(found) != 1 or others:
         names = ", ".join(n for n, _ in found + others) or "none"
         raise ConfigError(
             "env.dataset",
             f"embodichain generate needs exactly one dataset functor, a "
-            f"LeRobotRecorder (the workers record shards with it); found: {names}",
+            f"LeRobotRecorder or AsyncLeRobotRecorder (the workers record shards with it); found: {names}",
         )
     return found[0]

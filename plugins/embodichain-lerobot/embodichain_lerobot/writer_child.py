@@ -1,0 +1,225 @@
+"""The child side of :mod:`embodichain_lerobot.writer_process`: ``python -m embodichain_lerobot.writer_child FD``.
+
+It imports lerobot at once (seconds, while the first episodes run), then answers the
+recording process's messages in order:
+
+* ``open``: create the :class:`~embodichain_lerobot.writer.DatasetWriter`;
+* ``frames``: colour frames of the live episodes, fed to one lerobot
+  ``StreamingVideoEncoder`` per env (started at an episode's first frame), so a video is
+  encoded while its episode runs;
+* ``restart``: those envs' live episodes end without a commit (their encoding is cancelled);
+* ``episode``: write a committed episode; with streamed colour, lerobot's ``save_episode``
+  finishes that env's encoder instead of its own (:func:`prefed_encoder`);
+* ``finalize``: cancel the live encoders, finalize the dataset, exit.
+
+``open``, ``episode`` and ``finalize`` get one reply each, ``("ok", value)`` or
+``("error", exception)``. The child ignores ``SIGINT`` (a Ctrl-C in the terminal reaches the
+whole process group; the recording process decides what happens). When the recording
+process dies, the child sees the socket close and finalizes the dataset with every
+episode it received.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import shutil
+import signal
+import sys
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any, Iterator, Optional
+
+import numpy as np
+
+from embodichain_lerobot.storage import DiskFullError
+from embodichain_lerobot.writer_process import WriterProcessError, from_columns
+
+
+class _Prefed:
+    """lerobot's streaming-encoder interface over an encoder that already has the episode's
+    frames: ``add_frame`` neither starts it nor feeds it again; ``save_episode`` finishes it."""
+
+    def __init__(self, encoder: Any):
+        self._encoder = encoder
+
+    def start_episode(self, video_keys: Any, temp_dir: Any) -> None:
+        """Already started at the episode's first streamed frame."""
+
+    def feed_frame(self, video_key: str, image: Any) -> None:
+        """Already fed while the episode ran."""
+
+    def finish_episode(self) -> Any:
+        return self._encoder.finish_episode()
+
+    def cancel_episode(self) -> None:
+        self._encoder.cancel_episode()
+
+    def close(self) -> None:
+        self._encoder.close()
+
+
+@contextlib.contextmanager
+def prefed_encoder(dataset: Any, encoder: Any) -> Iterator[None]:
+    """Within the block, ``dataset`` saves its episode's videos from ``encoder`` (lerobot's
+    ``LeRobotDataset._streaming_encoder`` is swapped; documented in docs/datasets.md)."""
+    saved = dataset._streaming_encoder
+    dataset._streaming_encoder = _Prefed(encoder)
+    try:
+        yield
+    finally:
+        dataset._streaming_encoder = saved
+
+
+class ChildWriter:
+    """The state of the child: the dataset writer and one video encoder per env."""
+
+    def __init__(self) -> None:
+        self.writer: Any = None
+        self.open_error: Optional[BaseException] = None
+        self.streamed: list[str] = []
+        self.encoders: dict[int, Any] = {}
+        self.live: set[int] = set()  # envs whose encoder has an episode running
+
+    def handle(self, command: str, payload: Any) -> Any:
+        """Carry out one message; its reply value."""
+        if command == "open":
+            return self._open(*payload)
+        if command == "finalize":
+            return self.finalize()
+        if self.writer is None:
+            if command in ("frames", "restart"):
+                return None  # the open failed: its error is the reply to the next episode
+            if self.open_error is not None:
+                raise self.open_error
+            raise WriterProcessError(f"{command!r} before the dataset was opened")
+        if command == "frames":
+            return self._frames(*payload)
+        if command == "restart":
+            for env_id in set(payload) & self.live:
+                self.live.discard(env_id)
+                self.encoders[env_id].cancel_episode()
+            return None
+        if command == "episode":
+            return self._episode(*payload)
+        raise WriterProcessError(f"unknown command {command!r}")
+
+    def _open(self, root: str, args: tuple, kwargs: dict, streamed: list[str]) -> None:
+        from embodichain_lerobot.writer import DatasetWriter
+
+        try:
+            self.writer = DatasetWriter(Path(root), *args, **kwargs)
+        except BaseException as err:
+            self.open_error = err
+            shutil.rmtree(root, ignore_errors=True)  # the recorder reserved it; nothing was saved
+            raise
+        self.streamed = list(streamed)
+
+    def _encoder(self, env_id: int) -> Any:
+        if env_id not in self.encoders:
+            base = self.writer.dataset._streaming_encoder
+            self.encoders[env_id] = type(base)(
+                fps=base.fps,
+                vcodec=base.vcodec,
+                pix_fmt=base.pix_fmt,
+                g=base.g,
+                crf=base.crf,
+                preset=base.preset,
+                queue_maxsize=0,  # never drop a frame; the episode's frame count is checked at save
+                encoder_threads=base.encoder_threads,
+            )
+        return self.encoders[env_id]
+
+    def _frames(self, arrays: dict[str, np.ndarray], env_ids: list[int]) -> None:
+        for row, env_id in enumerate(env_ids):
+            encoder = self._encoder(env_id)
+            if env_id not in self.live:
+                encoder.start_episode(video_keys=self.streamed, temp_dir=self.writer.dataset.root)
+                self.live.add(env_id)
+            for key in self.streamed:
+                encoder.feed_frame(key, arrays[key][row])
+
+    def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
+        for name in subtasks:  # the same indices as the recording process gave
+            self.writer.subtask_index(name)
+        if not self.streamed:
+            return int(self.writer.write_episode(from_columns(columns, length), record))
+        features = self.writer.dataset.features
+        dummies = {k: np.broadcast_to(np.zeros((), np.uint8), tuple(features[k]["shape"])) for k in self.streamed}
+        self.live.discard(env_id)  # the save finishes its encoder (or cancels it on an error)
+        with prefed_encoder(self.writer.dataset, self._encoder(env_id)):
+            return int(self.writer.write_episode(from_columns(columns, length, dummies), record))
+
+    def finalize(self) -> Optional[str]:
+        for env_id in self.live:
+            self.encoders[env_id].cancel_episode()
+        self.live.clear()
+        path = self.writer.finalize() if self.writer is not None else None
+        return str(path) if path is not None else None
+
+
+def _picklable(err: BaseException) -> BaseException:
+    """``err`` if it survives pickling, else a :class:`WriterProcessError` with its text."""
+    try:
+        pickle.loads(pickle.dumps(err))
+        return err
+    except Exception:
+        kind = DiskFullError if isinstance(err, DiskFullError) else WriterProcessError
+        return kind(f"{type(err).__name__}: {err}")
+
+
+def _orphaned(state: ChildWriter) -> None:
+    """The recording process is gone: finalize what was published (nothing is half-written)."""
+    try:
+        state.finalize()
+    except Exception:  # its published episodes are intact either way
+        pass
+
+
+def serve(conn: Connection) -> None:
+    """Answer the recording process's messages until ``finalize`` or until it goes away."""
+    state = ChildWriter()
+    while True:
+        try:
+            command, payload = conn.recv()
+        except (EOFError, OSError):
+            return _orphaned(state)
+        try:
+            reply: tuple[str, Any] = ("ok", state.handle(command, payload))
+        except BaseException as err:
+            reply = ("error", _picklable(err))
+        if command in ("frames", "restart"):
+            if reply[0] == "error":  # no reply is expected: the episode's save reports it
+                print(f"embodichain writer process: {command} failed: {reply[1]!r}", file=sys.stderr)
+            continue
+        try:
+            conn.send(reply)
+        except OSError:  # it died while this command ran
+            return _orphaned(state)
+        if command == "finalize" and reply[0] == "ok":
+            return
+
+
+def main(argv: Optional[list[str]] = None) -> None:
+    """Entry point of the child."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    fd = int((argv if argv is not None else sys.argv[1:])[0])
+    os.environ.setdefault("SVT_LOG", "1")
+    import av
+    import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: now, before the first episode arrives)
+
+    from embodichain_lerobot.encoding import sampled_video_stats
+
+    av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's per-video encoder summaries (x264 prints ~12 lines)
+
+    with sampled_video_stats():  # for the per-env encoders too, which start outside any save
+        serve(Connection(fd))
+    # the dataset is finalized and every file closed: skip the interpreter's teardown
+    # (a second of unloading torch and lerobot that the recording process would wait for)
+    sys.stderr.flush()
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,230 @@
+"""The dataset writer in a child process (``params.writer_process``).
+
+:class:`WriterProcess` has the interface of
+:class:`~embodichain_lerobot.writer.DatasetWriter` (``root``, ``num_episodes``,
+``num_frames``, ``subtask_index``, ``write_episode``, ``finalize``) and runs the real
+writer in a child Python process (:mod:`embodichain_lerobot.writer_child`): lerobot is
+imported there, and its per-frame work (frame checks, video encoding, statistics,
+parquet and metadata) runs on the child's interpreter, so it never competes with
+stepping and rendering for this process's GIL. The child is started with
+``subprocess`` (``python -m embodichain_lerobot.writer_child FD``), not
+``multiprocessing``: a spawned ``multiprocessing`` child re-imports the user's main
+script, which breaks scripts without an ``if __name__ == "__main__"`` guard.
+
+Messages (pickled, over a socket pair with ``multiprocessing.connection``) leave in the
+order they were made, from a sender thread, so the recording loop never waits for the
+socket: :meth:`post` sends without a reply (camera frames of the live episodes,
+restarts), :meth:`submit` returns a future that the receiver thread completes with the
+child's reply (``open``, ``episode``, ``finalize``). With :meth:`stream_frames` the
+colour frames go to the child while the episode runs and are encoded there as they
+arrive (one lerobot streaming encoder per env); a committed episode then carries only
+its other features.
+"""
+
+from __future__ import annotations
+
+import collections
+import queue
+import socket
+import subprocess
+import sys
+import threading
+from concurrent.futures import Future
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any, Iterable, Iterator, Optional
+
+import numpy as np
+
+_REPLY_TIMEOUT_S = 600.0  # importing lerobot and saving an episode on a loaded machine
+_STOP = object()
+
+
+class WriterProcessError(RuntimeError):
+    """The writer process failed in a way that has no exception of its own (it died, or its error did not pickle)."""
+
+
+def to_columns(frames: Iterable[dict], skip: Iterable[str] = ()) -> tuple[dict[str, Any], int]:
+    """An episode's frames as one stacked array per feature (a few large arrays pickle much
+    faster than thousands of small ones); other values (the task string) as lists.
+    Features named in ``skip`` (streamed colour) are left out."""
+    frame_list, left_out = list(frames), set(skip)
+    columns: dict[str, Any] = {}
+    for name in frame_list[0] if frame_list else ():
+        if name in left_out:
+            continue
+        values = [f[name] for f in frame_list]
+        columns[name] = np.stack(values) if isinstance(values[0], np.ndarray) else values
+    return columns, len(frame_list)
+
+
+def from_columns(columns: dict[str, Any], length: int, extra: Optional[dict] = None) -> Iterator[dict]:
+    """The frames of :func:`to_columns` (plus the constant entries ``extra``), one dict per frame."""
+    for t in range(length):
+        frame = {name: values[t] for name, values in columns.items()}
+        frame.update(extra or {})
+        yield frame
+
+
+class WriterProcess:
+    """A :class:`~embodichain_lerobot.writer.DatasetWriter` that runs in a child process.
+
+    Example:
+        >>> proc = WriterProcess()          # doctest: +SKIP
+        >>> proc.start()                    # the child imports lerobot meanwhile  # doctest: +SKIP
+        >>> proc.open(root, 30, features, "arm7", True, "h264", 0, 0)  # doctest: +SKIP
+        >>> proc.write_episode(frames, {"env_id": 0})  # doctest: +SKIP
+        >>> proc.finalize()                 # doctest: +SKIP
+    """
+
+    def __init__(self) -> None:
+        self.root: Path = Path()
+        self.num_episodes = 0
+        self.num_frames = 0
+        self.streamed: frozenset[str] = frozenset()  # colour features sent with stream_frames
+        self._subtasks: dict[str, int] = {}
+        self._proc: Optional[subprocess.Popen] = None
+        self._conn: Optional[Connection] = None
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._waiting: collections.deque[Future] = collections.deque()
+        self._lock = threading.Lock()
+        self._dead: Optional[BaseException] = None
+        self._result: Optional[Path] = None
+        self._finalized = False
+
+    # -- life cycle --------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Launch the child and the sender/receiver threads (idempotent)."""
+        if self._proc is not None:
+            return
+        mine, theirs = socket.socketpair()
+        fd = theirs.fileno()
+        self._proc = subprocess.Popen(
+            [sys.executable, "-m", "embodichain_lerobot.writer_child", str(fd)],
+            pass_fds=(fd,),
+            stdin=subprocess.DEVNULL,
+        )
+        theirs.close()
+        self._conn = Connection(mine.detach())
+        for target, name in ((self._send_loop, "lerobot-writer-send"), (self._receive_loop, "lerobot-writer-receive")):
+            threading.Thread(target=target, name=name, daemon=True).start()
+
+    def open(self, root: Path, *args: Any, streamed: Iterable[str] = (), **kwargs: Any) -> Future:
+        """Create the dataset at ``root`` in the child (``DatasetWriter``'s arguments); the
+        features in ``streamed`` come with :meth:`stream_frames` instead of with the episode."""
+        self.start()
+        self.root, self.streamed = Path(root), frozenset(streamed)
+        return self.submit("open", (str(root), args, kwargs, sorted(self.streamed)))
+
+    def finalize(self) -> Optional[Path]:
+        """Finalize the dataset in the child (after every message before) and stop it (idempotent)."""
+        if self._finalized:
+            return self._result
+        self._finalized = True
+        if self._proc is None:
+            return None
+        try:
+            path = self.submit("finalize", None).result(_REPLY_TIMEOUT_S)
+            self._result = Path(path) if path else None
+        finally:
+            self._stop()
+        return self._result
+
+    # -- episodes ----------------------------------------------------------------------------------
+    def subtask_index(self, subtask: str) -> int:
+        """The stable index of ``subtask`` (the child learns it with the next episode)."""
+        return self._subtasks.setdefault(subtask, len(self._subtasks))
+
+    def stream_frames(self, snapshot: dict, env_ids: list[int]) -> None:
+        """Send the streamed features of ``snapshot``'s rows ``env_ids``: frame t of those envs' live episodes."""
+        keys = sorted(self.streamed)
+        self.post("frames", lambda: ({k: snapshot[k][env_ids] for k in keys}, env_ids))
+
+    def restart(self, env_ids: list[int]) -> None:
+        """The live episodes of ``env_ids`` end without a commit: their streamed frames are dropped."""
+        if self.streamed and env_ids:
+            self.post("restart", list(env_ids))
+
+    def submit_episode(self, env_id: int, frames: Iterable[dict], record: dict) -> Future:
+        """Send one committed episode; the future gives its lerobot episode index once published."""
+        columns, length = to_columns(frames, self.streamed)
+        subtasks = sorted(self._subtasks, key=self._subtasks.__getitem__)
+        future = self.submit("episode", (env_id, columns, length, record, subtasks))
+        future.add_done_callback(lambda f: self._count(f, length))
+        return future
+
+    def write_episode(self, frames: Iterable[dict], record: dict) -> int:
+        """Send one episode and wait until the child has published it; its lerobot episode index."""
+        return int(self.submit_episode(int(record.get("env_id", 0)), frames, record).result(_REPLY_TIMEOUT_S))
+
+    def _count(self, future: Future, length: int) -> None:
+        if future.exception() is None and int(future.result()) >= 0:
+            with self._lock:
+                self.num_episodes += 1
+                self.num_frames += length
+
+    # -- messages ----------------------------------------------------------------------------------
+    def post(self, command: str, payload: Any) -> None:
+        """Queue a message that gets no reply (``payload`` may be a callable, called on the sender thread)."""
+        self._outbox.put((command, payload, None))
+
+    def submit(self, command: str, payload: Any) -> Future:
+        """Queue a message; the future completes with the child's reply (or its error)."""
+        future: Future = Future()
+        with self._lock:
+            if self._dead is not None:
+                future.set_exception(self._dead)
+                return future
+            self._waiting.append(future)
+        self._outbox.put((command, payload, future))
+        return future
+
+    def _send_loop(self) -> None:
+        while True:
+            item = self._outbox.get()
+            if item is _STOP or self._conn is None:
+                return
+            command, payload, _ = item
+            try:
+                self._conn.send((command, payload() if callable(payload) else payload))
+            except (OSError, ValueError):  # the child is gone: the receiver reports it
+                return
+
+    def _receive_loop(self) -> None:
+        conn = self._conn
+        while conn is not None:
+            try:
+                status, value = conn.recv()
+            except (EOFError, OSError):
+                return self._child_died()
+            with self._lock:
+                future = self._waiting.popleft() if self._waiting else None
+            if future is None:
+                continue
+            if status == "error":
+                future.set_exception(value)
+            else:
+                future.set_result(value)
+
+    def _child_died(self) -> None:
+        code = self._proc.poll() if self._proc is not None else None
+        err = WriterProcessError(
+            f"the dataset writer process exited (code {code}); the episodes published before are intact in {self.root}"
+        )
+        with self._lock:
+            self._dead = err
+            waiting, self._waiting = list(self._waiting), collections.deque()
+        for future in waiting:
+            if not future.done():
+                future.set_exception(err)
+
+    def _stop(self) -> None:
+        self._outbox.put(_STOP)
+        if self._proc is not None:
+            try:
+                self._proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+                self._proc.wait()
+        if self._conn is not None:
+            self._conn.close()
