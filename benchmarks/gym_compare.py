@@ -20,11 +20,14 @@ sequence, so their physics (contacts, solver work) is alike.
 The contenders run in interleaved rounds after a warm-up; medians are reported.
 ``ours / x`` is the ratio of env-steps/s (above 1: ours is faster). ``--clock cpu`` times
 the CPU time of this process instead of the wall clock (steadier on a shared box; the
-async contender, whose work runs in other processes, is then left out).
+async contender, whose work runs in other processes, is then left out). ``--split`` adds
+a pass that times, for ``ours`` and ``sync``, this thread's CPU time per env step outside
+the physics call (``Batch.step``; ``MujocoEnv._step_mujoco_simulation``): what each adds
+between physics calls, in the loop.
 
 Usage:
     python benchmarks/gym_compare.py [--num-envs 1 16 64] [--repeats 5] [--async-max 16]
-        [--out benchmarks/results/gym_compare.json] [--quick]
+        [--split] [--out benchmarks/results/gym_compare.json] [--quick]
 """
 
 from __future__ import annotations
@@ -136,8 +139,8 @@ def random_actions(env: EmbodiedEnv, num_envs: int, seed: int) -> np.ndarray:
     return rng.uniform(low, high, (N_ACTIONS, num_envs, len(low))).astype(np.float32)
 
 
-def contenders(num_envs: int, with_async: bool, folder: str, seed: int = 0) -> tuple[dict, list[Callable]]:
-    """``{name: run(n_steps)}`` for one ``num_envs``, and the closers."""
+def contenders(num_envs: int, with_async: bool, folder: str, seed: int = 0) -> tuple[dict, list[Callable], dict]:
+    """``{name: run(n_steps)}`` for one ``num_envs``, the closers, and ``{"ours", "sync"}``'s envs."""
     ours = make_ours(num_envs, seed)
     acts_np = random_actions(ours, num_envs, seed)
     acts_t = [torch.from_numpy(a) for a in acts_np]
@@ -152,7 +155,7 @@ def contenders(num_envs: int, with_async: bool, folder: str, seed: int = 0) -> t
         runs["async"] = _looper(async_env.step, acts_np)
         closers.append(async_env.close)
     runs["raw"] = _raw_loop(ours, acts_np)
-    return runs, closers
+    return runs, closers, {"ours": ours, "sync": sync}
 
 
 def _looper(step: Callable[[Any], Any], actions: list) -> Callable[[int], None]:
@@ -190,6 +193,42 @@ def _raw_loop(env: EmbodiedEnv, actions: np.ndarray) -> Callable[[int], None]:
     return _looper(step, list(actions.astype(np.float64)))
 
 
+def outside_physics(runs: dict, envs: dict, steps: int, repeats: int) -> dict[str, float]:
+    """``{"ours", "sync"}``: median CPU time (this thread, µs) per env step outside the physics
+    call, from interleaved rounds with that call timed (``MujocoEnv`` steps include their
+    ``mj_rnePostConstraint``)."""
+    spent = {"ours": 0, "sync": 0}
+
+    def timed(name: str, call: Callable) -> Callable:
+        def run(*args: Any, **kwargs: Any) -> Any:
+            start = time.thread_time_ns()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                spent[name] += time.thread_time_ns() - start
+
+        return run
+
+    batch = envs["ours"].sim.batch  # the backend's mujoco.batch.Batch: an instance attribute shadows its step
+    inners = [e.unwrapped for e in envs["sync"].envs]
+    batch.step = timed("ours", batch.step)
+    for inner in inners:
+        inner._step_mujoco_simulation = timed("sync", inner._step_mujoco_simulation)
+    out: dict[str, list[float]] = {"ours": [], "sync": []}
+    try:
+        for _ in range(max(1, repeats)):
+            for name in out:
+                spent[name] = 0
+                start = time.thread_time_ns()
+                runs[name](steps)
+                out[name].append((time.thread_time_ns() - start - spent[name]) / steps / 1e3)
+    finally:
+        del batch.step
+        for inner in inners:
+            del inner._step_mujoco_simulation
+    return {name: median(values) for name, values in out.items()}
+
+
 def measure(
     num_envs: int,
     steps: Optional[int],
@@ -198,10 +237,12 @@ def measure(
     with_async: bool,
     seed: int = 0,
     clock: str = "wall",
+    split: bool = False,
 ) -> dict[str, Any]:
     """One ``num_envs``: every contender timed in interleaved rounds; the JSON record."""
+    outside: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as folder:
-        runs, closers = contenders(num_envs, with_async, folder, seed)
+        runs, closers, envs = contenders(num_envs, with_async, folder, seed)
         try:
             for run in runs.values():  # warm-up, and the slowest per-call time sizes the runs
                 run(5)
@@ -211,6 +252,8 @@ def measure(
             times = interleaved_timings(
                 {k: functools.partial(r, steps) for k, r in runs.items()}, repeats, warmup=0, clock=clock
             )
+            if split:
+                outside = outside_physics(runs, envs, steps, repeats)
         finally:
             for close in closers:
                 close()
@@ -222,6 +265,8 @@ def measure(
         rec[f"{name}_times_s"] = times.get(name)
     for name in ("raw", "sync", "async"):
         rec[f"ours_over_{name}"] = rate["ours"] / rate[name] if name in rate else None
+    for name in ("ours", "sync"):
+        rec[f"{name}_outside_physics_us"] = outside.get(name)
     return rec
 
 
@@ -240,6 +285,8 @@ COLUMNS = [
     ("ours_over_raw", "ours / raw", ".2f"),
     ("ours_over_sync", "ours / Sync", ".2f"),
     ("ours_over_async", "ours / Async", ".2f"),
+    ("ours_outside_physics_us", "ours µs outside physics", ".1f"),
+    ("sync_outside_physics_us", "Sync µs outside physics", ".1f"),
 ]
 
 
@@ -261,6 +308,11 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
         default="wall",
         help="wall clock, or CPU time of this process (all threads; no async contender)",
     )
+    p.add_argument(
+        "--split",
+        action="store_true",
+        help="also time ours' and Sync's CPU time per step outside the physics call (this thread)",
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=DEFAULT_OUT, help=f"JSON output ('' writes none; default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true", help="smoke run: 1 and 2 envs, 3 steps, 1 round (not a measurement)")
@@ -280,7 +332,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     records = []
     for n in args.num_envs:
         with_async = n <= args.async_max and args.clock == "wall"
-        rec = measure(n, args.steps, args.repeats, args.target_seconds, with_async, args.seed, args.clock)
+        rec = measure(n, args.steps, args.repeats, args.target_seconds, with_async, args.seed, args.clock, args.split)
         records.append(rec)
         print(
             f"num_envs={n:<3d} ours/raw {rec['ours_over_raw']:.2f}  ours/Sync {rec['ours_over_sync']:.2f}", flush=True
@@ -295,6 +347,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             "episode_length": EPISODE,
             "clock": args.clock,
             "async_max": args.async_max,
+            "split": bool(args.split),
             "quick": bool(args.quick),
             "seed": args.seed,
         },

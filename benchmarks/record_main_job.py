@@ -3,7 +3,7 @@
 Each twin runs in its own process (so the recorded one pays its imports in its
 build time, as ``embodichain run-env`` does): the main job's gym config
 (``embodichain_tasks/configs/main_job.json``: 2 envs, 320x180 stereo camera,
-scripted demos, ``LeRobotRecorder`` with videos) with ``save_path`` pointed at a
+scripted demos, ``AsyncLeRobotRecorder`` with its writer process and h264 videos) with ``save_path`` pointed at a
 temporary folder and seed 0 (every run draws the same scenes), and its unrecorded twin (``filter_dataset_saving``). Each child
 prints one JSON line: build time, run time (the episode loop), close time (the
 final flush: the recorder finalizes) and env steps. Reported per twin:
@@ -16,7 +16,8 @@ final flush: the recorder finalizes) and env steps. Reported per twin:
   depth and masks over the size without (target <= 3) and the wall times of
   ``embodichain dataset preview`` (PNG sheet target <= 3 s, mp4 <= 10 s);
 * ``cpu_s`` (per run): CPU seconds of the run and close, all threads (steadier than
-  wall time on a shared machine).
+  wall time on a shared machine); ``writer_process_cpu_s``: those of the recorder's writer
+  process (its whole life: lerobot's import included).
 
 Usage (normally through ``record_throughput.py --case main_job``):
     python benchmarks/record_main_job.py --child recorded|unrecorded --save-path DIR [--episodes K]
@@ -88,11 +89,20 @@ def _child(
         "run_s": stats.run_s,
         "close_s": close_s,
         "cpu_s": time.process_time() - cpu,
+        "writer_process_cpu_s": _children_cpu(),
         "env_steps": stats.env_steps,
         "episodes": stats.episodes,
         "saved": stats.saved,
         "dataset": paths[0] if paths else None,
     }
+
+
+def _children_cpu() -> float:
+    """CPU seconds of this process's finished children (the recorder's writer process)."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def run_twin(twin: str, episodes: int, workdir: str, depth_masks: bool = False) -> dict[str, Any]:
@@ -180,7 +190,7 @@ def _parse(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--save-path", required=True)
     p.add_argument("--episodes", type=int, default=4)
     p.add_argument("--params", default="{}", help="JSON: recorder params to override (e.g. vcodec)")
-    p.add_argument("--func", default=None, help="recorder functor instead of the config's (AsyncLeRobotRecorder)")
+    p.add_argument("--func", default=None, help="recorder functor instead of the config's (e.g. LeRobotRecorder)")
     p.add_argument("--depth-masks", action="store_true", help="also record the camera's depth and masks")
     return p.parse_args(argv)
 

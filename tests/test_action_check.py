@@ -107,3 +107,19 @@ def test_the_common_case_is_passed_through_untouched() -> None:
     action = torch.zeros(2, 3)
     assert check(action) is action
     assert check(torch.zeros(3, dtype=torch.float64)).dtype == torch.float32
+
+
+def test_host_array_is_the_view_of_the_last_action_passed_as_it_was() -> None:
+    check = ActionChecker(2, [7], torch.device("cpu"), None)
+    action = torch.rand(2, 7)
+    assert check(action) is action
+    view = check.host_array(action)
+    assert view is not None
+    assert np.shares_memory(view, action.numpy())
+    assert check.host_array(action.clone()) is None  # another tensor: no view
+    converted = check(action.double())  # converted: a new tensor, and no view of anything
+    assert check.host_array(converted) is None
+    assert check.host_array(action) is None
+    with pytest.raises(ValueError, match="NaN"):
+        check(torch.full((2, 7), float("nan")))
+    assert check.host_array(action) is None

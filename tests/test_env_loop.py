@@ -87,6 +87,32 @@ def test_truncation_is_per_env(make_env) -> None:
     assert env.elapsed_steps.tolist() == [2, 0]
 
 
+def test_every_step_returns_its_own_tensors(make_env) -> None:
+    """A caller may keep (and write) what a step returned: the next step neither reuses
+    those tensors nor their memory, and writing them changes neither the env nor the next step."""
+    env = make_env(max_episode_steps=50)
+    env.reset()
+    first = env.step(zero_action(env))
+    kept = leaves({"obs": first[0], "reward": first[1], "terminated": first[2], "truncated": first[3]})
+    kept.update(leaves({k: v for k, v in first[4].items() if isinstance(v, torch.Tensor)}, "/info"))
+    before = {k: v.clone() for k, v in kept.items()}
+    for value in kept.values():  # the caller scribbles over everything it kept
+        value.fill_(1)
+    second = env.step(zero_action(env))
+    fresh = leaves({"obs": second[0], "reward": second[1], "terminated": second[2], "truncated": second[3]})
+    fresh.update(leaves({k: v for k, v in second[4].items() if isinstance(v, torch.Tensor)}, "/info"))
+    assert set(fresh) == set(kept)
+    pointers = {v.data_ptr() for v in kept.values()}
+    for key, value in fresh.items():
+        assert value is not kept[key], key
+        assert value.data_ptr() not in pointers, key
+    assert env.elapsed_steps.tolist() == [2, 2]  # the counters were not written through the info copy
+    assert fresh["/info/elapsed_steps"].tolist() == [2, 2]
+    for key in ("/terminated", "/truncated", "/info/success", "/info/fail", "/info/diverged"):
+        assert not fresh[key].any(), key
+    assert torch.equal(fresh["/reward"], before["/reward"])
+
+
 def test_ignore_terminations(make_env, make_cfg) -> None:
     env = make_env(make_cfg(ignore_terminations=True, max_episode_steps=3), env_cls=FlagEnv)
     env.reset()

@@ -47,16 +47,17 @@ def test_quick_run_writes_json(tmp_path):
             assert len(rec[f"{name}_times_s"]) == 1
         assert rec["ours_over_sync"] == pytest.approx(rec["ours_steps_per_s"] / rec["sync_steps_per_s"])
         assert rec["ours_over_raw"] == pytest.approx(rec["ours_steps_per_s"] / rec["raw_steps_per_s"])
+        assert rec["ours_outside_physics_us"] is None  # only with --split
     assert one["async_steps_per_s"] > 0  # async runs up to --async-max envs, not beyond
     assert two["async_steps_per_s"] is None
     assert two["ours_over_async"] is None
 
 
 @pytest.mark.timeout(300)
-def test_cpu_clock_leaves_out_the_async_contender(tmp_path):
+def test_cpu_clock_leaves_out_the_async_contender_and_split_times_the_python(tmp_path):
     out = tmp_path / "gym_compare_cpu.json"
     proc = subprocess.run(
-        [sys.executable, SCRIPT, "--quick", "--num-envs", "1", "--clock", "cpu", "--out", str(out)],
+        [sys.executable, SCRIPT, "--quick", "--num-envs", "1", "--clock", "cpu", "--split", "--out", str(out)],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -68,6 +69,10 @@ def test_cpu_clock_leaves_out_the_async_contender(tmp_path):
     (rec,) = data["results"]
     assert rec["async_steps_per_s"] is None
     assert rec["ours_steps_per_s"] > 0
+    assert data["settings"]["split"] is True
+    for name in ("ours", "sync"):  # CPU time outside the physics call: positive, below the whole step
+        outside = rec[f"{name}_outside_physics_us"]
+        assert 0 < outside < 1e6 / rec[f"{name}_steps_per_s"] * 50, name
 
 
 def test_the_gym_env_runs_the_env_model(tmp_path):

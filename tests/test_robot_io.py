@@ -19,8 +19,14 @@ def _pair(env, joints):
 
 def test_selector_is_a_slice_only_for_one_ascending_run() -> None:
     assert _selector(np.array([3, 4, 5])) == slice(3, 6)
+    assert _selector(np.array([0, 2, 4, 6])) == slice(0, 7, 2)  # interleaved position/velocity actuators
+    assert _selector(np.array([4])) == slice(4, 5)
     assert isinstance(_selector(np.array([3, 5, 6])), np.ndarray)
     assert isinstance(_selector(np.array([5, 4])), np.ndarray)
+    assert isinstance(_selector(np.array([2, 2])), np.ndarray)
+    values = np.arange(10.0)
+    for adr in ([0, 2, 4, 6], [3, 4, 5], [1, 4, 7]):
+        assert np.array_equal(values[_selector(np.array(adr))], values[adr])
 
 
 @pytest.mark.parametrize("joints", [[0, 1, 2, 3, 4, 5, 6], [0, 2, 5]])
@@ -59,3 +65,21 @@ def test_a_command_of_the_wrong_width_names_both_widths(make_env) -> None:
     fast, _ = _pair(env, [0, 1, 2])
     with pytest.raises(ValueError, match=r"qpos command has 5 values per env; expected 3 .* or 9"):
         fast.write("qpos", torch.zeros(2, 5))
+
+
+def test_commands_follow_a_rebuilt_batch(make_env) -> None:
+    """The fast path's numpy views are remade when the backend rebuilds its arrays
+    (switching to per-env models makes a new ``mujoco.batch.Batch``)."""
+    env = make_env()
+    env.reset()
+    driven = [j for j in range(env.robot.dof) if int(env.robot.pos_act[j]) >= 0]
+    io = RobotIO(env.sim, env.robot, driven, env.num_envs)
+    io.write("qpos", torch.full((2, len(driven)), 0.1))
+    assert "qpos" in io._targets  # every column driven: written through a view
+    env.sim.use_env_models([env.sim.get_model(i) for i in range(env.num_envs)])
+    value = torch.full((2, len(driven)), 0.3)
+    io.write("qpos", value)
+    _, actuators = io.drive_targets["qpos"]
+    assert torch.equal(env.sim.ctrl[:, actuators], value.double())
+    io.write("qf", value)
+    assert torch.equal(env.sim.qfrc_applied[:, io.dof_adr], value.double())

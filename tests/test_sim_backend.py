@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pytest
 import torch
 
@@ -12,6 +13,7 @@ from core_testlib import zero_action
 
 from embodichain_core.sim.backend import BatchSim, SimBackend
 from embodichain_core.sim.backend import conformance
+from embodichain_core.sim.backend.env_rows import batch_ids
 
 
 def make_batch_sim(model: Any, num_envs: int) -> BatchSim:
@@ -85,3 +87,17 @@ def test_only_the_backend_touches_mujoco_batch() -> None:
         if pattern.search(line)
     ]
     assert not offenders, f"outside sim/backend/: {offenders}"
+
+
+def test_batch_ids_are_sorted_unique_int32_or_none_for_every_env() -> None:
+    assert batch_ids(None, 3) is None
+    assert batch_ids(torch.tensor([0, 1, 2]), 3) is None
+    assert batch_ids([2, 0, 1], 3) is None  # unsorted, still every env
+    for ids, want in (([1], [1]), ([2, 0], [0, 2]), ([1, 1, 0], [0, 1]), ([0, 0, 2], [0, 2]), ([], [])):
+        got = batch_ids(ids, 3)
+        assert got is not None, ids
+        assert got.dtype == np.int32, ids
+        assert got.tolist() == want, ids
+    got = batch_ids([0, 5], 2)  # as many ids as envs, but not every env: left for mujoco.batch to reject
+    assert got is not None
+    assert got.tolist() == [0, 5]

@@ -125,6 +125,8 @@ class EpisodeRandom:
             raise ValueError(f"seed must be in [0, 2**64), got {seed}")
         self.base_seed = int(seed)
         self.episode_index[:] = 0
+        # the chain of derive_seed(seed, env, episode) up to the env: one mix per episode start
+        self._env_keys = _chain(self.base_seed, [self._all.astype(np.uint64)])
         if startup:
             tag = np.full(self.num_envs, np.uint64(STARTUP_EPISODE), dtype=np.uint64)
             self._start(self._all, _chain(self.base_seed, [self._all.astype(np.uint64), tag]))
@@ -138,8 +140,10 @@ class EpisodeRandom:
                 ``derive_seed(seed, env_id, episode_index)``.
         """
         ids = self._ids(env_ids)
-        if seeds is None:
-            new = _chain(self.base_seed, [ids.astype(np.uint64), self.episode_index[ids].astype(np.uint64)])
+        if seeds is None:  # derive_seed(seed, ids, episode_index[ids]), from the cached env links
+            new = self._env_keys[ids]  # a copy (fancy index)
+            new += (self.episode_index[ids].astype(np.uint64) + np.uint64(1)) * _GAMMA
+            _mix(new)
         else:
             new = _as_u64(seeds, "episode_seeds")
             if new.shape != ids.shape:

@@ -60,7 +60,8 @@ class EventManager(ManagerBase[EventCfg]):
         if mode == "interval":
             if env_ids is not None:
                 raise ValueError("interval events run for all envs; do not pass env_ids")
-            self._apply_interval()
+            if self._counters:  # called every step: nothing more to do without interval events
+                self._apply_interval()
             return
         for name in self._modes.get(mode, []):
             ids = env_ids

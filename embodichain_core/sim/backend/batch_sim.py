@@ -17,6 +17,7 @@ goes through the interface.
 
 from __future__ import annotations
 
+import math
 import os
 import warnings
 from typing import Any, Iterable, Optional
@@ -36,6 +37,7 @@ from embodichain_core.sim.backend.free_body_const import FreeBodyConstants
 from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
 
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
+_NONE = int(mujoco.mjtStage.mjSTAGE_NONE)
 _SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
 CAPABILITIES = SimCapabilities(
     subset_step=True, per_env_models=True, host_arrays=True, float64=True, deterministic=True
@@ -137,7 +139,8 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         forward (lazy or explicit), are reported again by the next step of every env,
         which the env loop truncates and resets.
         """
-        self.flush_const()
+        if self._const_pending:
+            self.flush_const()
         if env_ids is None:
             if self._maybe_dirty:
                 self._forward_dirty()
@@ -157,12 +160,13 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
     def _step_rows(self, rows: Optional[np.ndarray], nstep: int) -> list[int]:
         """``Batch.step`` of ``rows`` (None: all) at ``stage=VEL``; the failed and non-finite rows."""
         failed: list[int] = []
+        ids = None if rows is None else _batch_ids(rows, self.num_envs)
         try:
-            self.batch.step(_batch_ids(rows, self.num_envs), nstep=nstep * self.substeps, stage=_VEL)
+            self.batch.step(ids, nstep * self.substeps, _VEL)
         except mjbatch.SimulationError as err:
             failed = [int(i) for i in err.ids]
         state = self.batch.state if rows is None else self.batch.state[rows]
-        if np.isfinite(state.sum()):  # a sum is finite only if every value is (cheap prefilter)
+        if math.isfinite(state.sum()):  # a sum is finite only if every value is (cheap prefilter)
             return failed
         bad = ~np.isfinite(state).all(axis=1)
         if bad.any():
@@ -189,12 +193,15 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         # recomputed lazily when next read (or before the next step). The MuJoCo reset
         # runs in any case: it also clears the derived fields a forward does not
         # recompute (qfrc_actuator, ...) and whatever a diverged simulation left there.
-        self.batch.reset(_batch_ids(env_ids, self.num_envs), stage=int(mujoco.mjtStage.mjSTAGE_NONE))
+        rows = _np_ids(env_ids, self.num_envs)  # converted once (a reset runs rarely, with cold caches)
+        ids = _batch_ids(rows, self.num_envs)
+        self.batch.reset(ids, stage=_NONE)
         if state is not None:
-            self.batch.state[_np_ids(env_ids, self.num_envs)] = state
-        self.mark_dirty(env_ids)
+            self.batch.state[rows if ids is not None else slice(None)] = state
+        self._dirty[rows] = True
+        self._maybe_dirty = True
         if self._pending_failed:  # a reset state has nothing left to report
-            reset = set(_np_ids(env_ids, self.num_envs).tolist())
+            reset = set(rows.tolist())
             self._pending_failed = [i for i in self._pending_failed if i not in reset]
 
     def error(self, env_id: int) -> str:

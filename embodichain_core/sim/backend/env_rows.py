@@ -40,8 +40,12 @@ def batch_ids(env_ids: Any, n: int) -> Optional[np.ndarray]:
     """Sorted unique int32 ids as ``mujoco.batch`` takes them; ``None`` for every env."""
     if env_ids is None:
         return None
-    ids = np.unique(np_ids(env_ids, n)).astype(np.int32)
-    return None if len(ids) == n else ids
+    ids = np_ids(env_ids, n)
+    if ids.size > 1 and not (ids[1:] > ids[:-1]).all():  # np.unique only when not sorted unique already
+        ids = np.unique(ids)
+    if len(ids) == n and ids[0] == 0 and ids[-1] == n - 1:
+        return None
+    return ids.astype(np.int32)
 
 
 def _is_list(index: Any) -> bool:

@@ -103,6 +103,9 @@ class LeRobotRecorder(DatasetFunctor):
         self._writer_process: Optional[WriterProcess] = None
         if self.params.writer_process is None:
             self.params.writer_process = self.default_writer_process
+        if self.params.writer_process:  # the child imports lerobot while the env is built
+            self._writer_process = WriterProcess()
+            self._writer_process.start()
         self._finalized = False
         self._path: Optional[str] = None
         self.discarded_episodes = 0
@@ -147,10 +150,7 @@ class LeRobotRecorder(DatasetFunctor):
     def _ensure_spec(self, obs: Any) -> FeatureSpec:
         if self._spec is None:
             self._spec = FeatureSpec(obs, self._env, self.params.depth_format)
-            if self.params.writer_process:  # the child imports lerobot meanwhile
-                self._writer_process = WriterProcess()
-                self._writer_process.start()
-            else:
+            if self._writer_process is None:
                 preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
         return self._spec
 
@@ -307,7 +307,10 @@ class LeRobotRecorder(DatasetFunctor):
             return self._path
         self._finalized = True
         dropped = self._buffers.drop(range(self.num_envs))
-        path = self._writer.finalize() if self._writer is not None else None
+        if self._writer is not None:
+            path = self._writer.finalize()
+        else:  # nothing was saved; a writer process that was started stops
+            path = self._writer_process.finalize() if self._writer_process is not None else None
         self._path = str(path) if path is not None else None
         log.info(
             "%s: saved %d episode(s), %d frame(s) to %s (dropped %d live frame(s))",

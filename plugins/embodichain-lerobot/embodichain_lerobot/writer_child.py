@@ -13,7 +13,9 @@ recording process's messages in order:
 * ``finalize``: cancel the live encoders, finalize the dataset, exit.
 
 ``open``, ``episode`` and ``finalize`` get one reply each, ``("ok", value)`` or
-``("error", exception)``. The child ignores ``SIGINT`` (a Ctrl-C in the terminal reaches the
+``("error", exception)``. The child reads its socket on a thread from its first moment
+(:class:`Inbox`: the recording process never waits for lerobot's import), runs at a lower
+priority (:data:`NICENESS`), and ignores ``SIGINT`` (a Ctrl-C in the terminal reaches the
 whole process group; the recording process decides what happens). When the recording
 process dies, the child sees the socket close and finalizes the dataset with every
 episode it received.
@@ -21,12 +23,15 @@ episode it received.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import os
 import pickle
 import shutil
 import signal
 import sys
+import threading
+import time
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any, Iterator, Optional
@@ -35,6 +40,16 @@ import numpy as np
 
 from embodichain_lerobot.storage import DiskFullError
 from embodichain_lerobot.writer_process import WriterProcessError, from_columns
+
+
+#: Frames queued in the encoders (all envs and cameras) above which the child stops reading.
+MAX_ENCODER_BACKLOG = 512
+#: Bytes of received, unhandled messages above which the child stops reading (:class:`Inbox`).
+INBOX_BYTES = 512 * 2**20
+#: The child's scheduling priority, relative to the recording process: on a busy machine
+#: stepping and rendering go first, and the child (whose inbox holds the frames meanwhile)
+#: catches up in their idle time (end to end, the main job ran about 10 % faster than at +0).
+NICENESS = 5
 
 
 class _Prefed:
@@ -132,13 +147,24 @@ class ChildWriter:
         return self.encoders[env_id]
 
     def _frames(self, arrays: dict[str, np.ndarray], env_ids: list[int]) -> None:
+        self._wait_for_encoders()
         for row, env_id in enumerate(env_ids):
             encoder = self._encoder(env_id)
             if env_id not in self.live:
                 encoder.start_episode(video_keys=self.streamed, temp_dir=self.writer.dataset.root)
                 self.live.add(env_id)
             for key in self.streamed:
-                encoder.feed_frame(key, arrays[key][row])
+                encoder.feed_frame(key, arrays[key][row, ..., :3])  # RGBA rows come with their alpha
+
+    def _wait_for_encoders(self) -> None:
+        """Hold new frames while the encoders have :data:`MAX_ENCODER_BACKLOG` frames queued (the
+        recording process then waits too, see ``writer_process.MAX_QUEUED_MESSAGES``)."""
+        while self._backlog() > MAX_ENCODER_BACKLOG:
+            time.sleep(0.005)
+
+    def _backlog(self) -> int:
+        queues = (getattr(enc, "_frame_queues", {}) for env_id, enc in self.encoders.items() if env_id in self.live)
+        return sum(q.qsize() for group in queues for q in group.values())
 
     def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
         for name in subtasks:  # the same indices as the recording process gave
@@ -177,12 +203,53 @@ def _orphaned(state: ChildWriter) -> None:
         pass
 
 
-def serve(conn: Connection) -> None:
+class Inbox:
+    """Reads the socket on its own thread from the child's first moment (lerobot's import takes
+    seconds, and the recording process must not wait for it), keeping up to ``limit`` bytes of
+    messages; above that it stops reading, and the recording process's sender waits."""
+
+    def __init__(self, conn: Connection, limit: int = INBOX_BYTES):
+        self._conn, self._limit = conn, limit
+        self._messages: collections.deque[bytes] = collections.deque()
+        self._bytes, self._closed = 0, False
+        self._cv = threading.Condition()
+        threading.Thread(target=self._read, name="writer-inbox", daemon=True).start()
+
+    def _read(self) -> None:
+        while True:
+            try:
+                data = self._conn.recv_bytes()
+            except (EOFError, OSError):
+                break
+            with self._cv:
+                while self._bytes > self._limit:
+                    self._cv.wait()
+                self._messages.append(data)
+                self._bytes += len(data)
+                self._cv.notify_all()
+        with self._cv:
+            self._closed = True
+            self._cv.notify_all()
+
+    def get(self) -> Any:
+        """The next message; ``EOFError`` once the recording process is gone and all are read."""
+        with self._cv:
+            while not self._messages and not self._closed:
+                self._cv.wait()
+            if not self._messages:
+                raise EOFError
+            data = self._messages.popleft()
+            self._bytes -= len(data)
+            self._cv.notify_all()
+        return pickle.loads(data)
+
+
+def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
     """Answer the recording process's messages until ``finalize`` or until it goes away."""
-    state = ChildWriter()
+    state, inbox = ChildWriter(), inbox or Inbox(conn)
     while True:
         try:
-            command, payload = conn.recv()
+            command, payload = inbox.get()
         except (EOFError, OSError):
             return _orphaned(state)
         try:
@@ -206,6 +273,12 @@ def main(argv: Optional[list[str]] = None) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     fd = int((argv if argv is not None else sys.argv[1:])[0])
     os.environ.setdefault("SVT_LOG", "1")
+    conn = Connection(fd)
+    inbox = Inbox(conn)  # reading starts now, during the import below
+    try:
+        os.nice(NICENESS)
+    except OSError:
+        pass
     import av
     import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: now, before the first episode arrives)
 
@@ -214,7 +287,7 @@ def main(argv: Optional[list[str]] = None) -> None:
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's per-video encoder summaries (x264 prints ~12 lines)
 
     with sampled_video_stats():  # for the per-env encoders too, which start outside any save
-        serve(Connection(fd))
+        serve(conn, inbox)
     # the dataset is finalized and every file closed: skip the interpreter's teardown
     # (a second of unloading torch and lerobot that the recording process would wait for)
     sys.stderr.flush()

@@ -37,6 +37,10 @@ from typing import Any, Iterable, Iterator, Optional
 import numpy as np
 
 _REPLY_TIMEOUT_S = 600.0  # importing lerobot and saving an episode on a loaded machine
+#: Messages waiting for the sender thread before :meth:`WriterProcess.post` waits: when the
+#: child cannot keep up (it also bounds its encoders' backlog), stepping slows down to its pace
+#: instead of the backlog growing without bound.
+MAX_QUEUED_MESSAGES = 64
 _STOP = object()
 
 
@@ -66,6 +70,16 @@ def from_columns(columns: dict[str, Any], length: int, extra: Optional[dict] = N
         yield frame
 
 
+def _rows(frames: np.ndarray, env_ids: list[int]) -> np.ndarray:
+    """Rows ``env_ids`` of a colour batch; the RGB view of an RGBA buffer (what the recorder
+    keeps) is sent whole, alpha included: a plain copy, where dropping the alpha is a slow
+    strided gather (the child drops it)."""
+    base = frames.base
+    if isinstance(base, np.ndarray) and base.shape[:-1] == frames.shape[:-1] and base.shape[-1] == 4:
+        return base[env_ids]
+    return frames[env_ids]
+
+
 class WriterProcess:
     """A :class:`~embodichain_lerobot.writer.DatasetWriter` that runs in a child process.
 
@@ -86,6 +100,7 @@ class WriterProcess:
         self._proc: Optional[subprocess.Popen] = None
         self._conn: Optional[Connection] = None
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._room = threading.Semaphore(MAX_QUEUED_MESSAGES)
         self._waiting: collections.deque[Future] = collections.deque()
         self._lock = threading.Lock()
         self._dead: Optional[BaseException] = None
@@ -138,7 +153,7 @@ class WriterProcess:
     def stream_frames(self, snapshot: dict, env_ids: list[int]) -> None:
         """Send the streamed features of ``snapshot``'s rows ``env_ids``: frame t of those envs' live episodes."""
         keys = sorted(self.streamed)
-        self.post("frames", lambda: ({k: snapshot[k][env_ids] for k in keys}, env_ids))
+        self.post("frames", lambda: ({k: _rows(snapshot[k], env_ids) for k in keys}, env_ids))
 
     def restart(self, env_ids: list[int]) -> None:
         """The live episodes of ``env_ids`` end without a commit: their streamed frames are dropped."""
@@ -149,33 +164,33 @@ class WriterProcess:
         """Send one committed episode; the future gives its lerobot episode index once published."""
         columns, length = to_columns(frames, self.streamed)
         subtasks = sorted(self._subtasks, key=self._subtasks.__getitem__)
-        future = self.submit("episode", (env_id, columns, length, record, subtasks))
-        future.add_done_callback(lambda f: self._count(f, length))
-        return future
+        return self.submit("episode", (env_id, columns, length, record, subtasks), frames=length)
 
     def write_episode(self, frames: Iterable[dict], record: dict) -> int:
         """Send one episode and wait until the child has published it; its lerobot episode index."""
         return int(self.submit_episode(int(record.get("env_id", 0)), frames, record).result(_REPLY_TIMEOUT_S))
 
-    def _count(self, future: Future, length: int) -> None:
-        if future.exception() is None and int(future.result()) >= 0:
-            with self._lock:
-                self.num_episodes += 1
-                self.num_frames += length
-
     # -- messages ----------------------------------------------------------------------------------
     def post(self, command: str, payload: Any) -> None:
         """Queue a message that gets no reply (``payload`` may be a callable, called on the sender thread)."""
+        self._room.acquire()
         self._outbox.put((command, payload, None))
 
-    def submit(self, command: str, payload: Any) -> Future:
-        """Queue a message; the future completes with the child's reply (or its error)."""
+    def submit(self, command: str, payload: Any, frames: int = 0) -> Future:
+        """Queue a message; the future completes with the child's reply (or its error).
+
+        The sender thread files the future as waiting just before it sends the message (one
+        ``put`` here: a Ctrl-C cannot leave a future without its message), and the receiver
+        counts an episode (``frames`` long) before it completes the future.
+        """
         future: Future = Future()
+        future.frames = frames  # type: ignore[attr-defined]
         with self._lock:
-            if self._dead is not None:
-                future.set_exception(self._dead)
-                return future
-            self._waiting.append(future)
+            dead = self._dead
+        if dead is not None:
+            future.set_exception(dead)
+            return future
+        self._room.acquire()
         self._outbox.put((command, payload, future))
         return future
 
@@ -184,11 +199,29 @@ class WriterProcess:
             item = self._outbox.get()
             if item is _STOP or self._conn is None:
                 return
-            command, payload, _ = item
+            self._room.release()
+            command, payload, future = item
+            with self._lock:
+                dead = self._dead
+                if future is not None and dead is None:
+                    self._waiting.append(future)  # filed before the message leaves: replies come in order
+            if dead is not None:
+                if future is not None:
+                    future.set_exception(dead)
+                continue
             try:
-                self._conn.send((command, payload() if callable(payload) else payload))
-            except (OSError, ValueError):  # the child is gone: the receiver reports it
-                return
+                message = (command, payload() if callable(payload) else payload)
+            except Exception as err:  # a frame that cannot be read: its episode's save reports the gap
+                print(f"embodichain writer: cannot send {command!r}: {err!r}", file=sys.stderr)
+                if future is not None:
+                    with self._lock:
+                        self._waiting.remove(future)
+                    future.set_exception(err)
+                continue
+            try:
+                self._conn.send(message)
+            except (OSError, ValueError):  # the child is gone: the receiver fails the waiting calls
+                continue
 
     def _receive_loop(self) -> None:
         conn = self._conn
@@ -199,6 +232,10 @@ class WriterProcess:
                 return self._child_died()
             with self._lock:
                 future = self._waiting.popleft() if self._waiting else None
+                frames = int(getattr(future, "frames", 0))
+                if future is not None and status == "ok" and frames and int(value) >= 0:
+                    self.num_episodes += 1
+                    self.num_frames += frames
             if future is None:
                 continue
             if status == "error":
@@ -207,6 +244,11 @@ class WriterProcess:
                 future.set_result(value)
 
     def _child_died(self) -> None:
+        if self._proc is not None:
+            try:
+                self._proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                pass
         code = self._proc.poll() if self._proc is not None else None
         err = WriterProcessError(
             f"the dataset writer process exited (code {code}); the episodes published before are intact in {self.root}"

@@ -15,6 +15,7 @@ def test_main_job_records_pick_fork_demos_with_the_stereo_camera_as_video():
     assert cfg.num_envs == 2
     assert extras["max_episodes"] >= 2
     recorder = cfg.dataset["lerobot"]
-    assert recorder.func == "LeRobotRecorder"
+    assert recorder.func == "AsyncLeRobotRecorder"  # its writer process encodes beside stepping
     assert recorder.params["use_videos"] is True
+    assert recorder.params["vcodec"] == "h264"
     assert [s.sensor_type for s in cfg.sensor] == ["StereoCamera"]
