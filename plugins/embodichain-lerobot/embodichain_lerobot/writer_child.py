@@ -87,6 +87,16 @@ def prefed_encoder(dataset: Any, encoder: Any) -> Iterator[None]:
         dataset._streaming_encoder = saved
 
 
+def _rgb(frames: np.ndarray) -> np.ndarray:
+    """RGB frames of RGBA ones (the recorder sends them with their alpha); torch's strided copy
+    is about 4 times numpy's (torch is imported here anyway, by lerobot)."""
+    if frames.shape[-1] != 4:
+        return frames
+    import torch
+
+    return torch.from_numpy(frames)[..., :3].contiguous().numpy()
+
+
 class ChildWriter:
     """The state of the child: the dataset writer and one video encoder per env."""
 
@@ -148,13 +158,14 @@ class ChildWriter:
 
     def _frames(self, arrays: dict[str, np.ndarray], env_ids: list[int]) -> None:
         self._wait_for_encoders()
+        rgb = {key: _rgb(arrays[key]) for key in self.streamed}
         for row, env_id in enumerate(env_ids):
             encoder = self._encoder(env_id)
             if env_id not in self.live:
                 encoder.start_episode(video_keys=self.streamed, temp_dir=self.writer.dataset.root)
                 self.live.add(env_id)
             for key in self.streamed:
-                encoder.feed_frame(key, arrays[key][row, ..., :3])  # RGBA rows come with their alpha
+                encoder.feed_frame(key, rgb[key][row])
 
     def _wait_for_encoders(self) -> None:
         """Hold new frames while the encoders have :data:`MAX_ENCODER_BACKLOG` frames queued (the
@@ -281,9 +292,11 @@ def main(argv: Optional[list[str]] = None) -> None:
         pass
     import av
     import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: now, before the first episode arrives)
+    import torch
 
     from embodichain_lerobot.encoding import sampled_video_stats
 
+    torch.set_num_threads(1)  # its few ops here are small: a thread pool would only spin
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's per-video encoder summaries (x264 prints ~12 lines)
 
     with sampled_video_stats():  # for the per-env encoders too, which start outside any save

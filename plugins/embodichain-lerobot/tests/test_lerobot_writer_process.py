@@ -49,6 +49,7 @@ class FakeEncoder:
         self.calls.append("start")
 
     def feed_frame(self, key: str, image: np.ndarray) -> None:
+        assert image.shape[-1] == 3  # RGBA batches lose their alpha before the encoder
         self.frames.append((key, int(image[0, 0, 0])))
 
     def cancel_episode(self) -> None:
@@ -69,7 +70,7 @@ def child_with_fake_dataset(tmp_path: Path) -> ChildWriter:
 
 def test_streamed_frames_reach_their_own_envs_encoder(tmp_path: Path) -> None:
     child = child_with_fake_dataset(tmp_path)
-    frames = np.stack([np.full((2, 2, 3), 10 + env, np.uint8) for env in range(3)])
+    frames = np.stack([np.full((2, 2, 4), 10 + env, np.uint8) for env in range(3)])  # RGBA, as the recorder sends
     child.handle("frames", ({"cam": frames[[0, 2]]}, [0, 2]))  # env 1 has no frame this step
     child.handle("frames", ({"cam": frames[[2]]}, [2]))
     assert child.encoders[0].frames == [("cam", 10)]
