@@ -141,6 +141,10 @@ class WriterProcess:
         try:
             path = self.submit("finalize", None).result(_REPLY_TIMEOUT_S)
             self._result = Path(path) if path else None
+        except BaseException:
+            if self.root != Path() and self.root.is_dir() and not any(self.root.iterdir()):
+                self.root.rmdir()  # reserved, but the child died before it created anything
+            raise
         finally:
             self._stop()
         return self._result
@@ -251,7 +255,8 @@ class WriterProcess:
                 pass
         code = self._proc.poll() if self._proc is not None else None
         err = WriterProcessError(
-            f"the dataset writer process exited (code {code}); the episodes published before are intact in {self.root}"
+            f"the dataset writer process exited (code {code}; its own error, if any, is on stderr above); "
+            f"the episodes published before are intact in {self.root}"
         )
         with self._lock:
             self._dead = err

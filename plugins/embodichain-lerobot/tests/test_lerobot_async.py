@@ -5,6 +5,7 @@ no calls after finalize."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 import time
@@ -138,6 +139,23 @@ def test_commits_to_the_writer_process_do_not_wait_and_finalize_drains(
     assert load(path).num_episodes == 2
     with pytest.raises(RuntimeError, match="finalized"):
         rec(env, torch.tensor([0]))
+
+
+def test_a_writer_process_that_cannot_start_fails_the_recording_clearly(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    hook = tmp_path / "hook"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text("import sys\nsys.modules['lerobot'] = None  # lerobot is not importable\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(hook), os.environ.get("PYTHONPATH")])))
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func="AsyncLeRobotRecorder")))
+    reset(env)
+    with pytest.raises(RuntimeError, match=r"the dataset writer process exited \(code 1; its own error"):
+        run_script(env, [["s"], ["."]])  # raised here if the child is already gone, else at close
+        env.close()
+    with contextlib.suppress(RuntimeError):  # raised again if the step raised first
+        env.dataset_manager.finalize()
+    assert list((tmp_path / "data").iterdir()) == []  # the reserved dataset folder is not left behind
 
 
 def test_episodes_are_copies_unaffected_by_later_steps(
