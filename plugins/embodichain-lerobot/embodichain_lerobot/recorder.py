@@ -176,9 +176,9 @@ class LeRobotRecorder(DatasetFunctor):
             _per_env(truncated, n, bool),
             _per_env((info or {}).get("success"), n, bool),
         )
-        if self._streaming():  # the frames this step completes go to the writer process now
-            for snapshot, ids in self._buffers.pending_groups():
-                self._ensure_writer().stream_frames(snapshot, ids)  # type: ignore[union-attr]
+        if self._streaming() and self._ensure_writer() is self._writer_process and self._writer_process.streamed:
+            for snapshot, ids in self._buffers.pending_groups():  # the frames this step completes
+                self._writer_process.stream_frames(snapshot, ids)
         self._buffers.add(spec.snapshot(obs), step)
 
     def _streaming(self) -> bool:

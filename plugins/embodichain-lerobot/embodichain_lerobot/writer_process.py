@@ -256,7 +256,7 @@ class WriterProcess:
         code = self._proc.poll() if self._proc is not None else None
         err = WriterProcessError(
             f"the dataset writer process exited (code {code}; its own error, if any, is on stderr above); "
-            f"the episodes published before are intact in {self.root}"
+            + (f"the episodes published before are intact in {self.root}" if self.root != Path() else "no dataset yet")
         )
         with self._lock:
             self._dead = err
