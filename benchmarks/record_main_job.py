@@ -13,7 +13,8 @@ final flush: the recorder finalizes) and env steps. Reported per twin:
 * ``ratio``: recorded end-to-end over the unrecorded twin's (the issue-21 target is >= 0.8);
 * ``build_s``: building the env (the target: recorded within 0.5 s of unrecorded);
 * with ``--case main_job_depth_masks`` in ``record_throughput.py``: the dataset size with
-  depth and masks over the size without (target <= 3) and the wall times of
+  depth and masks over the size without (target <= 3), with the main job's H.264 colour and
+  with lerobot's default AV1 (``size_ratio_libsvtav1``) and the wall times of
   ``embodichain dataset preview`` (PNG sheet target <= 3 s, mp4 <= 10 s);
 * ``cpu_s`` (per run): CPU seconds of the run and close, all threads (steadier than
   wall time on a shared machine); ``writer_process_cpu_s``: those of the recorder's writer
@@ -105,19 +106,25 @@ def _children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def run_twin(twin: str, episodes: int, workdir: str, depth_masks: bool = False) -> dict[str, Any]:
-    """Run one twin in a child process; its JSON result."""
+def run_twin(
+    twin: str, episodes: int, workdir: str, depth_masks: bool = False, params: Optional[dict] = None
+) -> dict[str, Any]:
+    """Run one twin in a child process (``params``: recorder params to override); its JSON result."""
     save_path = tempfile.mkdtemp(prefix=f"{twin}_", dir=workdir)
-    cmd = [
-        sys.executable,
-        os.path.abspath(__file__),
-        "--child",
-        twin,
-        "--save-path",
-        save_path,
-        "--episodes",
-        str(episodes),
-    ] + (["--depth-masks"] if depth_masks else [])
+    cmd = (
+        [
+            sys.executable,
+            os.path.abspath(__file__),
+            "--child",
+            twin,
+            "--save-path",
+            save_path,
+            "--episodes",
+            str(episodes),
+        ]
+        + (["--depth-masks"] if depth_masks else [])
+        + (["--params", json.dumps(params)] if params else [])
+    )
     out = subprocess.run(cmd, check=True, capture_output=True, text=True)
     line = [ln for ln in out.stdout.splitlines() if ln.startswith("{")][-1]
     return json.loads(line)
@@ -162,6 +169,9 @@ def measure_depth_masks(episodes: int, workdir: str) -> dict[str, Any]:
     ``embodichain dataset preview`` wall times (PNG sheet, mp4) of episode 0 with them."""
     plain = run_twin("recorded", episodes, workdir)["dataset"]
     full = run_twin("recorded", episodes, workdir, depth_masks=True)["dataset"]
+    av1 = {"vcodec": "libsvtav1"}  # lerobot's default codec: colour about twice the main job's H.264 size
+    plain_av1 = run_twin("recorded", episodes, workdir, params=av1)["dataset"]
+    full_av1 = run_twin("recorded", episodes, workdir, depth_masks=True, params=av1)["dataset"]
     cli = [
         os.path.join(os.path.dirname(sys.executable), "embodichain"),
         "dataset",
@@ -181,6 +191,7 @@ def measure_depth_masks(episodes: int, workdir: str) -> dict[str, Any]:
         "preview_mp4_s": _timed(cli + ["--format", "mp4"]),
     }
     record["size_ratio"] = record["bytes_with"] / record["bytes_without"]
+    record["size_ratio_libsvtav1"] = _size(full_av1) / _size(plain_av1)
     return record
 
 

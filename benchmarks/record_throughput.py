@@ -296,6 +296,7 @@ def main(argv: Optional[list[str]] = None) -> int:
                     ("bytes_without", "bytes without", "d"),
                     ("bytes_with", "with depth+masks", "d"),
                     ("size_ratio", "ratio", ".2f"),
+                    ("size_ratio_libsvtav1", "ratio, AV1 colour", ".2f"),
                     ("preview_png_s", "preview png s", ".2f"),
                     ("preview_mp4_s", "preview mp4 s", ".2f"),
                 ],
