@@ -160,7 +160,7 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
     def _step_rows(self, rows: Optional[np.ndarray], nstep: int) -> list[int]:
         """``Batch.step`` of ``rows`` (None: all) at ``stage=VEL``; the failed and non-finite rows."""
         failed: list[int] = []
-        ids = None if rows is None else _batch_ids(rows, self.num_envs)
+        ids = _batch_ids(rows, self.num_envs)
         try:
             self.batch.step(ids, nstep * self.substeps, _VEL)
         except mjbatch.SimulationError as err:
@@ -198,8 +198,7 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         self.batch.reset(ids, stage=_NONE)
         if state is not None:
             self.batch.state[rows if ids is not None else slice(None)] = state
-        self._dirty[rows] = True
-        self._maybe_dirty = True
+        self.mark_dirty(rows)
         if self._pending_failed:  # a reset state has nothing left to report
             reset = set(rows.tolist())
             self._pending_failed = [i for i in self._pending_failed if i not in reset]

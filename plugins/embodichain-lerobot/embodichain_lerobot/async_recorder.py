@@ -62,12 +62,8 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
     def _submit(self, episode: Episode) -> None:
         """Send the episode to the writer process now (in order with the streamed frames);
         its reply completes a future (errors are reported like the worker thread's)."""
-        self._check_space(episode)
-        writer = self._ensure_writer()
-        task = self.params.task
-        subtask = writer.subtask_index(task)
-        record = self._episode_record(episode, subtask)
-        future = self._writer_process.submit_episode(episode.env_id, episode.frames(task, subtask), record)  # type: ignore[union-attr]
+        _, frames, record = self._prepare(episode)
+        future = self._writer_process.submit_episode(episode.env_id, frames, record)  # type: ignore[union-attr]
         future.add_done_callback(lambda f: self._written(f, episode.env_id, len(episode)))
         self._futures = [f for f in self._futures if not f.done()] + [future]
         bound = self.params.max_pending_episodes

@@ -29,7 +29,7 @@ import logging
 import os
 import shutil
 from pathlib import Path
-from typing import Any, Mapping, Optional
+from typing import Any, Iterator, Mapping, Optional
 
 import numpy as np
 
@@ -176,15 +176,17 @@ class LeRobotRecorder(DatasetFunctor):
             _per_env(truncated, n, bool),
             _per_env((info or {}).get("success"), n, bool),
         )
-        if self._streaming() and self._ensure_writer() is self._writer_process and self._writer_process.streamed:
-            for snapshot, ids in self._buffers.pending_groups():  # the frames this step completes
-                self._writer_process.stream_frames(snapshot, ids)
+        proc = self._streaming_to()
+        if proc is not None:
+            self._ensure_writer()  # opened at the first step: the frames go out from then on
+            for snapshot, ids in self._buffers.pending_groups() if proc.streamed else ():
+                proc.stream_frames(snapshot, ids)  # the frames this step completes
         self._buffers.add(spec.snapshot(obs), step)
 
-    def _streaming(self) -> bool:
-        """Whether colour videos go to the writer process while the episodes run."""
+    def _streaming_to(self) -> Optional[WriterProcess]:
+        """The writer process when colour videos go to it while the episodes run, else ``None``."""
         p = self.params
-        return self._writer_process is not None and p.use_videos and p.streaming_encoding
+        return self._writer_process if p.use_videos and p.streaming_encoding else None
 
     def _restart(self, env_ids: list[int]) -> None:
         """The live episodes of ``env_ids`` ended without a commit (the writer process drops their frames)."""
@@ -241,7 +243,8 @@ class LeRobotRecorder(DatasetFunctor):
         """Write a committed episode (the async recorder queues it instead)."""
         self._write_now(episode)
 
-    def _check_space(self, episode: Episode) -> None:
+    def _prepare(self, episode: Episode) -> tuple[DatasetWriter | WriterProcess, Iterator[dict], dict]:
+        """Check the free space, then the writer, the frames and the record of ``episode``."""
         where = self._writer.root if self._writer is not None else self.params.save_path
         ensure_space(
             where,
@@ -249,13 +252,13 @@ class LeRobotRecorder(DatasetFunctor):
             self.params.min_free_mb,
             f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}",
         )
+        writer, task = self._ensure_writer(), self.params.task
+        subtask = writer.subtask_index(task)
+        return writer, episode.frames(task, subtask), self._episode_record(episode, subtask)
 
     def _write_now(self, episode: Episode) -> None:
-        self._check_space(episode)
-        writer = self._ensure_writer()
-        task = self.params.task
-        subtask = writer.subtask_index(task)
-        index = writer.write_episode(episode.frames(task, subtask), self._episode_record(episode, subtask))
+        writer, frames, record = self._prepare(episode)
+        index = writer.write_episode(frames, record)
         log.info("saved episode %d of env %d (%d frames) to %s", index, episode.env_id, len(episode), writer.root)
 
     def _ensure_writer(self) -> DatasetWriter | WriterProcess:
@@ -273,7 +276,7 @@ class LeRobotRecorder(DatasetFunctor):
         kwargs: dict[str, Any] = {"streaming_encoding": p.streaming_encoding, "encoder_threads": p.encoder_threads}
         try:
             if self._writer_process is not None:  # not waited for: an error comes with the first episode
-                streamed = [k for k, f in args[1].items() if f["dtype"] == "video"] if self._streaming() else []
+                streamed = [k for k, f in args[1].items() if f["dtype"] == "video"] if self._streaming_to() else []
                 self._writer_process.open(root, *args, *more, streamed=streamed, **kwargs)
                 self._writer = self._writer_process
             else:
