@@ -31,11 +31,14 @@ DEFAULT_DATASET_ROOT = "./outputs/datasets"
 #: The task string of frames when ``instruction["lang"]`` is not given.
 UNKNOWN_TASK = "unknown_task"
 VIDEO_CODECS = ("libsvtav1", "h264", "hevc", "auto")
-#: How depth and mask maps are stored (``params.depth_format``): ``png16`` packs depth in
-#: millimetres and mask ids + 1 as 16-bit values into lossless PNG image features
-#: (:mod:`embodichain_lerobot.packing`); ``raw`` keeps the float32/int32 arrays as
-#: numeric features (large: every reader pays for them).
-DEPTH_FORMATS = ("png16", "raw")
+#: How depth and mask maps are stored (``params.depth_format``). ``video`` and ``png16``
+#: pack depth in millimetres and mask ids + 1 as 16-bit values into RGB
+#: (:mod:`embodichain_lerobot.packing`): ``video`` as lossless H.264 video features
+#: (:mod:`embodichain_lerobot.lossless_video`; needs ``use_videos`` and
+#: ``streaming_encoding``; about half the size of ``png16``), ``png16`` as lossless PNG
+#: image features; ``raw`` keeps the float32/int32 arrays as numeric features (large:
+#: every reader pays for them). Not given: ``video`` when videos are streamed, else ``png16``.
+DEPTH_FORMATS = ("video", "png16", "raw")
 
 _UNSAFE = re.compile(r"[^a-z0-9_.\-]+")
 
@@ -57,7 +60,7 @@ class RecorderParams:
             streaming encoder: no PNG round trip, stats from the frames in memory); ``False``
             writes PNG frames and encodes them at ``save_episode`` (lerobot's default path).
         encoder_threads: threads per video encoder (``None``: the codec decides).
-        depth_format: ``png16`` (default) or ``raw``, see :data:`DEPTH_FORMATS`.
+        depth_format: ``video``, ``png16`` or ``raw``, see :data:`DEPTH_FORMATS`.
         image_writer_threads, image_writer_processes: lerobot's async PNG writer (``None``
             threads: 2 when the dataset has image features, PNG-stored depth/masks included).
         max_pending_episodes: async recorder queue bound (0: unbounded).
@@ -78,7 +81,7 @@ class RecorderParams:
     vcodec: str = "libsvtav1"
     streaming_encoding: bool = True
     encoder_threads: Optional[int] = None
-    depth_format: str = "png16"
+    depth_format: str = "png16"  # parse_params: "video" when videos are streamed
     image_writer_threads: Optional[int] = None
     image_writer_processes: int = 0
     max_pending_episodes: int = 64
@@ -118,15 +121,10 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     p.vcodec = str(params.get("vcodec", p.vcodec))
     if p.vcodec not in VIDEO_CODECS:
         raise ConfigError("vcodec", f"must be one of {VIDEO_CODECS}, got {p.vcodec!r}")
-    p.depth_format = str(params.get("depth_format", p.depth_format))
-    if p.depth_format not in DEPTH_FORMATS:
-        raise ConfigError(
-            "depth_format",
-            f"must be one of {DEPTH_FORMATS}, got {p.depth_format!r}." + did_you_mean(p.depth_format, DEPTH_FORMATS),
-        )
     p.streaming_encoding = params.get("streaming_encoding", True)
     if not isinstance(p.streaming_encoding, bool):
         raise ConfigError("streaming_encoding", f"must be true or false, got {p.streaming_encoding!r}")
+    p.depth_format = _depth_format(params.get("depth_format"), p.use_videos and p.streaming_encoding)
     p.writer_process = params.get("writer_process")
     if p.writer_process is not None and not isinstance(p.writer_process, bool):
         raise ConfigError("writer_process", f"must be true, false or null, got {p.writer_process!r}")
@@ -136,6 +134,23 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     for name in ("image_writer_processes", "max_pending_episodes", "min_free_mb"):
         setattr(p, name, _non_negative_int(params.get(name, getattr(p, name)), name))
     return p
+
+
+def _depth_format(value: Any, streamed_videos: bool) -> str:
+    """The validated ``depth_format`` (``None``: ``video`` when videos are streamed, else ``png16``)."""
+    if value is None:
+        return "video" if streamed_videos else "png16"
+    if value not in DEPTH_FORMATS:
+        raise ConfigError(
+            "depth_format", f"must be one of {DEPTH_FORMATS}, got {value!r}." + did_you_mean(str(value), DEPTH_FORMATS)
+        )
+    if value == "video" and not streamed_videos:
+        raise ConfigError(
+            "depth_format",
+            "'video' stores depth and masks as lossless videos, which needs use_videos: true and "
+            "streaming_encoding: true; set them, or use depth_format 'png16'",
+        )
+    return str(value)
 
 
 def dataset_fps(control_frequency: float) -> int:

@@ -8,17 +8,18 @@ observation key                        feature                                  
 ``robot/qpos``, ``qvel``, ``qf``       ``observation.state``, ``.qvel``, ``.qf``       float32, named by joint
 ``robot/<x>`` (observation functors)   ``observation.robot.<x>``                       numeric
 ``sensor/<cam>/color[_right]``         ``observation.images.<cam>[_right]``            image/video (H, W, 3)
-``sensor/<cam>/depth[_right]``         ``observation.depth.<cam>[_right]``             PNG image, 16-bit mm
-``sensor/<cam>/mask[_right]``          ``observation.mask.<cam>[_right]``              PNG image, 16-bit id+1
+``sensor/<cam>/depth[_right]``         ``observation.depth.<cam>[_right]``             lossless video/PNG, 16-bit mm
+``sensor/<cam>/mask[_right]``          ``observation.mask.<cam>[_right]``              lossless video/PNG, 16-bit id+1
 ``sensor/<cam>/<other>``               skipped with a warning (normal, position, ...)
 ``sensor/<contact>/<field>``           ``<contact>.<field>``                           numeric
 ``<key>`` (top-level tensor)           ``<key>``                                       numeric
 ``<a>/<b>`` (nested extra)             ``observation.<a>.<b>``                         numeric
 =====================================  ==============================================  ==========
 
-Depth and masks are lossless PNG image features packing 16-bit values into RGB
-(:mod:`embodichain_lerobot.packing`: millimetres, and entity id + 1); with the
-recorder's ``depth_format: "raw"`` they stay numeric features of the sensor's
+Depth and masks pack 16-bit values into RGB (:mod:`embodichain_lerobot.packing`:
+millimetres, and entity id + 1), stored as lossless video features with the
+recorder's ``depth_format: "video"`` (:mod:`embodichain_lerobot.lossless_video`) or
+as lossless PNG image features with ``"png16"``; with ``"raw"`` they stay numeric features of the sensor's
 dtype (float32 metres, int32 ids). Scalar shapes ``()`` become ``(1,)``. The action is ``action["qpos"]`` when the
 action is a mapping with that key, else its first tensor (or the tensor itself).
 """
@@ -74,10 +75,11 @@ class Source:
 
     key: str
     name: str
-    kind: str  # "numeric", "image" (colour), "depth" or "mask" (packed 16-bit PNG images)
+    kind: str  # "numeric", "image" (colour), "depth" or "mask" (packed 16-bit values)
     dtype: str
     shape: tuple
     names: Optional[list] = None
+    lossless_video: bool = False  # depth/mask stored as a lossless video (depth_format "video")
 
     def convert(self, value: Any, num_envs: int) -> np.ndarray:
         """The batch ``(N, ...)`` as an owned array of the feature dtype and shape."""
@@ -91,9 +93,9 @@ class Source:
         return np.array(arr, dtype=self.dtype, copy=True).reshape((num_envs,) + self.shape)
 
     def feature(self, use_videos: bool) -> dict:
-        """The lerobot feature dict (depth and masks are always lossless PNG images)."""
+        """The lerobot feature dict (depth and masks: lossless videos or PNG images)."""
         if self.kind in IMAGE_KINDS:
-            video = use_videos and self.kind == "image"
+            video = use_videos and (self.kind == "image" or self.lossless_video)
             return {
                 "dtype": "video" if video else "image",
                 "shape": self.shape,
@@ -141,7 +143,8 @@ def _camera_source(key: str, uid: str, stream: str, value: Any, depth_format: st
     if group != "images" and depth_format == "raw":
         return _numeric(key, name, value)
     shape = tuple(int(s) for s in to_numpy(value).shape[1:3]) + (3,)
-    return Source(key, name, {"images": "image"}.get(group, group), "uint8", shape, None)
+    kind = {"images": "image"}.get(group, group)
+    return Source(key, name, kind, "uint8", shape, None, lossless_video=kind != "image" and depth_format == "video")
 
 
 def _is_camera(env: Any, uid: str, fields: list[str]) -> bool:
@@ -182,7 +185,8 @@ class FeatureSpec:
     Args:
         obs: a batched observation of the env (``(N, ...)`` tensors).
         env: the env (joint names, sensors).
-        depth_format: ``"png16"`` (depth and masks as packed 16-bit PNG images) or ``"raw"``.
+        depth_format: ``"video"`` (depth and masks as packed 16-bit lossless videos),
+            ``"png16"`` (as packed 16-bit PNG images) or ``"raw"``.
     """
 
     def __init__(self, obs: Any, env: Any, depth_format: str = "png16"):
@@ -223,6 +227,10 @@ class FeatureSpec:
     def image_features(self, use_videos: bool) -> list[str]:
         """The names of the features stored as PNG images (not videos)."""
         return [s.name for s in self.sources if s.kind in IMAGE_KINDS and s.feature(use_videos)["dtype"] == "image"]
+
+    def lossless_videos(self, use_videos: bool) -> list[str]:
+        """The names of the features stored as lossless videos (depth and masks)."""
+        return [s.name for s in self.sources if s.lossless_video and s.feature(use_videos)["dtype"] == "video"]
 
     def snapshot(self, obs: Any) -> dict[str, np.ndarray]:
         """Owned numpy copies ``(N, ...)`` of the recorded observation streams."""

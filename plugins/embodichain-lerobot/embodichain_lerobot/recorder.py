@@ -184,7 +184,7 @@ class LeRobotRecorder(DatasetFunctor):
         self._buffers.add(spec.snapshot(obs), step)
 
     def _streaming_to(self) -> Optional[WriterProcess]:
-        """The writer process when colour videos go to it while the episodes run, else ``None``."""
+        """The writer process when video frames go to it while the episodes run, else ``None``."""
         p = self.params
         return self._writer_process if p.use_videos and p.streaming_encoding else None
 
@@ -209,7 +209,7 @@ class LeRobotRecorder(DatasetFunctor):
         min_free_mb: int = DEFAULT_MIN_FREE_MB,
         streaming_encoding: bool = True,
         encoder_threads: Optional[int] = None,
-        depth_format: str = "png16",
+        depth_format: Optional[str] = None,
         writer_process: Optional[bool] = None,
     ) -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
@@ -273,7 +273,11 @@ class LeRobotRecorder(DatasetFunctor):
             threads = 2 if self._spec.image_features(p.use_videos) else 0
         args = (self.fps, self._spec.features(p.use_videos), robot_type_of(p, self._robot_uid), p.use_videos)
         more = (p.vcodec, threads, p.image_writer_processes)
-        kwargs: dict[str, Any] = {"streaming_encoding": p.streaming_encoding, "encoder_threads": p.encoder_threads}
+        kwargs: dict[str, Any] = {
+            "streaming_encoding": p.streaming_encoding,
+            "encoder_threads": p.encoder_threads,
+            "lossless_keys": self._spec.lossless_videos(p.use_videos),
+        }
         try:
             if self._writer_process is not None:  # not waited for: an error comes with the first episode
                 streamed = [k for k, f in args[1].items() if f["dtype"] == "video"] if self._streaming_to() else []

@@ -31,7 +31,9 @@ are computed from the frames in memory (lerobot's frame sampling, see
 episode is added in one burst, so a bounded queue would drop frames), and before
 an episode is published every video's frame count is checked against the episode
 length: an encoder that lost frames stops the recording with an error instead of
-publishing a video shorter than its data.
+publishing a video shorter than its data. Depth and mask video features are encoded
+losslessly beside lerobot's colour encoder (:class:`~embodichain_lerobot.lossless_video.RoutedEncoder`
+takes the place of ``LeRobotDataset._streaming_encoder``).
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ import signal
 import threading
 import warnings
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Optional
+from typing import Any, Iterable, Iterator, Optional, Sequence
 
 import numpy as np
 
@@ -57,6 +59,7 @@ from embodichain_lerobot.encoding import (
     wait_lerobot,
 )
 from embodichain_lerobot.folders import STAGING
+from embodichain_lerobot.lossless_video import RoutedEncoder, planar_rgb_channels
 from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full
 
 SIDECAR = "meta/embodichain_episodes.jsonl"
@@ -129,6 +132,8 @@ class DatasetWriter:
             (``vcodec="auto"`` is resolved by :func:`~embodichain_lerobot.encoding.resolve_vcodec`).
         streaming_encoding: encode videos while frames are added (see the module docstring).
         encoder_threads: threads per video encoder (``None``: the codec decides).
+        lossless_keys: video features encoded losslessly (packed depth and masks,
+            :mod:`~embodichain_lerobot.lossless_video`); they need ``streaming_encoding``.
     """
 
     def __init__(
@@ -143,7 +148,10 @@ class DatasetWriter:
         image_writer_processes: int = 0,
         streaming_encoding: bool = True,
         encoder_threads: Optional[int] = None,
+        lossless_keys: Sequence[str] = (),
     ):
+        if lossless_keys and not (use_videos and streaming_encoding):
+            raise ValueError(f"lossless video features {list(lossless_keys)} need use_videos and streaming_encoding")
         wait_lerobot()
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
@@ -166,6 +174,8 @@ class DatasetWriter:
                 encoder_queue_maxsize=0,
                 encoder_threads=encoder_threads,
             )
+            if self.dataset._streaming_encoder is not None:  # lerobot's, for colour; ours for lossless_keys
+                self.dataset._streaming_encoder = RoutedEncoder(self.dataset._streaming_encoder, lossless_keys)
             atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
         except BaseException:
             self._lock.release()
@@ -232,7 +242,7 @@ class DatasetWriter:
         from lerobot.utils.utils import SuppressProgressBars
 
         try:
-            with SuppressProgressBars(), batched_image_embedding():
+            with SuppressProgressBars(), batched_image_embedding(), planar_rgb_channels():
                 self.dataset.save_episode(parallel_encoding=False)
             self._check_video_frames(line["length"])
             self._continue_in_new_files()

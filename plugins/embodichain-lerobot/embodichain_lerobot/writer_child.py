@@ -4,11 +4,12 @@ It imports lerobot at once (seconds, while the first episodes run), then answers
 recording process's messages in order:
 
 * ``open``: create the :class:`~embodichain_lerobot.writer.DatasetWriter`;
-* ``frames``: colour frames of the live episodes, fed to one lerobot
-  ``StreamingVideoEncoder`` per env (started at an episode's first frame), so a video is
-  encoded while its episode runs;
+* ``frames``: video frames of the live episodes (colour; depth and masks when they are
+  lossless videos), fed to one :class:`~embodichain_lerobot.lossless_video.RoutedEncoder`
+  per env (lerobot's ``StreamingVideoEncoder`` for colour; started at an episode's first
+  frame), so a video is encoded while its episode runs;
 * ``restart``: those envs' live episodes end without a commit (their encoding is cancelled);
-* ``episode``: write a committed episode; with streamed colour, lerobot's ``save_episode``
+* ``episode``: write a committed episode; with streamed videos, lerobot's ``save_episode``
   finishes that env's encoder instead of its own (:func:`prefed_encoder`);
 * ``finalize``: cancel the live encoders, finalize the dataset, exit.
 
@@ -142,18 +143,8 @@ class ChildWriter:
         self.streamed = list(streamed)
 
     def _encoder(self, env_id: int) -> Any:
-        if env_id not in self.encoders:
-            base = self.writer.dataset._streaming_encoder
-            self.encoders[env_id] = type(base)(
-                fps=base.fps,
-                vcodec=base.vcodec,
-                pix_fmt=base.pix_fmt,
-                g=base.g,
-                crf=base.crf,
-                preset=base.preset,
-                queue_maxsize=0,  # never drop a frame; the episode's frame count is checked at save
-                encoder_threads=base.encoder_threads,
-            )
+        if env_id not in self.encoders:  # a RoutedEncoder like the dataset's (lerobot's for colour)
+            self.encoders[env_id] = self.writer.dataset._streaming_encoder.fresh()
         return self.encoders[env_id]
 
     def _frames(self, arrays: dict[str, np.ndarray], env_ids: list[int]) -> None:
@@ -174,8 +165,7 @@ class ChildWriter:
             time.sleep(0.005)
 
     def _backlog(self) -> int:
-        queues = (getattr(enc, "_frame_queues", {}) for env_id, enc in self.encoders.items() if env_id in self.live)
-        return sum(q.qsize() for group in queues for q in group.values())
+        return sum(enc.backlog() for env_id, enc in self.encoders.items() if env_id in self.live)
 
     def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
         for name in subtasks:  # the same indices as the recording process gave

@@ -1,7 +1,8 @@
 """Camera streams (embodichain-sensors) in recorded datasets: stereo colour as
 ``observation.images.<uid>`` / ``<uid>_right``, depth (millimetres) and masks (id + 1)
-as packed 16-bit PNG image features (``depth_format: raw``: numeric features), colour
-as PNG images (exact) and as video (lossy), for num_envs 1 and 3."""
+as packed 16-bit PNG image features, or lossless videos beside video colour
+(``depth_format: raw``: numeric features), colour as PNG images (exact) and as video
+(lossy), for num_envs 1 and 3."""
 
 from __future__ import annotations
 
@@ -41,6 +42,10 @@ def record(make_env: Any, tmp_path: Path, num_envs: int, width: int = 32, height
     return load(env.dataset_manager.finalize()[0]), expected_episodes(SCRIPTS[num_envs], log, num_envs)
 
 
+def _millimetres(depth_m: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(depth_m[..., 0].astype(np.float64) * 1000), 0, 65535)
+
+
 def _hwc(value: Any) -> np.ndarray:
     """A dataset camera item ``(C, H, W)`` float in [0, 1] as ``(H, W, C)`` uint8."""
     return np.round(as_np(value).transpose(1, 2, 0) * 255).astype(np.uint8)
@@ -66,8 +71,7 @@ def test_stereo_images_depth_and_masks_round_trip(make_env: Any, tmp_path: Path,
             cam = obs["sensor"]["head"]
             np.testing.assert_array_equal(_hwc(item["observation.images.head"]), cam["color"][..., :3])
             np.testing.assert_array_equal(_hwc(item["observation.images.head_right"]), cam["color_right"][..., :3])
-            mm = np.clip(np.rint(cam["depth"][..., 0].astype(np.float64) * 1000), 0, 65535)
-            np.testing.assert_array_equal(depth_millimetres(item["observation.depth.head"]), mm)
+            np.testing.assert_array_equal(depth_millimetres(item["observation.depth.head"]), _millimetres(cam["depth"]))
             np.testing.assert_array_equal(mask_ids(item["observation.mask.head_right"]), cam["mask_right"][..., 0])
     first = episode_items(ds, 0)[0]
     metres = expected[0][1][0][0]["sensor"]["head"]["depth"][..., 0]
@@ -111,10 +115,35 @@ def test_unsupported_camera_streams_are_skipped_with_a_warning(make_env: Any, tm
 def test_videos_encode_and_decode(make_env: Any, tmp_path: Path, func: str) -> None:
     ds, expected = record(make_env, tmp_path, 1, 64, 48, use_videos=True, func=func)
     assert ds.features["observation.images.head"]["dtype"] == "video"
-    assert ds.meta.video_keys == ["observation.images.head", "observation.images.head_right"]
+    maps = [
+        "observation.depth.head",
+        "observation.depth.head_right",
+        "observation.mask.head",
+        "observation.mask.head_right",
+    ]
+    assert sorted(ds.meta.video_keys) == sorted(["observation.images.head", "observation.images.head_right", *maps])
+    assert ds.meta.info["features"]["observation.depth.head"]["info"]["video.pix_fmt"] == "gbrp"  # lossless RGB
     assert [int(x) for x in ds.meta.episodes["length"]] == [len(r) for _, r in expected]
     for e, (_, rows) in enumerate(expected):
         for item, (obs, _) in zip(episode_items(ds, e), rows):
+            cam = obs["sensor"]["head"]
             frame = _hwc(item["observation.images.head"]).astype(float)
             assert frame.shape == (48, 64, 3)
-            assert np.abs(frame - obs["sensor"]["head"]["color"][..., :3]).mean() < 12  # lossy AV1
+            assert np.abs(frame - cam["color"][..., :3]).mean() < 12  # lossy AV1
+            # depth and masks are lossless videos: exact through lerobot's default decoder
+            np.testing.assert_array_equal(depth_millimetres(item["observation.depth.head"]), _millimetres(cam["depth"]))
+            np.testing.assert_array_equal(
+                depth_millimetres(item["observation.depth.head_right"]), _millimetres(cam["depth_right"])
+            )
+            np.testing.assert_array_equal(mask_ids(item["observation.mask.head"]), cam["mask"][..., 0])
+            np.testing.assert_array_equal(mask_ids(item["observation.mask.head_right"]), cam["mask_right"][..., 0])
+
+
+def test_png16_depth_beside_video_colour(make_env: Any, tmp_path: Path) -> None:
+    ds, expected = record(make_env, tmp_path, 1, 64, 48, use_videos=True, depth_format="png16")
+    assert ds.meta.video_keys == ["observation.images.head", "observation.images.head_right"]
+    assert ds.features["observation.depth.head"]["dtype"] == "image"
+    item, (obs, _) = episode_items(ds, 0)[1], expected[0][1][1]
+    np.testing.assert_array_equal(
+        depth_millimetres(item["observation.depth.head"]), _millimetres(obs["sensor"]["head"]["depth"])
+    )

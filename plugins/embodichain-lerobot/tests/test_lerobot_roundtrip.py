@@ -166,7 +166,15 @@ def test_batched_image_embedding_writes_what_lerobot_writes(tmp_path: Path) -> N
     [
         (
             {"depth_format": "png"},
-            r"params\.depth_format: must be one of \('png16', 'raw'\), got 'png'\. Did you mean 'png16'\?",
+            r"params\.depth_format: must be one of \('video', 'png16', 'raw'\), got 'png'\. Did you mean 'png16'\?",
+        ),
+        (
+            {"depth_format": "video"},
+            r"params\.depth_format: 'video' stores depth and masks as lossless videos, which needs use_videos: true",
+        ),
+        (
+            {"depth_format": "video", "use_videos": True, "streaming_encoding": False},
+            r"params\.depth_format: 'video' .* needs use_videos: true and streaming_encoding: true",
         ),
         ({"streaming_encoding": "yes"}, r"params\.streaming_encoding: must be true or false, got 'yes'"),
         ({"encoder_threads": -1}, r"params\.encoder_threads: must be an int >= 0, got -1"),

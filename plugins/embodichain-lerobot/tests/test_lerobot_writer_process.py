@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from embodichain_lerobot.episodes import EpisodeBuffers, StepData
+from embodichain_lerobot.lossless_video import RoutedEncoder
 from embodichain_lerobot.storage import DiskFullError
 from embodichain_lerobot.writer_child import ChildWriter, _picklable
 from embodichain_lerobot.writer_process import WriterProcess, WriterProcessError, from_columns, to_columns
@@ -62,7 +63,7 @@ class FakeEncoderBase(FakeEncoder):
 
 def child_with_fake_dataset(tmp_path: Path) -> ChildWriter:
     child = ChildWriter()
-    dataset = type("DS", (), {"_streaming_encoder": FakeEncoderBase(), "root": tmp_path})()
+    dataset = type("DS", (), {"_streaming_encoder": RoutedEncoder(FakeEncoderBase()), "root": tmp_path})()
     child.writer = type("W", (), {"dataset": dataset})()
     child.streamed = ["cam"]
     return child
@@ -73,14 +74,15 @@ def test_streamed_frames_reach_their_own_envs_encoder(tmp_path: Path) -> None:
     frames = np.stack([np.full((2, 2, 4), 10 + env, np.uint8) for env in range(3)])  # RGBA, as the recorder sends
     child.handle("frames", ({"cam": frames[[0, 2]]}, [0, 2]))  # env 1 has no frame this step
     child.handle("frames", ({"cam": frames[[2]]}, [2]))
-    assert child.encoders[0].frames == [("cam", 10)]
-    assert child.encoders[2].frames == [("cam", 12), ("cam", 12)]
-    assert child.encoders[0].calls == ["start"]
+    colour = {env: encoder.colour for env, encoder in child.encoders.items()}
+    assert colour[0].frames == [("cam", 10)]
+    assert colour[2].frames == [("cam", 12), ("cam", 12)]
+    assert colour[0].calls == ["start"]
     assert 1 not in child.encoders
-    assert child.encoders[0].settings["queue_maxsize"] == 0  # never drops a frame
+    assert colour[0].settings["queue_maxsize"] == 0  # never drops a frame
     child.handle("restart", [0, 1])  # env 0's live episode is dropped; env 1 has none
     child.handle("frames", ({"cam": frames[[0]]}, [0]))
-    assert child.encoders[0].calls == ["start", "cancel", "start"]
+    assert colour[0].calls == ["start", "cancel", "start"]
     assert child.live == {0, 2}
 
 
