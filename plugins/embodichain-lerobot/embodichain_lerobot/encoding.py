@@ -11,6 +11,9 @@ counts and a faster image embedding for ``save_episode``.
   lerobot's sampled image statistics (the frames ``sample_indices`` picks, computed once
   at the end of the episode from per-channel value counts) instead of a 5000-bin histogram
   update per frame (about 3.4 ms of CPU a frame, in uint8 arithmetic that wraps ``x**2``).
+* :func:`planar_rgb_channels` lets lerobot describe the lossless depth and mask videos
+  (:mod:`embodichain_lerobot.lossless_video`), whose pixel format ``gbrp`` its
+  ``get_video_pixel_channels`` does not know.
 * :func:`batched_image_embedding` makes lerobot's ``save_episode`` embed PNG bytes into
   the parquet table in one batched ``datasets`` map instead of one map call per frame
   (which cost about 6 ms a frame, also for datasets without image features).
@@ -193,4 +196,23 @@ def sampled_video_stats() -> Iterator[None]:
     from lerobot.datasets import compute_stats
 
     with _swapped(compute_stats, "RunningQuantileStats", SampledFrameStats):
+        yield
+
+
+#: Planar RGB pixel formats (as H.264/HEVC RGB decode) and their channel counts.
+_PLANAR_RGB = {"gbrp": 3, "gbrap": 4}
+
+
+def _pixel_channels(pix_fmt: str) -> int:
+    from lerobot.datasets import video_utils
+
+    return _PLANAR_RGB.get(pix_fmt) or _original(video_utils, "get_video_pixel_channels")(pix_fmt)
+
+
+@contextlib.contextmanager
+def planar_rgb_channels() -> Iterator[None]:
+    """Within the block, lerobot's ``get_video_pixel_channels`` counts ``gbrp`` as 3 channels."""
+    from lerobot.datasets import video_utils
+
+    with _swapped(video_utils, "get_video_pixel_channels", _pixel_channels):
         yield

@@ -18,8 +18,8 @@ concatenates and describes these videos like any other, and its video backends
 (torchcodec, pyav) decode them exactly: the decoded RGB equals the packed frame
 (tested). One more thing lerobot needs: H.264 RGB decodes to the planar pixel format
 ``gbrp``, which lerobot's ``get_video_pixel_channels`` does not know (it looks for
-``"rgb"`` in the name); :func:`planar_rgb_channels` teaches it while an episode is
-saved (the only time lerobot describes a video).
+``"rgb"`` in the name); :func:`~embodichain_lerobot.encoding.planar_rgb_channels`
+teaches it while an episode is saved (the only time lerobot describes a video).
 
 Example:
     >>> import numpy as np, tempfile, pathlib
@@ -38,33 +38,14 @@ import shutil
 import tempfile
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Optional
+from typing import Any, Iterable, Optional
 
 import numpy as np
 
-from embodichain_lerobot.encoding import SampledFrameStats, _original, _swapped
+from embodichain_lerobot.encoding import SampledFrameStats
 
 #: FFmpeg's H.264 encoder of RGB input (part of x264; PyAV's wheels ship it).
 LOSSLESS_CODEC = "libx264rgb"
-
-
-#: Planar RGB pixel formats (as H.264/HEVC RGB decode) and their channel counts.
-_PLANAR_RGB = {"gbrp": 3, "gbrap": 4}
-
-
-def _pixel_channels(pix_fmt: str) -> int:
-    from lerobot.datasets import video_utils
-
-    return _PLANAR_RGB.get(pix_fmt) or _original(video_utils, "get_video_pixel_channels")(pix_fmt)
-
-
-@contextlib.contextmanager
-def planar_rgb_channels() -> Iterator[None]:
-    """Within the block, lerobot's ``get_video_pixel_channels`` counts ``gbrp`` as 3 channels."""
-    from lerobot.datasets import video_utils
-
-    with _swapped(video_utils, "get_video_pixel_channels", _pixel_channels):
-        yield
 
 
 class LosslessEpisodeVideo:
@@ -165,12 +146,8 @@ class RoutedEncoder:
         for key in video_keys:
             if key in self.lossless:
                 folder = Path(tempfile.mkdtemp(dir=temp_dir))
-                self._live[key] = LosslessEpisodeVideo(
-                    folder / f"{key.replace('/', '_')}_lossless.mp4", *self._timing()
-                )
-
-    def _timing(self) -> tuple[int, Optional[int]]:
-        return int(self.colour.fps), self.colour.g
+                path = folder / f"{key.replace('/', '_')}_lossless.mp4"
+                self._live[key] = LosslessEpisodeVideo(path, int(self.colour.fps), self.colour.g)
 
     def feed_frame(self, video_key: str, image: np.ndarray) -> None:
         """One frame of ``video_key``."""
@@ -184,8 +161,8 @@ class RoutedEncoder:
     def finish_episode(self) -> dict[str, tuple[Path, Optional[dict]]]:
         """``{video_key: (mp4 path, stats or None)}`` of every key of the episode."""
         live, self._live = self._live, {}
-        results = dict(self.colour.finish_episode())
         try:
+            results = dict(self.colour.finish_episode())
             for key, video in live.items():
                 results[key] = video.finish()
         except BaseException:

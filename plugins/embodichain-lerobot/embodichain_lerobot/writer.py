@@ -53,13 +53,14 @@ import numpy as np
 
 from embodichain_lerobot.encoding import (
     batched_image_embedding,
+    planar_rgb_channels,
     resolve_vcodec,
     sampled_video_stats,
     video_frame_count,
     wait_lerobot,
 )
 from embodichain_lerobot.folders import STAGING
-from embodichain_lerobot.lossless_video import RoutedEncoder, planar_rgb_channels
+from embodichain_lerobot.lossless_video import RoutedEncoder
 from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full
 
 SIDECAR = "meta/embodichain_episodes.jsonl"
@@ -151,7 +152,10 @@ class DatasetWriter:
         lossless_keys: Sequence[str] = (),
     ):
         if lossless_keys and not (use_videos and streaming_encoding):
-            raise ValueError(f"lossless video features {list(lossless_keys)} need use_videos and streaming_encoding")
+            raise ValueError(
+                f"lossless video features {list(lossless_keys)} (params.depth_format 'video') need "
+                "params.use_videos and params.streaming_encoding"
+            )
         wait_lerobot()
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 

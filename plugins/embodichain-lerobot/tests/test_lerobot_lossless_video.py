@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from embodichain_lerobot.lossless_video import LosslessEpisodeVideo, RoutedEncoder, planar_rgb_channels
+from embodichain_lerobot.encoding import planar_rgb_channels
+from embodichain_lerobot.lossless_video import LosslessEpisodeVideo, RoutedEncoder
 from embodichain_lerobot.packing import pack_u16, unpack_u16
 
 
