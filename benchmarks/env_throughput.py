@@ -40,6 +40,7 @@ import mujoco.batch as mjbatch  # noqa: E402
 import torch  # noqa: E402
 
 from common import interleaved_timings, machine_info, median, print_table, seven_dof_arm_mjcf, spread, write_json  # noqa: E402
+from matched_twin import MatchedTwin, Workload  # noqa: E402
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg  # noqa: E402
 from embodichain_core.managers import EventCfg, ObservationCfg, RewardCfg, SceneEntityCfg  # noqa: E402
@@ -52,6 +53,17 @@ TABLE_TOP = 0.32
 CUBE = 0.05
 CUBE_UIDS = ("cube0", "cube1", "cube2")
 ACTION_PERIOD = 50  # distinct precomputed actions, cycled
+#: The events' numbers (make_cfg configures them; the matched raw twin repeats them in numpy).
+WORKLOAD = dict(
+    cube_uids=CUBE_UIDS,
+    arm_part="arm",
+    push_interval=10,
+    max_speed=0.2,
+    xy_low=(0.35, -0.3),
+    xy_high=(0.7, 0.3),
+    cube_z=TABLE_TOP + CUBE / 2,
+    arm_noise=0.1,
+)
 
 
 # -- functors (written the way a task author would, with the public entity API) -------------------
@@ -137,11 +149,20 @@ def make_cfg(num_envs: int, sim_steps_per_control: int = 4, episode_length: int 
         "reset_cubes": EventCfg(
             func=randomize_cube_poses,
             mode="reset",
-            params={"cube_cfgs": cubes, "xy_range": [[0.35, -0.3], [0.7, 0.3]], "z": TABLE_TOP + CUBE / 2},
+            params={
+                "cube_cfgs": cubes,
+                "xy_range": [list(WORKLOAD["xy_low"]), list(WORKLOAD["xy_high"])],
+                "z": WORKLOAD["cube_z"],
+            },
         ),
-        "reset_arm": EventCfg(func=randomize_arm_joints, mode="reset", params={"entity_cfg": arm, "noise": 0.1}),
+        "reset_arm": EventCfg(
+            func=randomize_arm_joints, mode="reset", params={"entity_cfg": arm, "noise": WORKLOAD["arm_noise"]}
+        ),
         "push_cubes": EventCfg(
-            func=push_cubes, mode="interval", interval_step=10, params={"cube_cfgs": cubes, "max_speed": 0.2}
+            func=push_cubes,
+            mode="interval",
+            interval_step=WORKLOAD["push_interval"],
+            params={"cube_cfgs": cubes, "max_speed": WORKLOAD["max_speed"]},
         ),
     }
     observations = {
@@ -231,6 +252,7 @@ def measure(
     """
     env = make_env(num_envs, sim_steps_per_control, episode_length, seed)
     base = env.unwrapped
+    stagger = base._elapsed_steps.numpy().copy()
     model = base.scene.model
     substeps = base.sim.substeps
     nstep = sim_steps_per_control * substeps
@@ -247,7 +269,8 @@ def measure(
     ctrl = raw.bind("ctrl")
     stage = mujoco.mjtStage.mjSTAGE_VEL
 
-    counter = {"env": 0, "raw": 0}
+    twin = MatchedTwin(base, nthread, nstep, stagger, Workload(episode_length=episode_length, **WORKLOAD), seed)
+    counter = {"env": 0, "raw": 0, "matched": 0}
 
     def run_env(n: int) -> None:
         k = counter["env"]
@@ -262,17 +285,27 @@ def measure(
             raw.step(nstep=nstep, stage=stage)
         counter["raw"] = k + n
 
+    def run_matched(n: int) -> None:
+        k = counter["matched"]
+        for i in range(k, k + n):
+            twin.step(actions_np[i % ACTION_PERIOD])
+        counter["matched"] = k + n
+
     # warm-up (also sizes the timed window when --steps is not given)
     t_env_w = _timed(run_env, warmup_steps)
     t_raw_w = _timed(run_raw, warmup_steps)
+    _timed(run_matched, warmup_steps)
     if steps is None:
         per_call = max(t_env_w, t_raw_w) / max(1, warmup_steps)
         steps = int(min(20000, max(20, round(target_seconds / max(per_call, 1e-6)))))
 
     times = interleaved_timings(
-        {"env": lambda: run_env(steps), "raw": lambda: run_raw(steps)}, repeats=repeats, warmup=0, clock=clock
+        {"env": lambda: run_env(steps), "raw": lambda: run_raw(steps), "matched": lambda: run_matched(steps)},
+        repeats=repeats,
+        warmup=0,
+        clock=clock,
     )
-    t_env, t_raw = median(times["env"]), median(times["raw"])
+    t_env, t_raw, t_matched = median(times["env"]), median(times["raw"]), median(times["matched"])
     env_sps = steps * num_envs / t_env
     raw_sps = steps * num_envs / t_raw
     paired = [r / e for e, r in zip(times["env"], times["raw"])]
@@ -292,6 +325,10 @@ def measure(
         "ratio": env_sps / raw_sps,
         "ratio_paired_median": median(paired),
         "ratio_best": min(times["raw"]) / min(times["env"]),
+        "ratio_matched": t_matched / t_env,
+        "ratio_matched_paired_median": median([m / e for e, m in zip(times["env"], times["matched"])]),
+        "matched_ms_per_call": t_matched / steps * 1e3,
+        "framework_overhead_ms": (t_env - t_matched) / steps * 1e3,
         "manager_overhead_ms": (t_env - t_raw) / steps * 1e3,
         "env_ms_per_call": t_env / steps * 1e3,
         "raw_ms_per_call": t_raw / steps * 1e3,
@@ -299,6 +336,7 @@ def measure(
         "raw_spread": spread(times["raw"]),
         "env_times_s": times["env"],
         "raw_times_s": times["raw"],
+        "matched_times_s": times["matched"],
         "breakdown": parts,
     }
 
@@ -400,6 +438,8 @@ COLUMNS = [
     ("env_ms_per_call", "env ms/call", ".3f"),
     ("raw_ms_per_call", "raw ms/call", ".3f"),
     ("manager_overhead_ms", "overhead ms/call", ".3f"),
+    ("matched_ms_per_call", "matched raw ms/call", ".3f"),
+    ("ratio_matched", "ratio matched", ".3f"),
 ]
 
 
@@ -532,7 +572,8 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
         records.append(rec)
         print(
             f"num_envs={n:<4d} env {rec['env_steps_per_s']:>9,.0f} steps/s  raw {rec['raw_steps_per_s']:>9,.0f} "
-            f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call",
+            f"steps/s  ratio {rec['ratio']:.3f}  overhead {rec['manager_overhead_ms']:.3f} ms/call  "
+            f"ratio to the matched twin {rec['ratio_matched']:.3f}",
             flush=True,
         )
     payload = {

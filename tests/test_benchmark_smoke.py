@@ -32,6 +32,11 @@ RECORD_KEYS = {
     "env_times_s",
     "raw_times_s",
     "breakdown",
+    "ratio_matched",
+    "ratio_matched_paired_median",
+    "matched_ms_per_call",
+    "framework_overhead_ms",
+    "matched_times_s",
 }
 BREAKDOWN_KEYS = {
     "env_ms_per_call",
@@ -78,6 +83,8 @@ def test_quick_run_writes_json(tmp_path):
     assert isinstance(rec["manager_overhead_ms"], float)
     assert math.isfinite(rec["manager_overhead_ms"])
     assert rec["ratio"] == pytest.approx(rec["env_steps_per_s"] / rec["raw_steps_per_s"])
+    assert rec["ratio_matched"] == pytest.approx(rec["matched_ms_per_call"] / rec["env_ms_per_call"])
+    assert rec["framework_overhead_ms"] == pytest.approx(rec["env_ms_per_call"] - rec["matched_ms_per_call"])
     assert len(rec["env_times_s"]) == len(rec["raw_times_s"]) == rec["repeats"] == 1
     assert BREAKDOWN_KEYS <= set(rec["breakdown"]), BREAKDOWN_KEYS - set(rec["breakdown"])
 
@@ -118,3 +125,41 @@ def test_reset_randomization_quick_run_writes_json(tmp_path):
     assert rec["full_set_const_per_reset"] == 0
     assert rec["closed_form_per_reset"] == 1
     assert len(data["per_event"]["2"]) == 10
+
+
+def test_matched_twin_repeats_the_envs_pushes_and_resets():
+    """The matched raw twin does the env's physics work: an episode's end puts the cubes
+    at random poses on the table and the arm near its defaults, and a push every
+    ``push_interval`` steps of an episode gives the cubes a horizontal velocity."""
+    import numpy as np
+
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    try:
+        import env_throughput as et
+        from matched_twin import MatchedTwin, Workload
+    finally:
+        sys.path.pop(0)
+    env = et.make_env(2)
+    base = env.unwrapped
+    work = Workload(episode_length=100, **et.WORKLOAD)
+    twin = MatchedTwin(base, nthread=1, nstep=4, stagger=np.array([98, 5]), workload=work, seed=1)
+    action = et.make_actions(env)[0].numpy().astype(np.float64)
+    before = twin.qpos.copy()
+    twin.step(action)
+    twin.step(action)  # env 0 reaches step 100 of its episode and restarts
+    assert twin.elapsed.tolist() == [0, 7] and twin.pushes.tolist() == [0, 2]
+    assert twin.dirty.tolist() == [True, False]
+    for adr, _ in twin.cubes:
+        xy, z, quat = twin.qpos[0, adr : adr + 2], twin.qpos[0, adr + 2], twin.qpos[0, adr + 3 : adr + 7]
+        assert np.all(xy >= work.xy_low) and np.all(xy <= work.xy_high)
+        assert z == work.cube_z and quat[1] == quat[2] == 0.0 and np.isclose(np.linalg.norm(quat), 1.0)
+        assert not np.allclose(twin.qpos[0, adr : adr + 2], before[0, adr : adr + 2])
+    assert np.all(np.abs(twin.qpos[0, twin.arm_qpos] - twin.arm_default) <= work.arm_noise)
+    for _ in range(work.push_interval - 2):
+        twin.step(action)
+    assert twin.pushes.tolist() == [8, 10]  # env 1 is pushed on step 10 of its episode
+    for _, dof in twin.cubes:
+        vel = twin.qvel[1, dof : dof + 6]
+        assert np.any(vel[:2] != 0) and np.all(np.abs(vel[:2]) <= work.max_speed) and not vel[2:].any()
+    assert twin.dirty.tolist() == [False, True]
+    env.close()

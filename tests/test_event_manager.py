@@ -86,6 +86,36 @@ def test_interval_counters_restart_on_auto_reset(make_env) -> None:
     assert fired == {3: [[0, 1]], 7: [[0, 1]], 11: [[0, 1]]}
 
 
+def test_interval_schedule_matches_per_env_counters_under_random_resets(make_env) -> None:
+    """The cached phases fire exactly the envs a plain per-env counter would, and a
+    functor that mutates its env_ids cannot change later schedules."""
+
+    def mutating(env: Any, env_ids: Any, tag: str) -> None:
+        log_event(env, env_ids, tag)
+        env_ids.fill_(0)
+
+    env = make_env(
+        num_envs=5,
+        events={"tick": EventCfg(func=mutating, mode="interval", interval_step=3, params={"tag": "tick"})},
+    )
+    env.reset()
+    counters = [0] * 5
+    rng = torch.Generator().manual_seed(3)
+    for k in range(1, 41):
+        before = len(call_log(env))
+        env.step(zero_action(env))
+        counters = [c + 1 for c in counters]
+        expected = [i for i, c in enumerate(counters) if c % 3 == 0]
+        fired = [ids for t, ids, _ in call_log(env)[before:] if t == "tick"]
+        assert fired == ([expected] if expected else []), f"step {k}"
+        resets = torch.nonzero(torch.rand(5, generator=rng) < 0.25).flatten().tolist()
+        if resets:
+            env.reset(options={"reset_ids": resets})
+            for i in resets:
+                counters[i] = 0
+        assert env.event_manager.interval_counters("tick").tolist() == counters
+
+
 def test_global_interval_fires_all_envs_together(make_env) -> None:
     env = make_env(
         num_envs=3,

@@ -119,6 +119,11 @@ def test_rigid_pose_and_world_velocity_round_trip() -> None:
         assert np.allclose(res[3:], vel[env, :3].numpy(), atol=1e-6)
     # the free joint stores env 0's angular velocity in the body frame: world x -> body -y... after 90 deg about z
     assert scene.sim.qvel[0, cube.dof_adr + 3 : cube.dof_adr + 6].tolist() == pytest.approx([0.0, -0.5, 0.0], abs=1e-9)
+    # a push without spin (the fast path) stops the spin and keeps the world-frame linear part
+    push = torch.tensor([[0.2, -0.1, 0.0, 0.0, 0.0, 0.0]] * 3)
+    cube.set_velocity(push)
+    assert torch.allclose(cube.get_velocity(), push, atol=1e-6)
+    assert not scene.sim.qvel[:, cube.dof_adr + 3 : cube.dof_adr + 6].any()
     cube.set_local_pose(pose[[2]] + torch.tensor([[0.0, 0.0, 1.0, 0, 0, 0, 0]]), env_ids=[2])
     assert torch.equal(cube.get_local_pose()[:2], pose[:2].float())
 

@@ -88,6 +88,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._elapsed_np = self._elapsed_steps.numpy()  # same memory: the cheap increment of phase 5
         # phase 10 asks the task for truncations only when it overrides check_truncated (the default has none)
         self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
+        self._default_reward = type(self).get_reward is TaskApi.get_reward  # zeros: phase 8 skips it
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
         # scene, managers, spaces, the action check
         env_build.build_managers(self, env_build.setup_scene(self, build_scene))
@@ -175,9 +176,10 @@ class EmbodiedEnv(TaskApi, gym.Env):
         ):
             if manager is not None:
                 manager.reset(ids)
-        # 8. counters
-        self._elapsed_steps[ids] = 0
-        self._episode_success[ids] = False
+        # 8. counters (through their numpy views: a torch index write costs several times more)
+        rows = ids.cpu().numpy()
+        self._elapsed_np[rows] = 0
+        self._episode_success.numpy()[rows] = False
         # 9. observation, info, first-frame recording
         obs = self.get_obs()
         info = self.get_info()
@@ -214,41 +216,52 @@ class EmbodiedEnv(TaskApi, gym.Env):
 
     def _reward(self, obs: Any, command: Any, info: dict) -> torch.Tensor:
         """Phase 8: ``get_reward`` combined with the reward functors (terms in ``info["rewards"]``)."""
-        reward = self.get_reward(obs, command, info)
-        if reward.dtype is not torch.float32:
-            reward = reward.float()
         if self.reward_manager is not None and len(self.reward_manager):
-            reward, terms = self.reward_manager.compute(obs, command, info, reward)
+            # the default task reward is zeros: the terms' sum alone (one op fewer per step)
+            base = None if self._default_reward else self._task_reward(obs, command, info)
+            reward, terms = self.reward_manager.compute(obs, command, info, base)
             info["rewards"] = terms
-        return reward
+            return reward
+        return self._task_reward(obs, command, info)
+
+    def _task_reward(self, obs: Any, command: Any, info: dict) -> torch.Tensor:
+        reward = self.get_reward(obs, command, info)
+        return reward if reward.dtype is torch.float32 else reward.float()
 
     def _dones(
         self, obs: Any, info: dict, diverged: list[int]
     ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
         ``truncated = check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
-        success = info["success"]
+        success, fail = info["success"], info["fail"]
+        # numpy, then one from_numpy per tensor: a torch op costs ~1 us, and several times
+        # that right after the physics call, whose data has pushed this code out of the caches
+        flags = np.zeros((3, self.num_envs), dtype=bool)  # terminated; time limit or diverged; diverged
+        host = _host_flags(success, fail, self.num_envs)
         if self.cfg.ignore_terminations:
-            terminated = torch.zeros_like(success)
+            terminated = torch.from_numpy(flags[0]) if host else torch.zeros_like(success)
+        elif host:
+            terminated = torch.from_numpy(np.logical_or(host[0], host[1], out=flags[0]))
         else:
-            terminated = success | info["fail"]
-        # numpy, then one from_numpy per tensor: a torch op costs ~1 us, more between physics calls
-        flags = np.zeros((2, self.num_envs), dtype=bool)  # time limit or diverged; diverged
-        np.greater_equal(self._elapsed_np, self.max_episode_steps, out=flags[0])
+            terminated = success | fail
+        np.greater_equal(self._elapsed_np, self.max_episode_steps, out=flags[1])
         if diverged:
-            flags[:, diverged] = True
+            flags[1:, diverged] = True
             warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
-        truncated = torch.from_numpy(flags[0])
-        info["diverged"] = torch.from_numpy(flags[1])
+        truncated = torch.from_numpy(flags[1])
+        info["diverged"] = torch.from_numpy(flags[2])
         if self._task_truncates:
             truncated = self.check_truncated(obs, info) | truncated
-            any_truncated = _any(truncated)
-        else:
-            any_truncated = np.count_nonzero(flags[0]) > 0  # count_nonzero: ~0.1 us, ndarray.any() ~0.7
-        if not any_truncated and not _any(terminated):
+        elif host:  # count_nonzero: ~0.1 us, ndarray.any() ~0.7
+            if not np.count_nonzero(flags[:2]):
+                return terminated, truncated, None
+            done = np.logical_or(flags[0], flags[1])
+            self._episode_success.numpy()[done] = host[0][done]
+            return terminated, truncated, torch.from_numpy(done)
+        if not _any(truncated) and not _any(terminated):
             return terminated, truncated, None
         dones = terminated | truncated
-        self._episode_success[dones] = success[dones]
+        self._episode_success[dones] = success[dones].to(self._episode_success.device)
         return terminated, truncated, dones
 
     def _auto_reset(self, obs: Any, dones: torch.Tensor, info: dict) -> Any:
@@ -256,7 +269,8 @@ class EmbodiedEnv(TaskApi, gym.Env):
         info["final_obs"] = obs
         info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs",)}
         info["_final_obs"] = dones.clone()
-        new_obs, _ = self.reset(options={"reset_ids": torch.nonzero(dones).flatten()})
+        done_ids = torch.from_numpy(np.flatnonzero(dones.numpy())) if dones.is_cpu else torch.nonzero(dones).flatten()
+        new_obs, _ = self.reset(options={"reset_ids": done_ids})
         return new_obs
 
     def _commit_or_discard(self, env_ids: torch.Tensor, save: bool) -> None:
@@ -302,6 +316,22 @@ class EmbodiedEnv(TaskApi, gym.Env):
             sensor.close()
         if errors:
             raise errors[0]
+
+
+def _host_flags(success: Any, fail: Any, num_envs: int) -> Optional[tuple[np.ndarray, np.ndarray]]:
+    """The numpy views of the task's ``success``/``fail`` when both are ``(num_envs,)``
+    CPU bool tensors (the fast path of phase 10), else ``None``."""
+    if (
+        type(success) is torch.Tensor
+        and type(fail) is torch.Tensor
+        and success.dtype is torch.bool
+        and fail.dtype is torch.bool
+        and success.is_cpu
+        and fail.is_cpu
+        and success.shape == fail.shape == (num_envs,)
+    ):
+        return success.numpy(), fail.numpy()
+    return None
 
 
 def _any(flags: torch.Tensor) -> bool:

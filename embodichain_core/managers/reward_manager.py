@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Optional
 
 import torch
 
@@ -24,9 +24,16 @@ class RewardManager(ManagerBase[RewardCfg]):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'replace', got {cfg.mode!r}")
         super()._check(func, cfg, where)
 
-    def compute(self, obs: Any, action: Any, info: dict, base: torch.Tensor) -> tuple[torch.Tensor, dict]:
-        """Return ``(total, {term: unweighted value})`` starting from the task's ``base`` reward."""
-        total = base.clone()
+    def compute(
+        self, obs: Any, action: Any, info: dict, base: Optional[torch.Tensor]
+    ) -> tuple[torch.Tensor, dict]:
+        """Return ``(total, {term: unweighted value})`` starting from the task's ``base``
+        reward (``None``: zeros, the default task reward, added without a tensor op).
+
+        One tensor op per term: the first term's product starts the total, the others
+        are added in place with their weight as ``alpha``.
+        """
+        total = None if base is None else base.clone()
         terms: dict[str, torch.Tensor] = {}
         env = self._env
         n = env.num_envs
@@ -44,11 +51,12 @@ class RewardManager(ManagerBase[RewardCfg]):
             if value.shape != (n,):
                 raise ValueError(f"{entry.path}: a reward term must have shape ({n},), got {tuple(value.shape)}")
             terms[name] = value
-            weighted = float(cfg.weight) * value
-            if cfg.mode == "replace":
-                total = weighted  # a fresh tensor: the product
+            if cfg.mode == "replace" or total is None:
+                total = float(cfg.weight) * value  # a fresh tensor: the product
             else:
-                total += weighted  # total is this call's own tensor (a clone, or a product)
+                total.add_(value, alpha=float(cfg.weight))  # total is this call's own tensor
+        if total is None:  # no term at all: the default task reward
+            total = torch.zeros(n, dtype=torch.float32, device=env.device)
         return total, terms
 
     def summary_rows(self) -> list[tuple[str, str, str]]:

@@ -122,10 +122,13 @@ class RigidObject(Entity):
             return
         ids = self._ids(env_ids)
         rows, vel = ids.numpy(), as_array(velocity, len(ids), 6)
-        quat = self.sim.arrays["qpos"][rows, self.qpos_adr + 3 : self.qpos_adr + 7]
         qvel = self.sim.arrays["qvel"]
         qvel[rows, self.dof_adr : self.dof_adr + 3] = vel[:, :3]
-        qvel[rows, self.dof_adr + 3 : self.dof_adr + 6] = _rotate_inverse(quat, vel[:, 3:])
+        angular = vel[:, 3:]
+        if np.count_nonzero(angular):  # a push (no spin) needs no rotation into the body frames
+            quat = self.sim.arrays["qpos"][rows, self.qpos_adr + 3 : self.qpos_adr + 7]
+            angular = _rotate_inverse(quat, angular)
+        qvel[rows, self.dof_adr + 3 : self.dof_adr + 6] = angular
         self.sim.mark_dirty(rows)
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
