@@ -15,7 +15,12 @@ starting from the env's state and driven by the same joint targets, stepping
 ``sim_steps_per_control * physics_substeps`` MuJoCo steps per env step. Its loop
 is the least any env can do: write ``ctrl``, call ``Batch.step``.
 
-Env and raw runs are interleaved, ``--repeats`` times after a warm-up; medians
+A third contender, the matched twin (:mod:`matched_twin`), does the same physics work
+as the env in plain numpy (the same pushes, resets and forwards), so
+``ratio_matched = t_matched / t_env`` is what the framework itself costs, where
+``ratio`` also counts the physics the manager load adds (sliding, colliding cubes).
+
+Env, raw and twin runs are interleaved, ``--repeats`` times after a warm-up; medians
 are reported. ``ratio = env env-steps/s / raw env-steps/s`` and
 ``manager_overhead_ms = (t_env - t_raw) / calls``.
 

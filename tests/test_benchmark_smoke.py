@@ -147,12 +147,16 @@ def test_matched_twin_repeats_the_envs_pushes_and_resets():
     before = twin.qpos.copy()
     twin.step(action)
     twin.step(action)  # env 0 reaches step 100 of its episode and restarts
-    assert twin.elapsed.tolist() == [0, 7] and twin.pushes.tolist() == [0, 2]
+    assert twin.elapsed.tolist() == [0, 7]
+    assert twin.pushes.tolist() == [0, 2]
     assert twin.dirty.tolist() == [True, False]
     for adr, _ in twin.cubes:
         xy, z, quat = twin.qpos[0, adr : adr + 2], twin.qpos[0, adr + 2], twin.qpos[0, adr + 3 : adr + 7]
-        assert np.all(xy >= work.xy_low) and np.all(xy <= work.xy_high)
-        assert z == work.cube_z and quat[1] == quat[2] == 0.0 and np.isclose(np.linalg.norm(quat), 1.0)
+        assert np.all(xy >= work.xy_low)
+        assert np.all(xy <= work.xy_high)
+        assert z == work.cube_z
+        assert quat[1] == quat[2] == 0.0
+        assert np.isclose(np.linalg.norm(quat), 1.0)
         assert not np.allclose(twin.qpos[0, adr : adr + 2], before[0, adr : adr + 2])
     assert np.all(np.abs(twin.qpos[0, twin.arm_qpos] - twin.arm_default) <= work.arm_noise)
     for _ in range(work.push_interval - 2):
@@ -160,6 +164,8 @@ def test_matched_twin_repeats_the_envs_pushes_and_resets():
     assert twin.pushes.tolist() == [8, 10]  # env 1 is pushed on step 10 of its episode
     for _, dof in twin.cubes:
         vel = twin.qvel[1, dof : dof + 6]
-        assert np.any(vel[:2] != 0) and np.all(np.abs(vel[:2]) <= work.max_speed) and not vel[2:].any()
+        assert np.any(vel[:2] != 0)
+        assert np.all(np.abs(vel[:2]) <= work.max_speed)
+        assert not vel[2:].any()
     assert twin.dirty.tolist() == [False, True]
     env.close()

@@ -114,6 +114,8 @@ def test_interval_schedule_matches_per_env_counters_under_random_resets(make_env
             for i in resets:
                 counters[i] = 0
         assert env.event_manager.interval_counters("tick").tolist() == counters
+    with pytest.raises(KeyError, match=r"'tock' is not an interval event; interval events: \['tick'\]"):
+        env.event_manager.interval_counters("tock")
 
 
 def test_global_interval_fires_all_envs_together(make_env) -> None:

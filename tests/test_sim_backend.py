@@ -101,3 +101,18 @@ def test_batch_ids_are_sorted_unique_int32_or_none_for_every_env() -> None:
     got = batch_ids([0, 5], 2)  # as many ids as envs, but not every env: left for mujoco.batch to reject
     assert got is not None
     assert got.tolist() == [0, 5]
+
+
+def test_a_non_finite_control_or_position_reports_the_env(make_env) -> None:
+    """MuJoCo ignores a non-finite control (it warns and steps on); the scan after the step
+    still reports the env, as it does a non-finite position."""
+    env = make_env(num_envs=3)
+    env.reset()
+    sim = env.sim
+    sim.arrays["ctrl"][1, 0] = float("nan")
+    assert sim.step(1) == [1]
+    sim.reset([1])
+    sim.arrays["qpos"][2, 0] = float("inf")
+    sim.mark_dirty([2])
+    assert sim.step(1) == [2]
+    assert sim.step(1) == [2]  # still non-finite: reported until the env is reset

@@ -26,6 +26,7 @@ from embodichain_core.config.sections import check_event_mode, check_interval
 from embodichain_core.managers.cfg import EventCfg
 from embodichain_core.managers.manager_base import FunctorEntry, ManagerBase
 from embodichain_core.managers.param_rules import check_param_types
+from embodichain_core.sim.backend.env_rows import np_ids
 
 
 class EventManager(ManagerBase[EventCfg]):
@@ -98,12 +99,14 @@ class EventManager(ManagerBase[EventCfg]):
         reset by interval event ``name``: ``(num_envs,)``, or ``(1,)`` for a global one."""
         if name in self._global_start:
             return np.array([self._tick - self._global_start[name]], dtype=np.int64)
+        if name not in self._phases:
+            raise KeyError(f"{name!r} is not an interval event; interval events: {self.functors_of('interval')}")
         return self._phases[name].counters(self._tick)
 
     def reset(self, env_ids: Any = None) -> dict:
         """Restart the per-env interval counters and reset class functors."""
         if self._global_start or self._phases:
-            rows = None if env_ids is None else torch.as_tensor(env_ids).reshape(-1).long().cpu().numpy()
+            rows = None if env_ids is None else np_ids(env_ids, self._env.num_envs)
             for name in self._global_start:
                 if rows is None or len(rows) == self._env.num_envs:
                     self._global_start[name] = self._tick
@@ -153,7 +156,8 @@ class _Phases:
             self.phase[:] = residue
             self._due.clear()
             return
-        for old in set(self.phase[rows].tolist()) | {residue}:
+        self._due.pop(residue, None)
+        for old in self.phase[rows].tolist():  # few rows at a time: cheaper than a set of them
             self._due.pop(old, None)
         self.start[rows] = tick
         self.phase[rows] = residue

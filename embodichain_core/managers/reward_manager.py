@@ -24,9 +24,7 @@ class RewardManager(ManagerBase[RewardCfg]):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'replace', got {cfg.mode!r}")
         super()._check(func, cfg, where)
 
-    def compute(
-        self, obs: Any, action: Any, info: dict, base: Optional[torch.Tensor]
-    ) -> tuple[torch.Tensor, dict]:
+    def compute(self, obs: Any, action: Any, info: dict, base: Optional[torch.Tensor]) -> tuple[torch.Tensor, dict]:
         """Return ``(total, {term: unweighted value})`` starting from the task's ``base``
         reward (``None``: zeros, the default task reward, added without a tensor op).
 

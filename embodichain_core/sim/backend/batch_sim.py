@@ -38,11 +38,6 @@ from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS,
 
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 _NONE = int(mujoco.mjtStage.mjSTAGE_NONE)
-#: The head of a state row the divergence scan reads: time, qpos, qvel and act (the
-#: integrated quantities; a state row stores its parts in the order of these bits).
-_INTEGRATED = int(
-    mujoco.mjtState.mjSTATE_TIME | mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL | mujoco.mjtState.mjSTATE_ACT
-)
 _SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
 CAPABILITIES = SimCapabilities(
     subset_step=True, per_env_models=True, host_arrays=True, float64=True, deterministic=True
@@ -83,7 +78,6 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         self.dtype = torch.float64
         self.capabilities = CAPABILITIES
         self.env_models: Optional[list[mujoco.MjModel]] = None
-        self._scan_cols = int(mujoco.mj_stateSize(model, _INTEGRATED))  # see _step_rows
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
         self._const_dirty = np.zeros(self.num_envs, dtype=bool)  # full mj_setConst due
@@ -171,12 +165,7 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
             self.batch.step(ids, nstep * self.substeps, _VEL)
         except mjbatch.SimulationError as err:
             failed = [int(i) for i in err.ids]
-        # A non-finite value that acts on the physics (a control, a warm start, a mocap
-        # pose in contact) reaches qacc and so qvel within a step, and MuJoCo's own checks
-        # catch most first. So the scan reads only the integrated head of each row: after
-        # a step the rows are cold in this core's cache, and whole rows cost ~4x more.
-        head = self.batch.state[:, : self._scan_cols]
-        state = head if rows is None else head[rows]
+        state = self.batch.state if rows is None else self.batch.state[rows]
         if math.isfinite(state.sum()):  # a sum is finite only if every value is (cheap prefilter)
             return failed
         bad = ~np.isfinite(state).all(axis=1)
