@@ -67,6 +67,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
     ):
         self.event_manager = self.observation_manager = self.reward_manager = None
         self.action_manager = self.dataset_manager = None
+        self._pre_terms = self._post_terms = self._obs_terms = self._reward_terms = False  # set once built
         self.affordance_datas: dict[str, Any] = {}
         self._detached_uids_for_reset: list[str] = []
         self.rollout_buffer: Optional[RolloutBuffer] = None
@@ -92,6 +93,11 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
         # scene, managers, spaces, the action check
         env_build.build_managers(self, env_build.setup_scene(self, build_scene))
+        # which manager phases have work (managers are fixed once built): one flag test per step
+        self._pre_terms = bool(self.action_manager is not None and len(self.action_manager))
+        self._post_terms = bool(self.action_manager is not None and self.action_manager.terms("post"))
+        self._obs_terms = bool(self.observation_manager is not None and len(self.observation_manager))
+        self._reward_terms = bool(self.reward_manager is not None and len(self.reward_manager))
         self._init_obs = obs = self.get_obs()
         self.single_observation_space = space_from_obs(obs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -113,7 +119,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         action = self._check_action(action)
         # 1. action terms (pre): policy action -> command
         command = action
-        if self.action_manager is not None and len(self.action_manager):
+        if self._pre_terms:
             command = self.action_manager.process_action(action, "pre")
         # 2. apply the command: joint targets / efforts into the simulation
         self._apply_command(command)
@@ -131,7 +137,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         reward = self._reward(obs, command, info)
         # 9. action terms (post)
         self.last_action = command
-        if self.action_manager is not None and self.action_manager.terms("post"):
+        if self._post_terms:
             self.last_action = self.action_manager.process_action(command, "post")
         # 10. dones (``dones`` is None when no env is done)
         terminated, truncated, dones = self._dones(obs, info, diverged)
@@ -212,11 +218,11 @@ class EmbodiedEnv(TaskApi, gym.Env):
             for uid, sensor in self.sensors.items():
                 sensor.update()
                 obs["sensor"][uid] = sensor.get_data()
-        return self.observation_manager.compute(obs) if self.observation_manager else obs
+        return self.observation_manager.compute(obs) if self._obs_terms else obs
 
     def _reward(self, obs: Any, command: Any, info: dict) -> torch.Tensor:
         """Phase 8: ``get_reward`` combined with the reward functors (terms in ``info["rewards"]``)."""
-        if self.reward_manager is not None and len(self.reward_manager):
+        if self._reward_terms:
             # the default task reward is zeros: the terms' sum alone (one op fewer per step)
             base = None if self._default_reward else self._task_reward(obs, command, info)
             reward, terms = self.reward_manager.compute(obs, command, info, base)
