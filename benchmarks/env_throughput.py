@@ -54,6 +54,8 @@ from embodichain_core.sim.shapes import CubeCfg  # noqa: E402
 
 DEFAULT_OUT = os.path.join("benchmarks", "results", "env_throughput.json")
 TARGET_RATIO_AT_64 = 0.7
+#: Issue 16's targets (num_envs -> ratio), checked against both baselines in the summary.
+STEP_OVERHEAD_TARGETS = {1: 0.6, 16: 0.8, 64: 0.9}
 TABLE_TOP = 0.32
 CUBE = 0.05
 CUBE_UIDS = ("cube0", "cube1", "cube2")
@@ -420,6 +422,21 @@ def _breakdown(sim: Any, run_env: Any, run_raw: Any, steps: int, repeats: int) -
     }
 
 
+def _step_overhead_verdicts(records: list[dict[str, Any]]) -> list[str]:
+    """One line per measured num_envs with a target in :data:`STEP_OVERHEAD_TARGETS`."""
+    out = []
+    for rec in records:
+        target = STEP_OVERHEAD_TARGETS.get(rec["num_envs"])
+        if target is None:
+            continue
+        marks = [
+            f"{name} {rec[key]:.3f} {'meets' if rec[key] >= target else 'MISSES'}"
+            for name, key in (("ratio", "ratio"), ("ratio_matched", "ratio_matched"))
+        ]
+        out.append(f"num_envs={rec['num_envs']}: target >= {target}: " + ", ".join(marks))
+    return out
+
+
 def _loadavg() -> Optional[list[float]]:
     """1/5/15-minute load averages (a busy neighbour shows here), or None."""
     try:
@@ -597,6 +614,7 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             "managers": "2 reset events, 1 interval event, 3 observation add functors, 3 reward terms",
             "raw_batch": "persistent=True, stage=mjSTAGE_VEL, nthread=min(cpu_count, num_envs)",
             "target_ratio_at_64_envs": TARGET_RATIO_AT_64,
+            "step_overhead_targets": {str(k): v for k, v in STEP_OVERHEAD_TARGETS.items()},
         },
         "machine": dict(machine_info(), loadavg_before=load_before, loadavg_after=_loadavg()),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -617,6 +635,9 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
     if at64 and not args.quick:
         verdict = "meets" if at64[0]["ratio"] >= TARGET_RATIO_AT_64 else "MISSES"
         print(f"\nnum_envs=64: ratio {at64[0]['ratio']:.3f} {verdict} the target >= {TARGET_RATIO_AT_64}")
+    if not args.quick:
+        for line in _step_overhead_verdicts(records):
+            print(line)
     if args.out:
         print(f"wrote {write_json(args.out, payload)}")
     return payload

@@ -169,3 +169,22 @@ def test_matched_twin_repeats_the_envs_pushes_and_resets():
         assert not vel[2:].any()
     assert twin.dirty.tolist() == [False, True]
     env.close()
+
+
+def test_step_overhead_verdicts_judge_both_baselines():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    try:
+        from env_throughput import _step_overhead_verdicts
+    finally:
+        sys.path.pop(0)
+    lines = _step_overhead_verdicts(
+        [
+            {"num_envs": 16, "ratio": 0.78, "ratio_matched": 0.86},
+            {"num_envs": 2, "ratio": 0.1, "ratio_matched": 0.1},  # no target at 2 envs
+            {"num_envs": 64, "ratio": 0.9, "ratio_matched": 0.95},
+        ]
+    )
+    assert lines == [
+        "num_envs=16: target >= 0.8: ratio 0.780 MISSES, ratio_matched 0.860 meets",
+        "num_envs=64: target >= 0.9: ratio 0.900 meets, ratio_matched 0.950 meets",
+    ]
