@@ -55,6 +55,20 @@ def interleaved_timings(
     return out
 
 
+def cycling(step: Callable[[Any], Any], actions: Sequence[Any]) -> Callable[[int], None]:
+    """``run(n)``: ``n`` calls of ``step``, cycling through ``actions`` and going on where the
+    previous ``run`` stopped (every contender of a benchmark sees the same sequence)."""
+    state = {"k": 0}
+
+    def run(n: int) -> None:
+        k = state["k"]
+        for i in range(k, k + n):
+            step(actions[i % len(actions)])
+        state["k"] = k + n
+
+    return run
+
+
 def median(values: Sequence[float]) -> float:
     return float(statistics.median(values))
 

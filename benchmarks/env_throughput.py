@@ -44,7 +44,16 @@ import mujoco  # noqa: E402
 import mujoco.batch as mjbatch  # noqa: E402
 import torch  # noqa: E402
 
-from common import interleaved_timings, machine_info, median, print_table, seven_dof_arm_mjcf, spread, write_json  # noqa: E402
+from common import (
+    cycling,
+    interleaved_timings,
+    machine_info,
+    median,
+    print_table,
+    seven_dof_arm_mjcf,
+    spread,
+    write_json,
+)  # noqa: E402
 from matched_twin import MatchedTwin, Workload  # noqa: E402
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg  # noqa: E402
@@ -277,26 +286,13 @@ def measure(
     stage = mujoco.mjtStage.mjSTAGE_VEL
 
     twin = MatchedTwin(base, nthread, nstep, stagger, Workload(episode_length=episode_length, **WORKLOAD), seed)
-    counter = {"env": 0, "raw": 0, "matched": 0}
 
-    def run_env(n: int) -> None:
-        k = counter["env"]
-        for i in range(k, k + n):
-            env.step(actions[i % ACTION_PERIOD])
-        counter["env"] = k + n
+    def raw_step(action: Any) -> None:
+        ctrl[:, arm_acts] = action
+        raw.step(nstep=nstep, stage=stage)
 
-    def run_raw(n: int) -> None:
-        k = counter["raw"]
-        for i in range(k, k + n):
-            ctrl[:, arm_acts] = actions_np[i % ACTION_PERIOD]
-            raw.step(nstep=nstep, stage=stage)
-        counter["raw"] = k + n
-
-    def run_matched(n: int) -> None:
-        k = counter["matched"]
-        for i in range(k, k + n):
-            twin.step(actions_np[i % ACTION_PERIOD])
-        counter["matched"] = k + n
+    run_env, run_raw = cycling(env.step, actions), cycling(raw_step, actions_np)
+    run_matched = cycling(twin.step, actions_np)
 
     # warm-up (also sizes the timed window when --steps is not given)
     t_env_w = _timed(run_env, warmup_steps)
@@ -529,9 +525,8 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
 def profile(num_envs: int, sim_steps_per_control: int, steps: int, episode_length: int, seed: int = 0) -> None:
     """Print where ``env.step`` spends its time at ``num_envs``."""
     env = make_env(num_envs, sim_steps_per_control, episode_length, seed)
-    actions = make_actions(env)
-    for i in range(50):
-        env.step(actions[i % ACTION_PERIOD])
+    run = cycling(env.step, make_actions(env))
+    run(50)
     try:
         from pyinstrument import Profiler
     except ImportError:
@@ -540,8 +535,7 @@ def profile(num_envs: int, sim_steps_per_control: int, steps: int, episode_lengt
     if Profiler is not None:
         prof = Profiler(interval=0.0001)
         prof.start()
-        for i in range(steps):
-            env.step(actions[i % ACTION_PERIOD])
+        run(steps)
         prof.stop()
         print(prof.output_text(unicode=False, color=False, show_all=False))
     else:
@@ -550,8 +544,7 @@ def profile(num_envs: int, sim_steps_per_control: int, steps: int, episode_lengt
 
         prof = cProfile.Profile()
         prof.enable()
-        for i in range(steps):
-            env.step(actions[i % ACTION_PERIOD])
+        run(steps)
         prof.disable()
         pstats.Stats(prof).sort_stats("cumulative").print_stats(40)
     env.close()

@@ -49,7 +49,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 from gymnasium.envs.mujoco import MujocoEnv  # noqa: E402
 
-from common import interleaved_timings, machine_info, median, print_table, spread, write_json  # noqa: E402
+from common import cycling, interleaved_timings, machine_info, median, print_table, spread, write_json  # noqa: E402
 
 from embodichain_core.demo import demo_cfg  # noqa: E402
 from embodichain_core.envs import EmbodiedEnv  # noqa: E402
@@ -147,27 +147,15 @@ def contenders(num_envs: int, with_async: bool, folder: str, seed: int = 0) -> t
     make = gym_factory(ours, folder)
     sync = gym.vector.SyncVectorEnv([make] * num_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP)
     sync.reset(seed=seed)
-    runs: dict[str, Callable[[int], None]] = {"ours": _looper(ours.step, acts_t), "sync": _looper(sync.step, acts_np)}
+    runs: dict[str, Callable[[int], None]] = {"ours": cycling(ours.step, acts_t), "sync": cycling(sync.step, acts_np)}
     closers: list[Callable] = [ours.close, sync.close]
     if with_async:
         async_env = gym.vector.AsyncVectorEnv([make] * num_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP)
         async_env.reset(seed=seed)
-        runs["async"] = _looper(async_env.step, acts_np)
+        runs["async"] = cycling(async_env.step, acts_np)
         closers.append(async_env.close)
     runs["raw"] = _raw_loop(ours, acts_np)
     return runs, closers, {"ours": ours, "sync": sync}
-
-
-def _looper(step: Callable[[Any], Any], actions: list) -> Callable[[int], None]:
-    state = {"k": 0}
-
-    def run(n: int) -> None:
-        k = state["k"]
-        for i in range(k, k + n):
-            step(actions[i % N_ACTIONS])
-        state["k"] = k + n
-
-    return run
 
 
 def _raw_loop(env: EmbodiedEnv, actions: np.ndarray) -> Callable[[int], None]:
@@ -190,7 +178,7 @@ def _raw_loop(env: EmbodiedEnv, actions: np.ndarray) -> Callable[[int], None]:
         ctrl[:, cols] = action
         batch.step(nstep=nstep, stage=stage)
 
-    return _looper(step, list(actions.astype(np.float64)))
+    return cycling(step, list(actions.astype(np.float64)))
 
 
 def outside_physics(runs: dict, envs: dict, steps: int, repeats: int) -> dict[str, float]:

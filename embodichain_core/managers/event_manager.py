@@ -137,30 +137,26 @@ class _Phases:
     def __init__(self, num_envs: int, interval: int):
         self.interval = interval
         self.start = np.zeros(num_envs, dtype=np.int64)  # the tick of each env's last reset
-        self.phase = np.zeros(num_envs, dtype=np.int64)  # start % interval
-        self._due: dict[int, np.ndarray] = {}
+        self._due: dict[int, np.ndarray] = {}  # residue -> the envs whose start has it
 
     def due(self, tick: int) -> np.ndarray:
         """The envs whose counter reaches a multiple of the interval on ``tick`` (sorted)."""
         residue = tick % self.interval
         due = self._due.get(residue)
         if due is None:
-            due = self._due[residue] = np.flatnonzero(self.phase == residue)
+            due = self._due[residue] = np.flatnonzero(self.start % self.interval == residue)
         return due
 
     def restart(self, rows: np.ndarray | None, tick: int) -> None:
         """The counters of ``rows`` (None: every env) start again from ``tick``."""
-        residue = tick % self.interval
         if rows is None:
             self.start[:] = tick
-            self.phase[:] = residue
             self._due.clear()
             return
-        self._due.pop(residue, None)
-        for old in self.phase[rows].tolist():  # few rows at a time: cheaper than a set of them
-            self._due.pop(old, None)
+        self._due.pop(tick % self.interval, None)
+        for old in self.start[rows].tolist():  # few rows at a time: cheaper than a set of them
+            self._due.pop(old % self.interval, None)
         self.start[rows] = tick
-        self.phase[rows] = residue
 
     def counters(self, tick: int) -> np.ndarray:
         return tick - self.start
