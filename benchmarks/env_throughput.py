@@ -55,6 +55,7 @@ from common import (
     write_json,
 )  # noqa: E402
 from matched_twin import MatchedTwin, Workload  # noqa: E402
+from step_breakdown import breakdown as step_breakdown  # noqa: E402
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg  # noqa: E402
 from embodichain_core.managers import EventCfg, ObservationCfg, RewardCfg, SceneEntityCfg  # noqa: E402
@@ -262,8 +263,9 @@ def measure(
 ) -> dict[str, Any]:
     """One configuration: env and raw timings, interleaved; returns the JSON record.
 
-    With ``breakdown``, a second, instrumented pass times the MuJoCo calls inside
-    ``env.step`` (reported under ``breakdown``; the headline numbers come from the
+    With ``breakdown``, a second, instrumented pass (:mod:`step_breakdown`) times the
+    MuJoCo calls and the functors inside ``env.step`` (reported under ``breakdown``,
+    with the ceiling ratio; the headline numbers come from the
     uninstrumented pass).
     """
     env = make_env(num_envs, sim_steps_per_control, episode_length, seed)
@@ -312,7 +314,7 @@ def measure(
     env_sps = steps * num_envs / t_env
     raw_sps = steps * num_envs / t_raw
     paired = [r / e for e, r in zip(times["env"], times["raw"])]
-    parts = _breakdown(base.sim, run_env, run_raw, steps, min(3, repeats)) if breakdown else None
+    parts = step_breakdown(base, run_env, run_raw, steps, min(3, repeats)) if breakdown else None
     env.close()
     return {
         "num_envs": num_envs,
@@ -344,80 +346,6 @@ def measure(
     }
 
 
-class _TimedBatch:
-    """Stands in for ``BatchSim.batch``: forwards everything, times step/forward/reset."""
-
-    def __init__(self, batch: Any):
-        self._batch = batch
-        self.acc = {"step": 0.0, "forward": 0.0, "reset": 0.0}
-        self.calls = {"step": 0, "forward": 0, "reset": 0}
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._batch, name)
-
-    def _timed(self, name: str, *args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
-        try:
-            return getattr(self._batch, name)(*args, **kwargs)
-        finally:
-            self.acc[name] += time.perf_counter() - start
-            self.calls[name] += 1
-
-    def step(self, *args: Any, **kwargs: Any) -> Any:
-        return self._timed("step", *args, **kwargs)
-
-    def forward(self, *args: Any, **kwargs: Any) -> Any:
-        return self._timed("forward", *args, **kwargs)
-
-    def reset(self, *args: Any, **kwargs: Any) -> Any:
-        return self._timed("reset", *args, **kwargs)
-
-
-def _breakdown(sim: Any, run_env: Any, run_raw: Any, steps: int, repeats: int) -> Optional[dict[str, Any]]:
-    """Where an env step's time goes: MuJoCo calls inside it vs the Python around them.
-
-    ``physics_excess_ms`` (env ``Batch.step`` minus raw ``Batch.step`` per call) is
-    physics the env really does more of (cubes pushed and reset keep contacts
-    active) plus thread-pool wake-ups after the Python part of the step.
-    """
-    batch = sim.__dict__.get("batch")
-    if batch is None:  # BatchSim changed shape; nothing to instrument
-        return None
-    timed = _TimedBatch(batch)
-    sim.__dict__["batch"] = timed
-    rows: dict[str, list[float]] = {k: [] for k in ("env", "step", "forward", "reset", "raw")}
-    calls = {"step": 0, "forward": 0, "reset": 0}
-    try:
-        for _ in range(max(1, repeats)):
-            for k in timed.acc:
-                timed.acc[k] = 0.0
-                timed.calls[k] = 0
-            rows["env"].append(_timed(run_env, steps))
-            for k in ("step", "forward", "reset"):
-                rows[k].append(timed.acc[k])
-                calls[k] += timed.calls[k]
-            rows["raw"].append(_timed(run_raw, steps))
-    finally:
-        sim.__dict__["batch"] = batch
-    per_call = {k: median(v) / steps * 1e3 for k, v in rows.items()}
-    n = max(1, repeats) * steps
-    python_ms = [
-        (e - s - f - r) / steps * 1e3 for e, s, f, r in zip(rows["env"], rows["step"], rows["forward"], rows["reset"])
-    ]
-    return {
-        "repeats": max(1, repeats),
-        "env_ms_per_call": per_call["env"],
-        "env_batch_step_ms": per_call["step"],
-        "env_batch_forward_ms": per_call["forward"],
-        "env_batch_reset_ms": per_call["reset"],
-        "forward_calls_per_step": calls["forward"] / n,
-        "reset_calls_per_step": calls["reset"] / n,
-        "env_python_ms": median(python_ms),
-        "raw_ms_per_call": per_call["raw"],
-        "physics_excess_ms": per_call["step"] - per_call["raw"],
-    }
-
-
 def _step_overhead_verdicts(records: list[dict[str, Any]]) -> list[str]:
     """One line per measured num_envs with a target in :data:`STEP_OVERHEAD_TARGETS`."""
     out = []
@@ -429,6 +357,9 @@ def _step_overhead_verdicts(records: list[dict[str, Any]]) -> list[str]:
             f"{name} {rec[key]:.3f} {'meets' if rec[key] >= target else 'MISSES'}"
             for name, key in (("ratio", "ratio"), ("ratio_matched", "ratio_matched"))
         ]
+        ceiling = (rec.get("breakdown") or {}).get("ceiling_ratio")
+        if ceiling is not None:  # what the ratio would be if the framework's Python were free
+            marks.append(f"ceiling {ceiling:.3f}{'' if ceiling >= target else ' (below the target)'}")
         out.append(f"num_envs={rec['num_envs']}: target >= {target}: " + ", ".join(marks))
     return out
 
@@ -559,6 +490,9 @@ BREAKDOWN_COLUMNS = [
     ("env_batch_forward_ms", "forward", ".3f"),
     ("env_batch_reset_ms", "reset", ".3f"),
     ("env_python_ms", "Python", ".3f"),
+    ("task_functor_ms", "of which task functors", ".3f"),
+    ("framework_python_ms", "framework Python", ".3f"),
+    ("ceiling_ratio", "ceiling", ".3f"),
 ]
 
 

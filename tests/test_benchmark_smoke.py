@@ -48,6 +48,11 @@ BREAKDOWN_KEYS = {
     "physics_excess_ms",
     "forward_calls_per_step",
     "reset_calls_per_step",
+    "functors_ms",
+    "functor_entity_ms",
+    "task_functor_ms",
+    "framework_python_ms",
+    "ceiling_ratio",
 }
 
 
