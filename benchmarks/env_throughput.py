@@ -52,6 +52,7 @@ from common import (
     print_table,
     seven_dof_arm_mjcf,
     spread,
+    time_once,
     write_json,
 )  # noqa: E402
 from matched_twin import MatchedTwin, Workload  # noqa: E402
@@ -297,9 +298,9 @@ def measure(
     run_matched = cycling(twin.step, actions_np)
 
     # warm-up (also sizes the timed window when --steps is not given)
-    t_env_w = _timed(run_env, warmup_steps)
-    t_raw_w = _timed(run_raw, warmup_steps)
-    _timed(run_matched, warmup_steps)
+    t_env_w = time_once(lambda: run_env(warmup_steps))
+    t_raw_w = time_once(lambda: run_raw(warmup_steps))
+    time_once(lambda: run_matched(warmup_steps))
     if steps is None:
         per_call = max(t_env_w, t_raw_w) / max(1, warmup_steps)
         steps = int(min(20000, max(20, round(target_seconds / max(per_call, 1e-6)))))
@@ -370,12 +371,6 @@ def _loadavg() -> Optional[list[float]]:
         return [round(x, 2) for x in os.getloadavg()]
     except (AttributeError, OSError):
         return None
-
-
-def _timed(fn: Any, n: int) -> float:
-    start = time.perf_counter()
-    fn(n)
-    return time.perf_counter() - start
 
 
 COLUMNS = [

@@ -20,7 +20,7 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Optional
 
-from common import median
+from common import median, time_once
 
 #: The managers whose functors count as the task's code.
 FUNCTOR_MANAGERS = ("event_manager", "observation_manager", "reward_manager")
@@ -139,12 +139,6 @@ class FunctorTimer:
         self._undo.append(lambda: ent.__dict__.pop(name, None))
 
 
-def _timed(fn: Callable[[int], Any], n: int) -> float:
-    start = time.perf_counter()
-    fn(n)
-    return time.perf_counter() - start
-
-
 def breakdown(
     env: Any, run_env: Callable[[int], Any], run_raw: Callable[[int], Any], steps: int, repeats: int
 ) -> Optional[dict[str, Any]]:
@@ -171,13 +165,13 @@ def breakdown(
                     timed.acc[k] = 0.0
                     timed.calls[k] = 0
                 functors.reset_counts()
-                rows["env"].append(_timed(run_env, steps))
+                rows["env"].append(time_once(lambda: run_env(steps)))
                 for k in ("step", "forward", "reset"):
                     rows[k].append(timed.acc[k])
                     calls[k] += timed.calls[k]
                 rows["functors"].append(functors.functors)
                 rows["entity"].append(functors.entity)
-                rows["raw"].append(_timed(run_raw, steps))
+                rows["raw"].append(time_once(lambda: run_raw(steps)))
     finally:
         sim.__dict__["batch"] = batch
     return _summary(rows, calls, steps, max(1, repeats))

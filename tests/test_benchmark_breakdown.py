@@ -4,7 +4,9 @@ found it. No timing is asserted (the box is shared and noisy)."""
 
 from __future__ import annotations
 
+import json
 import os
+import subprocess
 import sys
 
 import pytest
@@ -79,9 +81,7 @@ def test_timed_functor_passes_attributes_through(bench):
             self.resets.append(env_ids)
 
     func = Counter()
-    timer = sb.FunctorTimer.__new__(sb.FunctorTimer)
-    timer.functors = timer.entity = 0.0
-    timer.depth = 0
+    timer = sb.FunctorTimer(env=None)  # the env is read only on entering the context
     timed = sb._TimedFunctor(func, timer)
     assert timed(None, [1, 2]) == 2
     timed.reset([0])  # a class functor keeps its reset(env_ids)
@@ -95,9 +95,9 @@ def test_breakdown_reports_the_split_and_the_ceiling(bench, env):
     base = env.unwrapped
     actions = et.make_actions(env)
     run_env = et.cycling(env.step, actions)
-    ctrl_steps = []
-    parts = sb.breakdown(base, run_env, lambda n: ctrl_steps.append(n), steps=4, repeats=2)
-    assert ctrl_steps == [4, 4]  # a raw run after each env run
+    raw_runs = []
+    parts = sb.breakdown(base, run_env, lambda n: raw_runs.append(n), steps=4, repeats=2)
+    assert raw_runs == [4, 4]  # a raw run after each env run
     assert parts["repeats"] == 2
     assert parts["functors_ms"] >= parts["functor_entity_ms"] > 0.0
     assert parts["task_functor_ms"] == pytest.approx(parts["functors_ms"] - parts["functor_entity_ms"])
@@ -132,9 +132,6 @@ def test_breakdown_is_none_without_a_batch(bench):
 
 @pytest.mark.timeout(300)
 def test_cold_ops_quick_run_writes_json(tmp_path):
-    import json
-    import subprocess
-
     out = tmp_path / "cold.json"
     script = os.path.join(ROOT, "benchmarks", "cold_ops.py")
     proc = subprocess.run(
@@ -155,8 +152,6 @@ def test_cold_ops_quick_run_writes_json(tmp_path):
 
 
 def test_cold_ops_rejects_bad_arguments():
-    import subprocess
-
     script = os.path.join(ROOT, "benchmarks", "cold_ops.py")
     proc = subprocess.run([sys.executable, script, "--rounds", "0"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
