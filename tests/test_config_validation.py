@@ -164,9 +164,15 @@ def test_declared_custom_modes(make_env) -> None:
     assert raise_path(base_cfg(custom_event_modes=["reset"]).validate).path == "env.custom_event_modes[0]"
 
 
-def test_an_undeclared_custom_mode_warns_and_a_functor_may_declare_its_modes() -> None:
-    with pytest.warns(UserWarning, match="custom_event_modes"):
-        check_event_mode("attach", "env.events.x")
+@pytest.mark.parametrize("mode", ["attach", "sometimes", "SOMETIMES", "every_step"])
+def test_an_undeclared_mode_is_an_error_whatever_its_spelling(mode: str) -> None:
+    with pytest.raises(ConfigError, match="custom_event_modes") as info:
+        check_event_mode(mode, "env.events.x")
+    assert info.value.path == "env.events.x.mode"
+    check_event_mode(mode, "env.events.x", declared=[mode])  # declared: allowed
+
+
+def test_a_functor_may_declare_its_modes() -> None:
 
     def weld(env: Any, env_ids: Any) -> None:
         """A functor declaring the custom mode it runs in."""

@@ -152,8 +152,10 @@ def test_interval_rejects_env_ids_and_bad_step(make_env, make_cfg) -> None:
 
 
 def test_custom_mode_runs_only_when_applied(make_env) -> None:
-    with pytest.warns(UserWarning, match=r"custom event mode 'attach' is not declared"):
-        env = make_env(events={"attach": EventCfg(func=log_event, mode="attach", params={"tag": "attach"})})
+    env = make_env(
+        events={"attach": EventCfg(func=log_event, mode="attach", params={"tag": "attach"})},
+        custom_event_modes=["attach"],
+    )
     env.reset()
     run_steps(env, 3, "attach")
     env.reset(options={"reset_ids": [0]})

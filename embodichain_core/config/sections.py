@@ -58,10 +58,10 @@ def close_modes(mode: str, choices: Iterable[str]) -> list[str]:
 def check_event_mode(mode: Any, path: str, declared: Iterable[str] = (), warn: bool = True) -> None:
     """Check an event's ``mode`` (``path`` is the entry's path).
 
-    ``startup``/``reset``/``interval`` and declared custom modes are accepted. An
-    undeclared mode that looks like a typo of one of them is an error with the
-    suggestion; any other undeclared mode runs only when task code applies it, and
-    a warning asks to declare it in ``env.custom_event_modes``.
+    ``startup``/``reset``/``interval`` and declared custom modes (``env.custom_event_modes``
+    or a functor's ``event_modes``) are accepted; any other mode is an error, with a
+    suggestion when it looks like a typo of a known one (an undeclared mode would never
+    fire on its own). ``warn`` is kept for callers of the earlier signature.
     """
     where = join_path(path, "mode")
     if not isinstance(mode, str) or not mode.strip():
@@ -81,12 +81,12 @@ def check_event_mode(mode: Any, path: str, declared: Iterable[str] = (), warn: b
             f"unknown event mode {mode!r}. Did you mean {suggestion}? (a custom mode "
             f"with this name must be declared in env.custom_event_modes)",
         )
-    if warn:
-        warnings.warn(
-            f"{where}: custom event mode {mode!r} is not declared; it runs only when task code calls "
-            f"env.event_manager.apply({mode!r}). Declare it in env.custom_event_modes.",
-            stacklevel=3,
-        )
+    raise ConfigError(
+        where,
+        f"unknown event mode {mode!r}: not one of {', '.join(repr(m) for m in known)}. A custom mode "
+        f"(run by task code with env.event_manager.apply({mode!r}, env_ids)) must be declared in "
+        "env.custom_event_modes",
+    )
 
 
 def check_declared_modes(modes: Any, path: str = "env.custom_event_modes") -> list[str]:
