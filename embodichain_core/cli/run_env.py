@@ -7,7 +7,8 @@ by replaying the demo action list (data generation). Dataset outputs are checked
 before the env is built (:func:`~embodichain_core.cli.run_errors.preflight_outputs`).
 An error while running prints its traceback and the config path of the functor that
 raised it; the env is closed (datasets finalized) and the summary printed either way.
-Exit codes: 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted.
+Exit codes: 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted
+(Ctrl-C), 143 terminated (``SIGTERM``, handled like Ctrl-C).
 
 Example:
     $ embodichain run-env --num_envs 4 --max_episodes 8 --headless
@@ -17,8 +18,11 @@ Example:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
+import threading
 import time
 from typing import Any, Optional, Sequence
 
@@ -48,7 +52,8 @@ dataset folder) prints one line naming the config key and exits with 2 before an
 built. An exception raised while building or running prints its traceback, then one line
 naming the functor that raised it by its config path, for example
 `ValueError in functor env.events.drive_damping: ...`, and exits with 1; Ctrl-C exits with
-130. Either way the env is closed, so dataset recorders finalize (the episodes saved so far
+130, and `SIGTERM` (`kill PID`, a job scheduler's stop) is handled the same way and exits
+with 143. Either way the env is closed, so dataset recorders finalize (the episodes saved so far
 stay loadable), and the summary is printed with a `stopped` line saying why.
 
 **Dataset outputs.** Before the env is built, each dataset functor class that defines
@@ -60,8 +65,36 @@ to be a writable folder on a filesystem with at least `params.min_free_mb` MB fr
 the check. A disk that fills up later ends the run with a `DiskFullError`, the saved
 episodes intact (see datasets.md).
 
-**Exit codes.** 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted.
+**Exit codes.** 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted
+(Ctrl-C), 143 terminated (SIGTERM).
 """
+
+
+class Terminated(KeyboardInterrupt):
+    """``SIGTERM`` arrived: the run stops the way a Ctrl-C stops it (env closed, summary printed)."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the closing short
+    raise Terminated
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Any:
+    """Within the block (main thread only), ``SIGTERM`` raises :class:`Terminated`."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _interrupt_code(err: KeyboardInterrupt) -> tuple[int, str]:
+    """The exit code and the ``stopped`` reason of a Ctrl-C or a ``SIGTERM``."""
+    return (143, "terminated (SIGTERM)") if isinstance(err, Terminated) else (130, "interrupted (Ctrl-C)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,7 +147,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run ``embodichain run-env`` with ``argv``; return the exit code."""
     args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
     try:
-        return _main(args)
+        with sigterm_as_interrupt():
+            return _main(args)
     except ConfigError as err:
         source = _config_arg(args)
         print(f"{PROG}: config error{f' in {source}' if source else ''}: {err}", file=sys.stderr)
@@ -129,9 +163,9 @@ def _main(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     try:
         env = make_env(plan)
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted while building the env", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        print(f"{PROG}: {_interrupt_code(err)[1]} while building the env", file=sys.stderr)
+        return _interrupt_code(err)[0]
     except ConfigError:
         raise
     except Exception as err:
@@ -151,10 +185,10 @@ def _run(env: Any, plan: RunPlan, stats: RunStats, show_bar: bool) -> int:
     try:
         run_episodes(env, plan.extras, stats, show_bar=show_bar)
         return 0
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted; closing (committed episodes are kept)", file=sys.stderr)
-        stats.error = "interrupted (Ctrl-C)"
-        return 130
+    except KeyboardInterrupt as err:
+        code, stats.error = _interrupt_code(err)
+        print(f"{PROG}: {stats.error}; closing (committed episodes are kept)", file=sys.stderr)
+        return code
     except RunError as err:
         print(f"{PROG}: {err}", file=sys.stderr)
         stats.error = str(err)

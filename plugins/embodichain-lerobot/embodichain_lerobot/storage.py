@@ -193,3 +193,23 @@ def marker_owner(root: Path) -> Optional[dict]:
         return None
     finally:
         os.close(fd)  # also drops the lock we may have taken
+
+
+def finish_orphaned(root: Path) -> bool:
+    """Finish the folder of a writer that died after publishing episodes: remove its staging
+    folder and its marker (nobody holds it), as the writer's ``finalize()`` would have.
+
+    Every published episode stays (the staging folder only holds unpublished files). A folder
+    whose marker is still held, or with no published episode, is left alone.
+
+    Returns:
+        Whether the folder was finished.
+    """
+    from embodichain_lerobot.folders import STAGING, folder_status
+
+    status = folder_status(root)
+    if not status.complete or status.owner is not None:
+        return False
+    shutil.rmtree(Path(root) / STAGING, ignore_errors=True)
+    (Path(root) / MARKER).unlink(missing_ok=True)
+    return True

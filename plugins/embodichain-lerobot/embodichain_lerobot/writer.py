@@ -83,30 +83,36 @@ def atomic_copy(src: Path, dest: Path) -> None:
 
 @contextlib.contextmanager
 def deferred_sigint() -> Iterator[None]:
-    """Hold a Ctrl-C back until the block is done (a second Ctrl-C interrupts at once).
+    """Hold a Ctrl-C (and a ``SIGTERM`` that has a Python handler, such as ``run-env``'s) back
+    until the block is done; a second one interrupts at once.
 
-    Only in the main thread with Python's default handler installed; elsewhere a no-op.
+    Only in the main thread, for ``SIGINT`` with Python's default handler installed; elsewhere a no-op.
     """
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
-    ):
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
+    held = {}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        held[signal.SIGINT] = signal.default_int_handler
+    term = signal.getsignal(signal.SIGTERM)
+    if callable(term):
+        held[signal.SIGTERM] = term
     pending: list[int] = []
 
     def hold(signum: int, frame: Any) -> None:
         if pending:
-            raise KeyboardInterrupt
+            held[signum](signum, frame)
         pending.append(signum)
 
-    signal.signal(signal.SIGINT, hold)
+    for signum in held:
+        signal.signal(signum, hold)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        for signum, handler in held.items():
+            signal.signal(signum, handler)
     if pending:
-        raise KeyboardInterrupt
+        held[pending[0]](pending[0], None)
 
 
 def _json_default(value: Any) -> Any:

@@ -16,10 +16,12 @@ recording process's messages in order:
 ``open``, ``episode`` and ``finalize`` get one reply each, ``("ok", value)`` or
 ``("error", exception)``. The child reads its socket on a thread from its first moment
 (:class:`Inbox`: the recording process never waits for lerobot's import), runs at a lower
-priority (:data:`NICENESS`), and ignores ``SIGINT`` (a Ctrl-C in the terminal reaches the
-whole process group; the recording process decides what happens). When the recording
-process dies, the child sees the socket close and finalizes the dataset with every
-episode it received.
+priority (:data:`NICENESS`), and ignores ``SIGINT`` and ``SIGTERM`` (a Ctrl-C in the
+terminal, or a ``kill`` of the process group, reaches it too; the recording process
+decides what happens). When the recording process dies (even by ``SIGKILL``), the child
+sees the socket close, writes every episode and frame message it had already received
+(in order, as if the recording process lived), then finalizes the dataset: an episode
+that left the recording process is never dropped.
 """
 
 from __future__ import annotations
@@ -51,6 +53,10 @@ INBOX_BYTES = 512 * 2**20
 #: stepping and rendering go first, and the child (whose inbox holds the frames meanwhile)
 #: catches up in their idle time (end to end, the main job ran about 10 % faster than at +0).
 NICENESS = 5
+#: Tests only: a file holding a number ``N``; the child starts its episode ``i`` only once the
+#: file exists and ``i < N`` (it polls), so a test decides exactly how many episodes the child has
+#: written when it kills a process. Unset (the default): no effect.
+TEST_GATE_ENV = "EMBODICHAIN_WRITER_TEST_GATE"
 
 
 class _Prefed:
@@ -168,6 +174,7 @@ class ChildWriter:
         return sum(enc.backlog() for env_id, enc in self.encoders.items() if env_id in self.live)
 
     def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
+        _test_gate(self.writer.num_episodes)
         for name in subtasks:  # the same indices as the recording process gave
             self.writer.subtask_index(name)
         if not self.streamed:
@@ -186,6 +193,18 @@ class ChildWriter:
         return str(path) if path is not None else None
 
 
+def _test_gate(index: int) -> None:
+    """Wait while the test gate (:data:`TEST_GATE_ENV`) holds episode ``index`` back."""
+    gate = os.environ.get(TEST_GATE_ENV)
+    while gate:
+        try:
+            if index < int(Path(gate).read_text().strip() or 0):
+                return
+        except (OSError, ValueError):
+            pass
+        time.sleep(0.02)
+
+
 def _picklable(err: BaseException) -> BaseException:
     """``err`` if it survives pickling, else a :class:`WriterProcessError` with its text."""
     try:
@@ -196,8 +215,34 @@ def _picklable(err: BaseException) -> BaseException:
         return kind(f"{type(err).__name__}: {err}")
 
 
-def _orphaned(state: ChildWriter) -> None:
-    """The recording process is gone: finalize what was published (nothing is half-written)."""
+def _orphaned(state: ChildWriter, inbox: "Inbox") -> None:
+    """The recording process is gone: write every message already received (episodes, their
+    streamed frames), then finalize. Every episode that left the recording process is saved,
+    exactly as if it had lived; nothing is half-written."""
+    saved = 0
+    while True:
+        try:
+            command, payload = inbox.get()
+        except (EOFError, OSError):
+            break
+        if command == "finalize":
+            break
+        try:
+            value = state.handle(command, payload)
+        except BaseException as err:  # the episodes published before stay intact
+            print(
+                f"embodichain writer process: {command} failed after the recording process died: {err!r}",
+                file=sys.stderr,
+            )
+            if command == "episode":
+                break  # a broken writer accepts nothing more
+            continue
+        saved += command == "episode" and int(value) >= 0
+    print(
+        f"embodichain writer process: the recording process is gone; saved the {saved} episode(s) it had "
+        "already sent, finalizing",
+        file=sys.stderr,
+    )
     try:
         state.finalize()
     except Exception:  # its published episodes are intact either way
@@ -252,7 +297,7 @@ def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
         try:
             command, payload = inbox.get()
         except (EOFError, OSError):
-            return _orphaned(state)
+            return _orphaned(state, inbox)
         try:
             reply: tuple[str, Any] = ("ok", state.handle(command, payload))
         except BaseException as err:
@@ -263,8 +308,8 @@ def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
             continue
         try:
             conn.send(reply)
-        except OSError:  # it died while this command ran
-            return _orphaned(state)
+        except OSError:  # it died while this command ran: the rest of the inbox is still written
+            return _orphaned(state, inbox)
         if command == "finalize" and reply[0] == "ok":
             return
 
@@ -272,6 +317,7 @@ def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point of the child."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # like a Ctrl-C: the recording process decides
     fd = int((argv if argv is not None else sys.argv[1:])[0])
     os.environ.setdefault("SVT_LOG", "1")
     conn = Connection(fd)

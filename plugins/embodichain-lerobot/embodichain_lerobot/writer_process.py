@@ -36,6 +36,8 @@ from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
+from embodichain_lerobot.storage import finish_orphaned
+
 _REPLY_TIMEOUT_S = 600.0  # importing lerobot and saving an episode on a loaded machine
 #: Messages waiting for the sender thread before :meth:`WriterProcess.post` waits: when the
 #: child cannot keep up (it also bounds its encoders' backlog), stepping slows down to its pace
@@ -95,6 +97,8 @@ class WriterProcess:
         self.root: Path = Path()
         self.num_episodes = 0
         self.num_frames = 0
+        self.sent_episodes = 0  # episodes handed to the child (saved or not yet)
+        self.lost_episodes: list[int] = []  # env ids of episodes sent to a child that died before saving them
         self.streamed: frozenset[str] = frozenset()  # colour features sent with stream_frames
         self._subtasks: dict[str, int] = {}
         self._proc: Optional[subprocess.Popen] = None
@@ -144,6 +148,8 @@ class WriterProcess:
         except BaseException:
             if self.root != Path() and self.root.is_dir() and not any(self.root.iterdir()):
                 self.root.rmdir()  # reserved, but the child died before it created anything
+            elif self.root != Path() and self._dead is not None:
+                finish_orphaned(self.root)
             raise
         finally:
             self._stop()
@@ -168,7 +174,9 @@ class WriterProcess:
         """Send one committed episode; the future gives its lerobot episode index once published."""
         columns, length = to_columns(frames, self.streamed)
         subtasks = sorted(self._subtasks, key=self._subtasks.__getitem__)
-        return self.submit("episode", (env_id, columns, length, record, subtasks), frames=length)
+        future = self.submit("episode", (env_id, columns, length, record, subtasks), frames=length)
+        future.env_id = env_id  # type: ignore[attr-defined]
+        return future
 
     def write_episode(self, frames: Iterable[dict], record: dict) -> int:
         """Send one episode and wait until the child has published it; its lerobot episode index."""
@@ -211,6 +219,8 @@ class WriterProcess:
                     self._waiting.append(future)  # filed before the message leaves: replies come in order
             if dead is not None:
                 if future is not None:
+                    if getattr(future, "frames", 0):
+                        self.lost_episodes.append(int(getattr(future, "env_id", -1)))
                     future.set_exception(dead)
                 continue
             try:
@@ -226,6 +236,8 @@ class WriterProcess:
                 self._conn.send(message)
             except (OSError, ValueError):  # the child is gone: the receiver fails the waiting calls
                 continue
+            if command == "episode":
+                self.sent_episodes += 1
 
     def _receive_loop(self) -> None:
         conn = self._conn
@@ -261,6 +273,15 @@ class WriterProcess:
         with self._lock:
             self._dead = err
             waiting, self._waiting = list(self._waiting), collections.deque()
+        lost = [f for f in waiting if getattr(f, "frames", 0)]
+        self.lost_episodes = [int(getattr(f, "env_id", -1)) for f in lost]
+        if lost:
+            print(
+                f"embodichain writer: {len(lost)} finished episode(s) (env ids {self.lost_episodes}) were not saved: "
+                f"the writer process died before writing them; the {self.num_episodes} episode(s) saved before are "
+                f"intact in {self.root}",
+                file=sys.stderr,
+            )
         for future in waiting:
             if not future.done():
                 future.set_exception(err)
