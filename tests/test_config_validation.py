@@ -220,6 +220,24 @@ def test_observation_entries() -> None:
     assert raise_path(base_cfg(observations=no_level).validate).path == "env.observations.o.name"
 
 
+def test_an_observation_name_must_not_shadow_a_group() -> None:
+    params = {"entity_cfg": {"uid": "cube"}}
+    for group in ("robot", "sensor"):
+        shadow = {"o": ObservationCfg(func=nudge, mode="add", name=group, params=params)}
+        err = raise_path(base_cfg(observations=shadow).validate)
+        assert err.path == "env.observations.o.name"
+        assert "observation group" in err.reason
+    nested = {
+        "pose": ObservationCfg(func=nudge, mode="add", name="object/cube_pose", params=params),
+        "whole": ObservationCfg(func=nudge, mode="add", name="object", params=params),
+    }
+    err = raise_path(base_cfg(observations=nested).validate)
+    assert err.path == "env.observations.whole.name"
+    assert "'object/cube_pose'" in err.reason
+    members = {"o": ObservationCfg(func=nudge, mode="add", name="robot/extra", params=params)}
+    base_cfg(observations=members).validate()  # a member of a group is fine
+
+
 def double(env: Any, data: Any) -> Any:
     """An observation functor of the tests."""
     return data * 2
@@ -256,6 +274,56 @@ def test_named_params(params: dict, key: str, text: str) -> None:
     assert err.path == f"env.events.e.params.{key}"
     assert text in err.reason
     assert "functor 'f'" in err.reason
+
+
+@pytest.mark.parametrize(
+    "params, key",
+    [
+        ({"position_range": [[-1e9, 0.0, 0.0], [0.1, 0.0, 0.0]]}, "position_range"),
+        ({"intensity_range": [1.0, 1e12]}, "intensity_range"),
+        ({"mass_range": [0.1, 2e6], "relative": True}, "mass_range"),
+        ({"damping_range": {"link1": [0.0, 1e7]}}, "damping_range.link1"),
+    ],
+)
+def test_a_range_bound_of_huge_magnitude_is_an_error(params: dict, key: str) -> None:
+    err = raise_path(check_named_params, params, "env.events.e", "f")
+    assert err.path == f"env.events.e.params.{key}"
+    assert "magnitude above 1e+06" in err.reason
+    check_named_params({"position_range": [[-1e6, 0.0, 0.0], [1e6, 0.0, 0.0]]}, "env.events.e", "f")  # at the bound
+
+
+@pytest.mark.parametrize(
+    "edit, path, quantity",
+    [
+        (lambda c: setattr(c.rigid_object[0], "init_pos", (0.5, 2e6, 0.5)), "rigid_object[0].init_pos[1]", "position"),
+        (lambda c: setattr(c.background[0], "init_pos", (-1e6, 0.0, 0.0)), "background[0].init_pos[0]", "position"),
+        (lambda c: setattr(c.robot, "init_pos", (0.0, 0.0, 5e5)), "robot.init_pos[2]", "position"),
+        (lambda c: setattr(c.rigid_object[0].attrs, "mass", 1e6), "rigid_object[0].attrs.mass", "mass"),
+        (lambda c: setattr(c.background[0].attrs, "density", 1e9), "background[0].attrs.density", "density"),
+        (
+            lambda c: setattr(c.rigid_object[0].attrs, "static_friction", 1e6),
+            "rigid_object[0].attrs.static_friction",
+            "friction",
+        ),
+        (lambda c: setattr(c.robot.attrs, "dynamic_friction", 1e9), "robot.attrs.dynamic_friction", "friction"),
+    ],
+)
+def test_implausible_physical_scales_are_errors_with_an_override(edit: Any, path: str, quantity: str) -> None:
+    cfg = base_cfg()
+    edit(cfg)
+    err = raise_path(cfg.validate, memory=False)
+    assert err.path == path
+    assert f"sim_cfg.physical_limits.{quantity}" in err.reason
+    cfg.sim_cfg.physical_limits = {quantity: 1e10}
+    cfg.validate(memory=False)  # the documented override
+
+
+def test_physical_limits_must_name_known_quantities() -> None:
+    cfg = base_cfg()
+    cfg.sim_cfg.physical_limits = {"speed": 3.0}
+    assert raise_path(cfg.validate, memory=False).path == "sim_cfg.physical_limits.speed"
+    cfg.sim_cfg.physical_limits = {"mass": -1.0}
+    assert raise_path(cfg.validate, memory=False).path == "sim_cfg.physical_limits.mass"
 
 
 def test_named_params_accept_relative_and_optional_ranges() -> None:

@@ -70,6 +70,7 @@ SIM_KEYS: dict[str, str] = {
     "physics_substeps": "physics_substeps",
     "physics_config": "physics_config",
     "render_cfg": "render_cfg",
+    "physical_limits": "physical_limits",
 }
 #: Cfg fields that may be given at the top level as well as inside ``env`` (not both).
 TOP_CFG_FIELDS = ("num_envs", "max_episode_steps", "sim_cfg")

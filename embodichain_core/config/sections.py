@@ -14,7 +14,16 @@ from typing import Any, Iterable, Optional
 from embodichain_core.config.checks import check_int, check_number, describe
 from embodichain_core.config.errors import ConfigError, join_path
 
-__all__ = ["EVENT_MODES", "SECTION_MODES", "check_sections", "check_event_mode", "close_modes", "MAX_INTERVAL_STEP"]
+__all__ = [
+    "EVENT_MODES",
+    "SECTION_MODES",
+    "OBSERVATION_GROUPS",
+    "check_sections",
+    "check_event_mode",
+    "check_observation_groups",
+    "close_modes",
+    "MAX_INTERVAL_STEP",
+]
 
 #: The event modes the env itself runs.
 EVENT_MODES = ("startup", "reset", "interval")
@@ -125,6 +134,36 @@ def check_sections(cfg: Any) -> None:
                 check_interval(fcfg, where, cfg.max_episode_steps, warn=False)
             else:
                 _check_section_entry(section, fcfg, where)
+    check_observation_groups(cfg)
+
+
+#: Observation groups the env itself fills (``robot``: joint state; ``sensor``: sensor data).
+OBSERVATION_GROUPS = ("robot", "sensor")
+
+
+def check_observation_groups(cfg: Any) -> None:
+    """An ``add`` observation must not replace a whole group: a built-in one (``robot``,
+    ``sensor``) or a group other observations are added under (``object`` when another
+    entry adds ``object/cube_pose``).
+
+    Raises:
+        ConfigError: at ``env.observations.<entry>.name``, naming the group.
+    """
+    from embodichain_core.managers.cfg import FUNCTOR_CFG_TYPES
+    from embodichain_core.managers.manager_base import iter_section
+
+    path = join_path("env", "observations")
+    entries = list(iter_section(getattr(cfg, "observations", None), FUNCTOR_CFG_TYPES["observations"], path))
+    added = {name: fcfg.name for name, fcfg in entries if fcfg.mode == "add" and isinstance(fcfg.name, str)}
+    for entry, obs_name in added.items():
+        inner = sorted(other for key, other in added.items() if key != entry and other.startswith(obs_name + "/"))
+        if obs_name in OBSERVATION_GROUPS or inner:
+            users = f" (it holds {', '.join(map(repr, inner))})" if inner else " (filled by the env)"
+            raise ConfigError(
+                join_path(path, entry, "name"),
+                f"observation name {obs_name!r} is an observation group{users}; adding it would replace the "
+                f"whole group. Name a member instead, e.g. '{obs_name}/<name>'",
+            )
 
 
 #: Positional arguments before the params, per section (as the managers call functors).

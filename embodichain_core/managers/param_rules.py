@@ -17,6 +17,7 @@ param name                                             rule
 ``friction_range``, ``damping_range``,                 bounds >= 0 (unless ``relative`` is true)
 ``stiffness_range``, ``max_effort_range``
 ``*scale*_range``                                      bounds > 0 (scale factors)
+``*_range`` (any)                                      every bound of magnitude <= 1e6
 ``*_prob``, ``prob``, ``probability``                  a number in ``[0, 1]``
 any number, anywhere in the params                     not NaN
 a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: or ``None``)
@@ -35,11 +36,15 @@ import inspect
 import math
 from typing import Any, Optional
 
+import numpy as np
+
 from embodichain_core.config.checks import check_number, check_range
 from embodichain_core.config.errors import ConfigError, join_path
 
-__all__ = ["check_named_params", "check_param_types", "range_bounds"]
+__all__ = ["check_named_params", "check_param_types", "range_bounds", "MAX_RANGE_MAGNITUDE"]
 
+#: Largest magnitude of a ``*_range`` bound (metres, degrees, kg, intensities alike).
+MAX_RANGE_MAGNITUDE = 1.0e6
 _UNIT = (0.0, 1.0, False)
 _POSITIVE = (0.0, None, True)
 _NON_NEGATIVE = (0.0, None, False)
@@ -105,9 +110,22 @@ def _check_range_param(key: str, value: Any, params: dict, where: str) -> None:
         if not value:
             raise ConfigError(where, "an empty mapping of ranges sets nothing; give [low, high]")
         for sub, pair in value.items():
-            check_range(pair, join_path(where, str(sub)), low=low, high=high, low_open=low_open)
+            _check_magnitude(
+                check_range(pair, join_path(where, str(sub)), low=low, high=high, low_open=low_open),
+                pair,
+                join_path(where, str(sub)),
+            )
         return
-    check_range(value, where, low=low, high=high, low_open=low_open)
+    _check_magnitude(check_range(value, where, low=low, high=high, low_open=low_open), value, where)
+
+
+def _check_magnitude(bounds: tuple, value: Any, where: str) -> None:
+    """No range bound beyond :data:`MAX_RANGE_MAGNITUDE` (whatever its unit, a sign of a
+    wrong exponent or a placeholder)."""
+    if any(float(np.abs(b).max(initial=0.0)) > MAX_RANGE_MAGNITUDE for b in bounds):
+        raise ConfigError(
+            where, f"a bound of magnitude above {MAX_RANGE_MAGNITUDE:g} is not a plausible range, got {value!r}"
+        )
 
 
 def _check_nan(value: Any, where: str, depth: int = 0) -> None:

@@ -71,6 +71,9 @@ class SimulationManagerCfg:
     backend: BackendName = "mujoco_batch"
     physics_config: PhysicsCfg = PhysicsCfg()
     persistent: bool = True
+    #: Raised plausibility bounds, ``{"position" | "mass" | "density" | "friction": bound}``
+    #: (defaults in :data:`embodichain_core.config.plausible.DEFAULT_LIMITS`).
+    physical_limits: Optional[Dict[str, float]] = None
 
 
 @configclass

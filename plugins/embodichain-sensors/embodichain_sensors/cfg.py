@@ -38,10 +38,19 @@ def _check_vector(value: Any, n: int, name: str) -> None:
 
 
 def _check_intrinsics(value: object, name: str) -> None:
+    """``(fx, fy, cx, cy)`` in pixels: fx, fy > 0 and a principal point cx, cy >= 0 (pixel
+    coordinates from the image's top-left corner; a point beyond the image is allowed for
+    off-centre crops)."""
     _check_vector(value, 4, name)
-    fx, fy = float(value[0]), float(value[1])  # type: ignore[index]
+    fx, fy, cx, cy = (float(v) for v in value)  # type: ignore[attr-defined]
     if fx <= 0 or fy <= 0:
         raise ConfigError(name, f"fx and fy must be > 0 (pixels), got {value!r}")
+    if cx < 0 or cy < 0:
+        raise ConfigError(
+            name,
+            f"the principal point (cx, cy) = ({cx:g}, {cy:g}) must be >= 0 (pixels from the image's "
+            f"top-left corner), got {value!r}",
+        )
 
 
 @configclass

@@ -184,6 +184,11 @@ def test_one_renderer_per_sensor_reused(scene_factory, monkeypatch):
 def test_config_validation():
     with pytest.raises(ConfigError, match="intrinsics"):
         CameraCfg(uid="c", intrinsics=(0, 1, 2, 3))
+    for intrinsics in ((100.0, 100.0, -1.0, 24.0), (100.0, 100.0, 32.0, -0.5)):
+        with pytest.raises(ConfigError, match=r"principal point .* must be >= 0") as err:
+            CameraCfg(uid="c", width=64, height=48, intrinsics=intrinsics)
+        assert err.value.path == "intrinsics"
+    CameraCfg(uid="c", width=64, height=48, intrinsics=(100.0, 100.0, 0.0, 0.0))  # a corner is allowed
     with pytest.raises(ConfigError, match="near"):
         CameraCfg(uid="c", near=2.0, far=1.0)
     with pytest.raises(ConfigError, match="target"):

@@ -372,9 +372,32 @@ def objects() -> Iterator[Mutation]:
     yield from single("light", "list", [])
 
 
+def implausible() -> Iterator[Mutation]:
+    """Valid numbers at nonsense physical scales, undeclared modes and shadowing names."""
+    table, fork = "background[0]", "rigid_object[0]"
+    yield from single(f"{fork}.init_pos", "huge", [1.0e6, -0.2, 0.8225], names=(f"{fork}.init_pos[0]",))
+    yield from single(f"{table}.init_pos", "huge", [0.8, -2.0e6, 0.8], names=(f"{table}.init_pos[1]",))
+    yield from single("robot.init_pos", "huge", [0.0, 0.0, 1.0e6], names=("robot.init_pos[2]",))
+    yield from single(f"{fork}.attrs.mass", "huge", 1.0e6)
+    yield from single(f"{table}.attrs.mass", "huge", 1.0e9)
+    yield from single(f"{fork}.attrs.static_friction", "huge", 1.0e6)
+    yield from single(f"{table}.attrs.dynamic_friction", "huge", 1.0e9)
+    # an unusual scene raises a bound explicitly
+    yield from single("physical_limits", "raised", {"position": 5000.0, "mass": 1.0e5}, "ok")
+    yield from single("physical_limits", "unknown_quantity", {"speed": 3.0}, names=("physical_limits.speed",))
+    yield from single("sensor[0].intrinsics", "negative_cx", [150.0, 150.0, -160.0, 90.0])
+    pose = f"{_EV}.fork_pose.params.position_range"
+    yield from single(pose, "huge_bound", [[-1.0e9, -0.05, 0.0], [0.04, 0.05, 0.0]])
+    yield from single(f"{_EV}.light.params.intensity_range", "huge_bound", [15.0, 1.0e12])
+    yield from single(f"{_EV}.fork_mass.mode", "undeclared", "sometimes")
+    yield from single(f"{_EV}.light.mode", "undeclared_caps", "EVERY_STEP", names=(f"{_EV}.light.mode",))
+    yield from single("env.observations.fork_pose.name", "group", "robot")
+    yield from single("env.observations.fork_pose.name", "sensor_group", "sensor")
+
+
 def mutations() -> list[Mutation]:
     """Every mutation of the corpus, in a fixed order."""
     out: list[Mutation] = []
-    for group in (run_and_sim, events, observations_and_dataset, robot, sensors_and_lights, objects):
+    for group in (run_and_sim, events, observations_and_dataset, robot, sensors_and_lights, objects, implausible):
         out += list(group())
     return out
