@@ -1,7 +1,8 @@
 """A recording process for the crash tests: ``python lerobot_crash_child.py MODE SAVE_PATH FUNC CAMERA``.
 
 Prints ``COMMITTED <n>`` (flushed) each time the recorder has saved its n-th
-episode. Modes: ``hang`` (3 episodes, then steps forever inside a 4th),
+episode; with a writer process also ``WRITER <pid>`` at the start and ``SENT <n>`` each
+time the n-th episode has been handed to it. Modes: ``hang`` (3 episodes, then steps forever inside a 4th),
 ``churn`` (an episode every 2 steps, forever), ``die_in_save`` / ``die_in_publish``
 (SIGKILL itself while saving / publishing the 3rd episode), ``die_in_first_save`` /
 ``die_in_first_publish`` (the same for the 1st episode), ``die_in_create`` (SIGKILL
@@ -81,7 +82,10 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
     )
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
-    saved, step = 0, 0
+    proc = getattr(rec, "_writer_process", None)
+    if proc is not None and proc._proc is not None:
+        print(f"WRITER {proc._proc.pid}", flush=True)
+    saved, sent, step = 0, 0, 0
     try:
         while True:
             step += 1
@@ -91,9 +95,14 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
             if rec.saved_episodes > saved:
                 saved = rec.saved_episodes
                 print(f"COMMITTED {saved}", flush=True)
+            if proc is not None and proc.sent_episodes > sent:
+                sent = proc.sent_episodes
+                print(f"SENT {sent}", flush=True)  # handed to the writer process, maybe not saved yet
     finally:
-        env.close()
-        print(f"FINALIZED {rec.saved_episodes} {rec.dataset_path}", flush=True)
+        try:
+            env.close()
+        finally:
+            print(f"FINALIZED {rec.saved_episodes} {rec.dataset_path}", flush=True)
 
 
 if __name__ == "__main__":
