@@ -7,7 +7,8 @@ install or discovery order), checks every plugin for misspelled hooks, and calls
 plugin's register hooks. A plugin is named after its distribution (see
 :mod:`embodichain_core.plugins.clashes`). A plugin that fails (import error, unknown
 hook, bad hook signature, a hook raising, registering one name twice with different
-targets) is reported by name with its traceback as a :class:`PluginLoadWarning`,
+targets) is reported by name and error in one line as a :class:`PluginLoadWarning` (the
+traceback is kept for ``failed_plugins()`` and ``embodichain list plugins -v``),
 contributes nothing (its registrations are rolled back) and does not take the others
 down. A name another plugin registered too is *not* a failure: both entries stay,
 under their qualified names ``<plugin>:<name>`` (see :mod:`embodichain_core.plugins.names`).
@@ -238,8 +239,13 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
     info.status, info.error, info.registered = "failed", traceback.format_exc(), {}
     if pm.get_plugin(info.name) is not None:
         pm.unregister(name=info.name)
+    exc = sys.exc_info()[1]
+    lines = str(exc).strip().splitlines()
+    summary = f"{type(exc).__name__}: {lines[0] if lines else ''}" if exc is not None else info.error_summary
+    # One line: the warning shows on every command; the traceback is one request away.
     warnings.warn(
-        f"embodichain plugin {info.name!r} failed to load and was skipped:\n{info.error}",
+        f"embodichain plugin {info.name!r} failed to load and was skipped: {summary} "
+        "(the traceback: `embodichain list plugins -v`, or embodichain_core.plugins.failed_plugins())",
         PluginLoadWarning,
         stacklevel=3,
     )
