@@ -140,7 +140,8 @@ def test_failing_plugin_reported_others_load(monkeypatch: pytest.MonkeyPatch) ->
     assert infos["good-plugin"].registered == {"functors": ["randomize_light", "joint_pos"]}
     # one line on every command, naming the error and where the traceback is
     message = str(record[0].message)
-    assert "\n" not in message and "Traceback" not in message
+    assert "\n" not in message
+    assert "Traceback" not in message
     assert "ImportError: cannot import name 'thing'" in message
     assert "embodichain list plugins -v" in message
 
