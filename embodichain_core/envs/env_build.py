@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.config.ignored import warn_ignored
 from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.cfg import EnvCfg
 from embodichain_core.envs.robot_io import RobotIO
@@ -77,6 +78,7 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
         The events config after the filters (for the event manager).
     """
     env.cfg.validate()
+    warn_ignored(env.cfg)
     bind_extensions(env)
     events = filter_functors(env.cfg, "events")
     env.scene = build_scene(env, events)

@@ -116,6 +116,14 @@ class SceneBuilder:
         self.records[uid] = record
         return record
 
+    def require_iterations(self, *owners: Any) -> None:
+        """Raise MuJoCo's solver ``iterations`` (one setting for the whole model) to at least
+        ``min_position_iters + min_velocity_iters`` of each owner (PhysX's per-body solver
+        iteration counts; a config or its ``attrs``)."""
+        for owner in owners:
+            need = int(owner.min_position_iters) + int(owner.min_velocity_iters)
+            self.spec.option.iterations = max(int(self.spec.option.iterations), need)
+
     def on_compile(self, fn: Callable[[mujoco.MjModel], None]) -> None:
         """Run ``fn(model)`` on every compiled model (base and variants)."""
         self._post_compile.append(fn)

@@ -30,6 +30,7 @@ _MOVABLE = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
 def add_articulation(builder: SceneBuilder, cfg: ArticulationCfg, kind: str, path: str) -> EntityRecord:
     """Attach an articulation (``kind`` ``robot`` or ``articulation``) to the scene."""
     record = builder.claim_uid(cfg.uid, kind, cfg, path)
+    builder.require_iterations(cfg, cfg.attrs)
     child = _load_spec(cfg, path)
     root = child.worldbody.first_body()
     if root is None:

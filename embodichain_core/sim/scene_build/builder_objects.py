@@ -96,6 +96,7 @@ def _check_body_type(cfg: RigidObjectCfg, role: str, path: str) -> None:
 
 
 def _add_body(builder: SceneBuilder, cfg: RigidObjectCfg, name: str) -> Any:
+    builder.require_iterations(cfg.attrs)
     body = builder.spec.worldbody.add_body(name=name)
     body.pos = init_pos_from_cfg(cfg.init_pos, cfg.init_local_pose)
     body.quat = init_quat_from_cfg(cfg.init_rot, cfg.init_local_pose)
