@@ -54,8 +54,9 @@ INBOX_BYTES = 512 * 2**20
 #: catches up in their idle time (end to end, the main job ran about 10 % faster than at +0).
 NICENESS = 5
 #: Tests only: a file holding a number ``N``; the child starts its episode ``i`` only once the
-#: file exists and ``i < N`` (it polls), so a test decides exactly how many episodes the child has
-#: written when it kills a process. Unset (the default): no effect.
+#: file exists and ``i < N`` (it polls; a held episode is announced in ``<file>.held``), so a
+#: test decides exactly how many episodes the child has written when it kills a process.
+#: Unset (the default): no effect.
 TEST_GATE_ENV = "EMBODICHAIN_WRITER_TEST_GATE"
 
 
@@ -174,7 +175,7 @@ class ChildWriter:
         return sum(enc.backlog() for env_id, enc in self.encoders.items() if env_id in self.live)
 
     def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
-        _test_gate(self.writer.num_episodes)
+        _test_gate(self.writer.num_episodes, self.writer.root)
         for name in subtasks:  # the same indices as the recording process gave
             self.writer.subtask_index(name)
         if not self.streamed:
@@ -193,15 +194,21 @@ class ChildWriter:
         return str(path) if path is not None else None
 
 
-def _test_gate(index: int) -> None:
-    """Wait while the test gate (:data:`TEST_GATE_ENV`) holds episode ``index`` back."""
+def _test_gate(index: int, root: Path) -> None:
+    """Wait while the test gate (:data:`TEST_GATE_ENV`) holds episode ``index`` back; a held
+    episode is announced with the line ``<root> <index>`` in ``<gate>.held``."""
     gate = os.environ.get(TEST_GATE_ENV)
+    announced = False
     while gate:
         try:
             if index < int(Path(gate).read_text().strip() or 0):
                 return
         except (OSError, ValueError):
             pass
+        if not announced:
+            with open(f"{gate}.held", "a") as held:
+                held.write(f"{root} {index}\n")
+            announced = True
         time.sleep(0.02)
 
 

@@ -8,14 +8,16 @@ The config is loaded and checked exactly as ``run-env`` does it before Ray start
 (a configuration error: one line naming the key, exit 2). Without ``--ray-address``
 an embedded local Ray with ``--workers`` CPUs runs the workers; with it the command
 joins that cluster. Exit codes: 0 success, 1 stopped by an error (or episodes that
-failed every attempt), 2 configuration error, 130 interrupted (Ctrl-C: the
-workers end, the episodes saved so far are merged).
+failed every attempt), 2 configuration error, 130 interrupted (Ctrl-C), 143 terminated
+(``SIGTERM``); on both the workers stop, wait for their writers and close their shards
+(at most ``--close-timeout`` seconds), and the episodes saved so far are merged.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -23,7 +25,7 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_ray.spec import GenerateSpec
 
 PROG = "embodichain generate"
-EXIT_ERROR, EXIT_CONFIG, EXIT_INTERRUPTED = 1, 2, 130
+EXIT_ERROR, EXIT_CONFIG, EXIT_INTERRUPTED, EXIT_TERMINATED = 1, 2, 130, 143
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,6 +49,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--ray-address", dest="ray_address", metavar="ADDR", help="join this Ray cluster")
     p.add_argument("--max-restarts", dest="max_restarts", type=int, default=3, help="restarts per worker")
+    p.add_argument(
+        "--close-timeout",
+        dest="close_timeout",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="on Ctrl-C or SIGTERM, seconds the workers get to finish their writes and close (default 60)",
+    )
+    p.add_argument("--ray-dashboard", dest="ray_dashboard", action="store_true", help="start the local Ray's dashboard")
     p.add_argument("--keep-shards", dest="keep_shards", action="store_true", help="keep the shards after merging")
     p.add_argument(
         "--merge-only",
@@ -62,7 +73,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
     """The run's :class:`GenerateSpec`; counts are checked here (``ConfigError`` naming the option)."""
-    for name, low in (("episodes", 1), ("workers", 1), ("num_envs", 1), ("seed", 0), ("max_restarts", 0)):
+    for name, low in (
+        ("episodes", 1),
+        ("workers", 1),
+        ("num_envs", 1),
+        ("seed", 0),
+        ("max_restarts", 0),
+        ("close_timeout", 0),
+    ):
         if getattr(args, name) < low:
             raise ConfigError(f"--{name}", f"must be >= {low}, got {getattr(args, name)}")
     source = args.gym_config or args.task or "task"
@@ -87,6 +105,8 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
         keep_shards=args.keep_shards,
         merge_only=args.merge_only,
         show_bar=not args.quiet and sys.stderr.isatty(),
+        close_timeout=args.close_timeout,
+        dashboard=args.ray_dashboard,
     )
 
 
@@ -95,7 +115,15 @@ def main(argv: Sequence[str] | None = None, on_start: Callable[[list], None] | N
 
     ``on_start(actors)`` runs once the worker actors exist (a test hook, see :func:`~embodichain_ray.run.generate`).
     """
+    started = time.perf_counter()
     args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    from embodichain_core.cli.run_env import sigterm_as_interrupt
+
+    with sigterm_as_interrupt():  # SIGTERM stops the run like Ctrl-C (exit 143)
+        return _main(args, on_start, started)
+
+
+def _main(args: argparse.Namespace, on_start: Callable[[list], None] | None, started: float) -> int:
     try:
         spec = spec_from_args(args)
         from embodichain_ray.plan import check_plan
@@ -107,7 +135,7 @@ def main(argv: Sequence[str] | None = None, on_start: Callable[[list], None] | N
         return EXIT_CONFIG
     from embodichain_ray.run import generate
 
-    return generate(spec, plan, PROG, on_start)
+    return generate(spec, plan, PROG, on_start, started)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,15 @@ worker takes fewer episodes (dynamic load balancing). A batch whose worker died
 actor (``max_restarts``), whose constructor builds a fresh env recording into a *new*
 shard folder. Episodes that a dead batch had already published are found again in the
 old shard and de-duplicated at the merge.
+
+A worker reports a batch only once its episodes are durable (see
+:mod:`embodichain_ray.worker`), so the driver's count never runs ahead of the shards. A
+stop (Ctrl-C, ``SIGTERM``: :meth:`Scheduler.stop`) creates the stop file, which every worker
+checks after each step: the workers drop the round they are in, wait for their writers
+and return; then they close their shards (:func:`close_workers`), all within
+``spec.close_timeout`` seconds, after which the ones still busy are killed (what they had
+published is merged). Episodes already in the shards when a run starts are not run again
+(resuming an interrupted run).
 """
 
 from __future__ import annotations
@@ -34,6 +43,7 @@ class WorkerStats:
     busy_s: float = 0.0
     restarts: int = 0
     dead: bool = False
+    died_closing: bool = False
 
     @property
     def steps_per_s(self) -> float:
@@ -51,6 +61,9 @@ class RunState:
     env_steps: int = 0
     start_s: float = 0.0
     run_s: float = 0.0
+    close_s: float = 0.0
+    resumed: int = 0
+    lost: list = field(default_factory=list)  # episodes a worker reported that no shard holds
     error: str | None = None
     merged: int = 0
     merge_s: float = 0.0
@@ -74,7 +87,7 @@ def init_ray(spec: GenerateSpec) -> None:
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a private instance: no token file in ~/.ray
     ray.init(
         num_cpus=spec.workers,
-        include_dashboard=False,
+        include_dashboard=spec.dashboard,
         object_store_memory=80 * 2**20,
         log_to_driver=False,
         logging_level=logging.ERROR,
@@ -112,9 +125,11 @@ class Scheduler:
     ``max_restarts`` is dead; when every worker is dead the run stops.
     """
 
-    def __init__(self, spec: GenerateSpec, actors: list, state: RunState, bar: Any):
+    def __init__(self, spec: GenerateSpec, actors: list, state: RunState, bar: Any, done: frozenset = frozenset()):
         self.spec, self.actors, self.state, self.bar = spec, actors, state, bar
-        self.queue: deque = deque(range(spec.episodes))
+        self.queue: deque = deque(k for k in range(spec.episodes) if k not in done)
+        state.saved |= set(done)
+        bar.update(len(done))
         self.inflight: dict = {}  # ObjectRef -> (worker, batch); batch None: a pid probe
         self.down: list = [False] * len(actors)
         state.workers = [WorkerStats() for _ in actors]
@@ -145,7 +160,25 @@ class Scheduler:
             if not self.inflight and self.queue:
                 raise RuntimeError(f"every worker died ({self.state.error}); {len(self.queue)} episode(s) were not run")
 
-    def _collect(self, ref: Any, worker: int, batch: list | None) -> bool:
+    def stop(self, timeout: float) -> None:
+        """Ask every worker to stop (the stop file) and take the batches they return within
+        ``timeout`` seconds (their episodes are durable); a second Ctrl-C stops waiting."""
+        import ray
+
+        self.spec.stop_file.touch()
+        self.queue.clear()
+        deadline = time.perf_counter() + timeout
+        try:
+            while self.inflight and time.perf_counter() < deadline:
+                left = max(deadline - time.perf_counter(), 0.0)
+                ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=min(left, 1.0))
+                for ref in ready:
+                    worker, batch = self.inflight.pop(ref)
+                    self._collect(ref, worker, batch, requeue=False)
+        except KeyboardInterrupt:
+            log.warning("second interrupt: the workers are not waited for")
+
+    def _collect(self, ref: Any, worker: int, batch: list | None, requeue: bool = True) -> bool:
         """Take a finished call's result; ``False`` when the worker is down (its batch re-queued)."""
         import ray
         from ray.exceptions import ActorDiedError, RayActorError
@@ -154,7 +187,7 @@ class Scheduler:
         try:
             value = ray.get(ref)
         except RayActorError as err:  # the worker died (killed, out of memory): run its batch again
-            if batch is not None:
+            if batch is not None and requeue:
                 self.queue.extendleft(reversed(batch))
             if not self.down[worker]:
                 self.down[worker], stats.restarts = True, stats.restarts + 1
@@ -184,23 +217,29 @@ class Scheduler:
         self.bar.set_postfix_str(f"{self.state.env_steps / max(elapsed, 1e-9):.1f} env-steps/s", refresh=False)
 
 
-def close_workers(actors: list, timeout: float = 120.0) -> None:
-    """Let every live worker finalize its shard (up to ``timeout`` s), then kill them all."""
+def close_workers(actors: list, timeout: float = 120.0, state: RunState | None = None) -> None:
+    """Let every live worker finalize its shard (up to ``timeout`` s), then kill them all.
+
+    A worker that dies or fails while closing is marked ``died_closing`` in ``state``: every
+    episode it reported was durable before, so its shard still holds them.
+    """
     import ray
 
-    refs = []
+    refs: dict = {}
     for worker, actor in enumerate(actors):
         try:
-            refs.append(actor.close.remote())
+            refs[actor.close.remote()] = worker
         except Exception as err:  # noqa: BLE001  (an actor gone for good: its shard is as it was left)
             log.debug("worker %d cannot close: %r", worker, err)
     if refs:
-        done, _ = ray.wait(refs, num_returns=len(refs), timeout=timeout)
+        done, _ = ray.wait(list(refs), num_returns=len(refs), timeout=max(timeout, 0.0))
         for ref in done:
             try:
                 ray.get(ref)
             except Exception as err:  # noqa: BLE001  (a shard that failed to finalize keeps its episodes)
-                log.warning("a worker failed to close its shard: %r", err)
+                log.warning("worker %d failed to close its shard: %s", refs[ref], str(err).splitlines()[0])
+                if state is not None and state.workers:
+                    state.workers[refs[ref]].died_closing = True
     kill_workers(actors)
 
 

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from embodichain_lerobot.env_meta import merge_env_meta
 from embodichain_ray.shards import ShardEpisode, remove_tree, write_sidecars
 
 #: Episodes per destination file: every append re-writes the current file, so a file of ``P``
@@ -210,6 +211,7 @@ def merge_episodes(episodes: Sequence[ShardEpisode], output: Path, per_file: int
         with plain_nd_arrays(), SuppressProgressBars(), contextlib.redirect_stderr(io.StringIO()):
             _merge_views(episodes, work, metas, max(1, per_file))
         write_sidecars(work, episodes)
+        merge_env_meta(sorted({ep.root for ep in episodes}), work)  # what a replay rebuilds the env from
     except BaseException:
         remove_tree(work)
         raise

@@ -22,6 +22,8 @@ from embodichain_core.envs.episode_rng import derive_seed
 
 #: Folder of worker ``w``'s shards under the shards folder (each incarnation adds a ``_NNN`` folder inside).
 WORKER_DIR = "worker-{:03d}"
+#: Created by the driver to stop the workers (Ctrl-C, SIGTERM); removed when a run starts.
+STOP_FILE = ".stop"
 
 
 def episode_seed(seed: int, episode: int, attempt: int = 0) -> int:
@@ -70,6 +72,9 @@ class GenerateSpec:
         keep_shards: keep the shards after a successful merge.
         merge_only: run no worker, only merge what ``shards`` holds.
         show_bar: draw the progress bar.
+        close_timeout: seconds a stop (Ctrl-C, ``SIGTERM``) gives the workers to finish their
+            round, wait for their writers and close their shards before they are killed.
+        dashboard: start the embedded Ray's dashboard (off unless asked).
     """
 
     task: str | None
@@ -85,10 +90,17 @@ class GenerateSpec:
     keep_shards: bool = False
     merge_only: bool = False
     show_bar: bool = False
+    close_timeout: float = 60.0
+    dashboard: bool = False
 
     def worker_dir(self, worker: int) -> Path:
         """Where worker ``worker`` records (its recorder's ``save_path``)."""
         return self.shards / WORKER_DIR.format(worker)
+
+    @property
+    def stop_file(self) -> Path:
+        """The file whose existence asks every worker to stop after its current step."""
+        return self.shards / STOP_FILE
 
 
 def run_env_argv(spec: GenerateSpec) -> list[str]:

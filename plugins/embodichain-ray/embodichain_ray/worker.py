@@ -11,8 +11,14 @@ held is dropped), replays the demo until every busy slot's episode has ended, th
 commits the busy slots that are still running with a ``reset`` (the env commits the
 successful ones, or all with ``save_failed_episodes``); a slot whose episode ended
 early was committed by the env's auto-reset. Idle slots run an episode with a padding
-seed that is never merged. Committed episodes are published by the recorder before
-the reset returns, so an episode reported as saved survives the worker being killed.
+seed that is never merged.
+
+An episode is reported as saved only once it is durable: :meth:`EpisodeWorker.run` returns
+after the recorder has published every committed episode (an ``AsyncLeRobotRecorder``'s
+writer process is waited for, :meth:`EpisodeWorker.wait_durable`), so an episode reported
+as saved survives the worker and its writer process being killed. When the driver's stop
+file exists (Ctrl-C, ``SIGTERM``) the current round is abandoned after its current step
+(its episodes are not committed) and ``run`` returns what earlier rounds saved.
 """
 
 from __future__ import annotations
@@ -81,6 +87,7 @@ class EpisodeWorker:
         self.base = self.env.unwrapped
         self.num_envs = int(self.base.num_envs)
         self._closed = False
+        self._stopped = False
 
     def pid(self) -> int:
         """This worker's process id (the tests kill it)."""
@@ -91,9 +98,11 @@ class EpisodeWorker:
         started = time.perf_counter()
         result = BatchResult(pid=os.getpid())
         pending = [(k, 0) for k in episodes]  # (episode, attempt), in order
-        while pending:
+        while pending and not self.stopping():
             slots, pending = pending[: self.num_envs], pending[self.num_envs :]
             success = self._round(slots, result)
+            if success is None:  # stopped mid-round: nothing of it was committed
+                break
             retry = []
             for (k, a), ok in zip(slots, success):
                 if ok or self.plan.keep_failed:
@@ -105,31 +114,58 @@ class EpisodeWorker:
                 else:
                     result.outcomes.append(EpisodeOutcome(k, a + 1, False))
             pending = retry + pending
+        self.wait_durable()
         result.seconds = time.perf_counter() - started
         return result
 
-    def _round(self, slots: list[tuple[int, int]], result: BatchResult) -> list[bool]:
-        """One demo per slot; the busy slots' success (their episodes are committed)."""
+    def stopping(self) -> bool:
+        """Whether the driver asked the workers to stop (its stop file exists)."""
+        self._stopped = self._stopped or self.spec.stop_file.exists()
+        return self._stopped
+
+    def wait_durable(self) -> None:
+        """Block until every committed episode is published by its recorder (a no-op for the
+        synchronous recorder; an ``AsyncLeRobotRecorder`` waits for its writer process).
+
+        Raises:
+            Exception: a write failed (the recorder's own error, e.g. ``DiskFullError``).
+        """
+        manager = getattr(self.base, "dataset_manager", None)
+        for entry in getattr(manager, "entries", {}).values():
+            wait = getattr(entry.func, "wait", None)
+            if callable(wait):
+                wait()
+
+    def _round(self, slots: list[tuple[int, int]], result: BatchResult) -> list[bool] | None:
+        """One demo per slot; the busy slots' success (their episodes are committed), or
+        ``None`` when a stop interrupted it (nothing committed)."""
         import torch
 
         n, busy = self.num_envs, len(slots)
         seeds = [episode_seed(self.spec.seed, k, a) for k, a in slots]
         seeds += [padding_seed(self.spec.seed, i) for i in range(busy, n)]
         self.env.reset(options={"reset_ids": list(range(n)), "episode_seeds": seeds, "save_data": False})
-        success, ended = self._replay(busy, result)
+        replayed = self._replay(busy, result)
+        if replayed is None:
+            return None
+        success, ended = replayed
         running = torch.nonzero(~ended[:busy]).flatten()
         if len(running):  # the commit boundary of the busy slots still running
             self.env.reset(options={"reset_ids": running})
         return [bool(s) for s in success[:busy]]
 
-    def _replay(self, busy: int, result: BatchResult) -> tuple[Any, Any]:
-        """Step the demo until the busy slots' episodes have all ended; per-slot success and ended."""
+    def _replay(self, busy: int, result: BatchResult) -> tuple[Any, Any] | None:
+        """Step the demo until the busy slots' episodes have all ended; per-slot success and
+        ended (``None``: stopped, the round's episodes are dropped uncommitted)."""
         import torch
 
         n = self.num_envs
         success = torch.zeros(n, dtype=torch.bool)
         ended = torch.zeros(n, dtype=torch.bool)
         for action in self.base.create_demo_action_list() or []:
+            if self.stopping():
+                self._drop_live()
+                return None
             _, _, terminated, truncated, info = self.env.step(torch.as_tensor(action))
             result.env_steps += n
             done = (_flags(terminated, n) | _flags(truncated, n)) & ~ended
@@ -139,6 +175,14 @@ class EpisodeWorker:
                 return success, ended
         success |= ~ended & _flags(self.base.is_task_success(), n)
         return success, ended
+
+    def _drop_live(self) -> None:
+        """Discard the live episodes of every slot (a stop ends the round without commits)."""
+        manager = getattr(self.base, "dataset_manager", None)
+        for entry in getattr(manager, "entries", {}).values():
+            discard = getattr(entry.func, "discard", None)
+            if callable(discard):
+                discard(list(range(self.num_envs)))
 
     def close(self) -> str | None:
         """Close the env (the recorder finalizes its shard); the shard folder or ``None``; idempotent."""
