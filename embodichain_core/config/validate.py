@@ -16,6 +16,7 @@ from typing import Any, Optional
 
 from embodichain_core.config.checks import check_int, check_number, check_vector
 from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.config.joint_check import check_robot_joints
 from embodichain_core.config.physical import check_scene
 from embodichain_core.config.plausible import check_plausible
 from embodichain_core.config.resources import MAX_NUM_ENVS, check_memory
@@ -55,6 +56,7 @@ def validate_env_cfg(cfg: Any, num_envs: Optional[int] = None, *, memory: bool =
     check_sim(cfg.sim_cfg, "sim_cfg")
     check_scene(cfg)
     check_plausible(cfg)
+    check_robot_joints(cfg.robot, "robot")
     check_sections(cfg)
     if memory:
         check_memory(cfg, num_envs)

@@ -24,7 +24,7 @@ import numpy as np
 import torch
 
 from embodichain_core.sim.entities.articulation import Articulation
-from embodichain_core.sim.entities.base import find_names
+from embodichain_core.config.joint_check import match_part_patterns
 from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix
 from embodichain_core.utils.suggest import did_you_mean
 
@@ -42,11 +42,9 @@ class Robot(Articulation):
     def __init__(self, uid: str, cfg: Any, scene: Any, record: Any):
         super().__init__(uid, cfg, scene, record)
         self.control_parts: dict[str, list[int]] = {}
+        path = getattr(record, "path", "") or "robot"
         for part, patterns in (cfg.control_parts or {}).items():
-            ids, _ = find_names(
-                self.joint_names, patterns, preserve_order=True, what="joint", owner=f"{uid} control part {part!r}"
-            )
-            self.control_parts[part] = ids
+            self.control_parts[part] = match_part_patterns(self.joint_names, path, str(part), patterns)
         self.solvers: dict[str, Any] = {}
         builder = getattr(cfg, "build_solvers", None)
         if callable(builder):
