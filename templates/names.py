@@ -25,8 +25,9 @@ FUNCTOR_NAME_RE = re.compile(r"^[a-z][a-z0-9]*(?:_[a-z0-9]+)*$")
 DISTRIBUTION_RE = re.compile(r"^[A-Za-z0-9](?:[A-Za-z0-9._-]*[A-Za-z0-9])?$")
 #: A lowercase importable package name.
 PACKAGE_RE = re.compile(r"^[a-z_][a-z0-9_]*$")
-#: A gymnasium id with a version: ``Name-vN`` (optionally ``namespace/Name-vN``).
-TASK_ID_RE = re.compile(r"^(?:[A-Za-z][\w-]*/)?[A-Za-z][\w.:-]*-v\d+$")
+#: A gymnasium id with a version, ``Name-vN``, without a namespace: the namespace is always
+#: the distribution that provides the task (``<distribution>/Name-vN``, added when it registers).
+TASK_ID_RE = re.compile(r"^[A-Za-z][\w.:-]*-v\d+$")
 #: The functor template's kinds.
 FUNCTOR_KINDS = ("observation", "reward", "event", "randomization")
 #: The functor template's default one-line description of each kind: what the baked example
@@ -105,7 +106,13 @@ def validate_task_context(ctx: dict[str, Any]) -> list[str]:
     if not cls.isidentifier() or keyword.iskeyword(cls) or not cls[:1].isupper():
         errors.append(f"invalid class name {cls!r}: use a CamelCase Python identifier")
     task_id = str(ctx.get("task_id", ""))
-    if not TASK_ID_RE.match(task_id):
+    if "/" in task_id:
+        bare, dist = task_id.rpartition("/")[2], ctx.get("distribution_name", "the distribution")
+        errors.append(
+            f"invalid task id {task_id!r}: give it without a namespace ({bare!r}); the gym namespace is always "
+            f"the distribution that provides the task, so it is registered as '{dist}/{bare}' and as {bare!r}"
+        )
+    elif not TASK_ID_RE.match(task_id):
         errors.append(f"invalid task id {task_id!r}: a gymnasium id ending in a version, like 'PushCube-v0' (Name-vN)")
     steps = ctx.get("max_episode_steps", 1)
     if not str(steps).isdigit() or int(steps) < 1:

@@ -119,6 +119,12 @@ def test_functor_descriptions_are_one_per_kind() -> None:
         (["task", "9lives"], "invalid task name '9lives'"),
         (["task", "my_task", "--task-id", "MyTask"], "invalid task id 'MyTask'"),
         (["task", "my_task", "--task-id", "My Task-v0"], "invalid task id 'My Task-v0'"),
+        (
+            ["task", "reach_target", "--task-id", "acme/ReachTarget-v0"],
+            "invalid task id 'acme/ReachTarget-v0': give it without a namespace ('ReachTarget-v0'); the gym "
+            "namespace is always the distribution that provides the task, so it is registered as "
+            "'embodichain-reach-target/ReachTarget-v0'",
+        ),
         (["task", "my_task", "--max-episode-steps", "0"], "invalid max_episode_steps 0"),
         (["functor", "Cube-Height", "--kind", "reward"], "invalid functor name 'Cube-Height'"),
         (["functor", "class", "--kind", "event"], "invalid functor name 'class'"),

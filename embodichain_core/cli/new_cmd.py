@@ -80,7 +80,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="task name: words of letters and digits joined by '-' or '_' "
         "(push_cube gives PushCube-v0 in embodichain-push-cube)",
     )
-    task.add_argument("--task-id", help="gymnasium id, Name-vN (default: <ClassName>-v0)")
+    task.add_argument(
+        "--task-id",
+        help="gymnasium id, Name-vN without a namespace (the namespace is the package's distribution; "
+        "default: <ClassName>-v0)",
+    )
     task.add_argument("--max-episode-steps", type=int, metavar="N", help="episode length (default: 100)")
     functor = sub.add_parser(
         "functor",
