@@ -56,6 +56,9 @@ def test_missing_absolute_path_raises_with_siblings(roots):
         get_data_path(str(roots.tmp / "abs" / "mesh.plyy"))
     assert "mesh.ply" in str(err.value)
     assert isinstance(err.value, FileNotFoundError)
+    # the hint names the documented way for a plugin, the hook
+    assert "embodichain_register_assets hook" in str(err.value)
+    assert "register_data_root" not in str(err.value)
 
 
 def test_env_root_wins_over_runtime_and_plugin_roots(roots):

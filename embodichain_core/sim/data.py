@@ -53,7 +53,10 @@ class DataPathNotFoundError(FileNotFoundError):
         lines += [f"  - {r}" + ("" if os.path.isdir(r) else " (missing)") for r in roots]
         if suggestions:
             lines.append("Closest existing names: " + ", ".join(repr(s) for s in suggestions))
-        lines.append(f"Set ${ENV_DATA_ROOT}, or register a root with register_data_root().")
+        lines.append(
+            f"Set ${ENV_DATA_ROOT}, or add a root from your plugin with the embodichain_register_assets hook "
+            "(docs/assets.md)."
+        )
         super().__init__("\n".join(lines))
 
 
