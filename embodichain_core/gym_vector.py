@@ -63,7 +63,7 @@ def _row(value: Any) -> Any:
     return value
 
 
-class UnbatchedEnv(gym.Wrapper):
+class UnbatchedEnv(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """A ``num_envs=1`` embodichain env in gymnasium's single-env layout (numpy).
 
     Observations, info values and spaces lose the batch dim; ``reward`` is a float and
@@ -73,14 +73,17 @@ class UnbatchedEnv(gym.Wrapper):
     vector env) resets as after any single env's episode.
 
     Wrapping an ``UnbatchedEnv`` again changes nothing (``make_vec(..., wrappers=[UnbatchedEnv])``
-    of a task whose sub-envs are already unbatched).
+    of a task whose sub-envs are already unbatched). The wrapper records itself in the env's
+    ``spec`` (gymnasium's ``RecordConstructorArgs``), so ``env.spec.make()`` rebuilds the wrapped
+    env, as gymnasium's ``check_env`` does.
 
     Args:
         env: the env, built with ``num_envs=1`` (``gym.make(task_id)``).
     """
 
     def __init__(self, env: gym.Env):
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.Wrapper.__init__(self, env)
         self._passthrough = isinstance(env, UnbatchedEnv)
         if self._passthrough:
             self.observation_space, self.action_space = env.observation_space, env.action_space

@@ -4,11 +4,13 @@ async vector envs, whose sub-envs are ``UnbatchedEnv`` s (single-env layout, las
 observation on done) with or without ``wrappers=[UnbatchedEnv]``."""
 
 import copy
+import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import torch
+from gymnasium.utils.env_checker import check_env
 
 from embodichain_core.gym_vector import BatchedEnvSpec, SingleEnvEntryPoint, UnbatchedEnv
 
@@ -58,6 +60,19 @@ def test_unbatched_env_layout_and_errors() -> None:
     assert info["elapsed_steps"] == 15  # the info of the episode's last step, not of the reset
     with pytest.raises(ValueError, match="num_envs=1"):
         UnbatchedEnv(gym.make(TASK, num_envs=2, verbose=False))
+
+
+def test_unbatched_env_passes_gymnasium_check_env() -> None:
+    # check_env rebuilds the env from env.spec (RecordConstructorArgs), then checks the spaces,
+    # seeding and the step/reset layout of the single-env API
+    env = UnbatchedEnv(gym.make(TASK, verbose=False))
+    try:
+        assert env.spec.additional_wrappers[-1].name == "UnbatchedEnv"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # the checker's advice on infinite Box bounds
+            check_env(env, skip_render_check=True)
+    finally:
+        env.close()
 
 
 def test_gym_make_stays_batched_and_only_make_vec_copies_unbatch() -> None:
