@@ -51,6 +51,7 @@ LAUNCHER_DEFAULTS: dict[str, Any] = {
     "filter_dataset_saving": False,
     "seed": None,
     "backend": None,
+    "viewer": None,
 }
 
 #: Launcher arguments that map onto a gym-config override of the same name.
@@ -64,6 +65,7 @@ OVERRIDE_KEYS = (
     "filter_visual_rand",
     "filter_dataset_saving",
     "backend",
+    "viewer",
 )
 
 #: Attribute of the parsed namespace holding the names of the arguments given on the command line.
@@ -112,6 +114,12 @@ def _backends() -> tuple[str, ...]:
     return BACKENDS
 
 
+def _viewer_modes() -> tuple[str, ...]:
+    from embodichain_core.viewing import VIEWER_MODES
+
+    return VIEWER_MODES
+
+
 def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_gym_config: bool = False) -> None:
     """Add the env launcher arguments to ``parser`` (in place).
 
@@ -146,6 +154,14 @@ def add_env_launcher_args_to_parser(parser: argparse.ArgumentParser, *, require_
         help=f"number of parallel environments (default: the config's, else {d['num_envs']})",
     )
     add("--headless", action=_Flag, help="run without a viewer window (default: the config's)")
+    add(
+        "--viewer",
+        action=_Value,
+        default=d["viewer"],
+        choices=_viewer_modes(),
+        help="open a viewer (implies headless false): auto = native window when DISPLAY/WAYLAND_DISPLAY "
+        "is set, else a browser page on localhost; none = no viewer (default: the config's, sim_cfg.viewer)",
+    )
     add(
         "--device",
         action=_Value,
@@ -202,6 +218,12 @@ def launcher_overrides(args: argparse.Namespace) -> dict[str, Any]:
     values = {key: getattr(args, key) for key in OVERRIDE_KEYS if key in given}
     if "preview" in given:
         values["filter_dataset_saving"] = True
+    if values.get("viewer") not in (None, "none"):
+        if values.get("headless"):
+            from embodichain_core.config.errors import ConfigError
+
+            raise ConfigError("viewer", f"--viewer {values['viewer']} opens a viewer: drop --headless (or the flag)")
+        values["headless"] = False
     return values
 
 

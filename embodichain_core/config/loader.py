@@ -62,6 +62,8 @@ SCENE_SECTIONS = (
 #: Flat top-level simulation keys -> ``sim_cfg`` field (``renderer`` -> ``render_cfg.renderer``).
 SIM_KEYS: dict[str, str] = {
     "headless": "headless",
+    "viewer": "viewer",
+    "viewer_port": "viewer_port",
     "device": "sim_device",
     "gpu_id": "gpu_id",
     "backend": "backend",

@@ -30,6 +30,7 @@ from embodichain_core.envs.spaces import batch_space, space_from_obs
 from embodichain_core.envs.summary import print_summary
 from embodichain_core.envs.task_api import TaskApi
 from embodichain_core.envs.timing import resolve_num_envs, resolve_timing
+from embodichain_core.viewing import attach_viewer
 
 
 class EmbodiedEnv(TaskApi, gym.Env):
@@ -72,6 +73,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._detached_uids_for_reset: list[str] = []
         self.rollout_buffer: Optional[RolloutBuffer] = None
         self._closed = False
+        self._viewer: Optional[Any] = None  # headless: false opens one once built (embodichain_core.viewing)
         # config, timing, seed
         self.cfg = env_build.resolve_cfg(self.cfg_cls, cfg, kwargs)
         self.metadata = dict(type(self).metadata)
@@ -110,11 +112,14 @@ class EmbodiedEnv(TaskApi, gym.Env):
             )
         if self.cfg.verbose:
             print_summary(self)
+        self._viewer = attach_viewer(self)
 
     # -- the loop ----------------------------------------------------------------------------------
     def step(self, action: Any) -> tuple[dict, torch.Tensor, torch.Tensor, torch.Tensor, dict]:  # type: ignore[override]
         """One control step of every env; ``action`` follows the rule of
         :mod:`embodichain_core.envs.action_check` (a bad action is one clear error)."""
+        if self._viewer is not None:  # the viewer's pause / single step / reset / speed
+            self._viewer.before_step()
         # 0. action check, once at the boundary
         action = self._check_action(action)
         # 1. action terms (pre): policy action -> command
@@ -149,6 +154,8 @@ class EmbodiedEnv(TaskApi, gym.Env):
         # 12. autoreset of the done envs (gymnasium SAME_STEP)
         if dones is not None:
             obs = self._auto_reset(obs, dones, info)
+        if self._viewer is not None:  # a copy of the state into the viewer's latest-state slot
+            self._viewer.after_step(obs, reward, info)
         return obs, reward, terminated, truncated, info
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
@@ -320,6 +327,8 @@ class EmbodiedEnv(TaskApi, gym.Env):
                 errors.append(err)
         for sensor in self.sensors.values():
             sensor.close()
+        if self._viewer is not None:
+            self._viewer.close()
         if errors:
             raise errors[0]
 

@@ -57,6 +57,11 @@ class SimulationManagerCfg:
     width: int = 1920
     height: int = 1080
     headless: bool = True
+    #: With ``headless: false``: ``auto`` (a native window when a display exists, else the
+    #: browser viewer), ``native``, ``browser`` or ``none`` (docs/viewer.md).
+    viewer: Literal["auto", "native", "browser", "none"] = "auto"
+    #: First localhost port the browser viewer tries (the next free one when taken).
+    viewer_port: int = 8080
     render_cfg: RenderCfg = RenderCfg()
     gpu_id: int = 0
     thread_mode: int = 0
