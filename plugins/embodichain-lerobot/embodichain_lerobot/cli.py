@@ -10,6 +10,10 @@ Commands:
     preview PATH --episode N [--out DIR] [--format png|mp4] [--frames K]
         a contact sheet PNG (or an mp4) of the episode's camera streams and a
         plot of its state and action over time.
+    replay PATH [--episode N | --all] [--json FILE] [--atol X] [--min_psnr DB] [--image_frames K]
+        rebuild the env from ``meta/embodichain_env.json``, replay each episode's recorded
+        actions from its recorded seed and compare the re-simulated features frame by
+        frame (:mod:`embodichain_lerobot.replay`); exit 1 when one is past tolerance.
 
 Exit codes: 0 success, 1 the command failed, 2 usage error or not a dataset.
 
@@ -25,7 +29,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
 PROG = "embodichain dataset"
 #: Episodes ``info`` lists without ``--episodes``.
@@ -57,7 +61,28 @@ def build_parser() -> argparse.ArgumentParser:
         help="camera preview: a contact-sheet PNG (default) or an mp4 of every frame",
     )
     prev.add_argument("--frames", type=int, default=8, metavar="K", help="frames in the contact sheet (default 8)")
+    _add_replay(sub)
     return parser
+
+
+def _add_replay(sub: Any) -> None:
+    from embodichain_lerobot.replay import MIN_PSNR
+
+    rep = sub.add_parser("replay", help="replay recorded episodes in the simulator and compare them frame by frame")
+    rep.add_argument("path", metavar="PATH", help="dataset folder (holds meta/embodichain_env.json)")
+    which = rep.add_mutually_exclusive_group()
+    which.add_argument("--episode", type=int, metavar="N", help="replay episode N (default: episode 0)")
+    which.add_argument("--all", action="store_true", help="replay every episode")
+    rep.add_argument("--json", metavar="FILE", help="write the per-episode, per-feature results as JSON")
+    rep.add_argument(
+        "--atol", type=float, metavar="X", help="numeric tolerance (default: 0 on mujoco_batch, 1e-3 on warp)"
+    )
+    rep.add_argument(
+        "--min_psnr", type=float, default=MIN_PSNR, metavar="DB", help=f"colour frames' PSNR floor (default {MIN_PSNR})"
+    )
+    rep.add_argument(
+        "--image_frames", type=int, default=3, metavar="K", help="camera frames compared per episode (default 3)"
+    )
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -69,6 +94,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if args.command == "info":
             return _info(args)
+        if args.command == "replay":
+            from embodichain_lerobot.replay_cli import run_replay
+
+            return run_replay(args)
         return _preview(args)
     except BrokenPipeError:  # the output was piped into `head` or similar
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -22,6 +22,7 @@ from typing import Any, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.suggest import did_you_mean
+from embodichain_lerobot.env_state import check_state_keys
 from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB
 
 #: Environment variable naming the default dataset root (``save_path`` not given).
@@ -71,6 +72,8 @@ class RecorderParams:
         min_free_mb: megabytes that must stay free on the dataset's filesystem: checked
             before the env is built and before each episode is saved (see
             :mod:`embodichain_lerobot.storage`).
+        environment_state: observation keys recorded together as one flat
+            ``observation.environment_state`` feature (:mod:`embodichain_lerobot.env_state`).
     """
 
     save_path: str = ""
@@ -87,6 +90,7 @@ class RecorderParams:
     max_pending_episodes: int = 64
     min_free_mb: int = DEFAULT_MIN_FREE_MB
     writer_process: Optional[bool] = None
+    environment_state: list[str] = field(default_factory=list)
 
     @property
     def task(self) -> str:
@@ -117,6 +121,7 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
     p.robot_meta = _as_dict(params.get("robot_meta"), "robot_meta")
     p.instruction = _as_dict(params.get("instruction"), "instruction")
     p.extra = _as_dict(params.get("extra"), "extra")
+    p.environment_state = check_state_keys(params.get("environment_state"))
     p.use_videos = bool(params.get("use_videos", False))
     p.vcodec = str(params.get("vcodec", p.vcodec))
     if p.vcodec not in VIDEO_CODECS:

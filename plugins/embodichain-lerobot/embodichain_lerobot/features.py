@@ -28,12 +28,13 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Any, Iterator, Optional
+from typing import Any, Iterator, Optional, Sequence
 
 import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_lerobot.env_state import state_source
 from embodichain_lerobot.packing import pack_depth, pack_mask
 
 ROBOT_KEYS = {"robot/qpos": "observation.state", "robot/qvel": "observation.qvel", "robot/qf": "observation.qf"}
@@ -80,6 +81,10 @@ class Source:
     shape: tuple
     names: Optional[list] = None
     lossless_video: bool = False  # depth/mask stored as a lossless video (depth_format "video")
+
+    def take(self, flat: dict[str, Any], num_envs: int) -> np.ndarray:
+        """This stream's batch of a flattened observation (see :meth:`convert`)."""
+        return self.convert(flat[self.key], num_envs)
 
     def convert(self, value: Any, num_envs: int) -> np.ndarray:
         """The batch ``(N, ...)`` as an owned array of the feature dtype and shape."""
@@ -187,13 +192,16 @@ class FeatureSpec:
         env: the env (joint names, sensors).
         depth_format: ``"video"`` (depth and masks as packed 16-bit lossless videos),
             ``"png16"`` (as packed 16-bit PNG images) or ``"raw"``.
+        environment_state: observation keys recorded together as
+            ``observation.environment_state`` (:mod:`embodichain_lerobot.env_state`).
     """
 
-    def __init__(self, obs: Any, env: Any, depth_format: str = "png16"):
+    def __init__(self, obs: Any, env: Any, depth_format: str = "png16", environment_state: Sequence[str] = ()):
         self.num_envs = int(env.num_envs)
         robot = env.robot
         self.joint_names = [str(robot.joint_names[j]) for j in env.active_joint_ids]
-        self.sources = list(_sources(flatten_obs(obs), env, self.joint_names, depth_format))
+        sources = list(_sources(flatten_obs(obs), env, self.joint_names, depth_format))
+        self.sources: list[Any] = state_source(sources, environment_state)[0]
         self._check_names()
         self.action_dim: Optional[int] = None
 
@@ -235,7 +243,7 @@ class FeatureSpec:
     def snapshot(self, obs: Any) -> dict[str, np.ndarray]:
         """Owned numpy copies ``(N, ...)`` of the recorded observation streams."""
         flat = flatten_obs(obs)
-        return {s.name: s.convert(flat[s.key], self.num_envs) for s in self.sources}
+        return {s.name: s.take(flat, self.num_envs) for s in self.sources}
 
 
 def action_array(action: Any, num_envs: int) -> np.ndarray:

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_lerobot.env_state import ENV_STATE, state_keys_of
 from embodichain_lerobot.features import IMAGE_KINDS, FeatureSpec, Source, flatten_obs
 
 __all__ = ["ObservationMapper", "policy_inputs"]
@@ -67,14 +68,16 @@ class ObservationMapper:
     def __init__(self, obs: Any, env: Any, config: Any, instruction: str | None = None):
         self.instruction = instruction
         wanted = policy_inputs(config)
-        self.spec = FeatureSpec(obs, env, depth_format=_depth_format(wanted))
+        state_keys = state_keys_of(getattr(getattr(env, "cfg", None), "dataset", None))
+        self.spec = FeatureSpec(obs, env, depth_format=_depth_format(wanted), environment_state=state_keys)
         self.num_envs = self.spec.num_envs
         by_name = {s.name: s for s in self.spec.sources}
         env_shapes = {name: _expected_shape(s) for name, s in by_name.items()}
         problems = []
         for name, (kind, shape) in wanted.items():
             if name not in by_name:
-                problems.append(f"{name} {list(shape)} is missing")
+                hint = " (the config's LeRobot recorder names it: params.environment_state)" if name == ENV_STATE else ""
+                problems.append(f"{name} {list(shape)} is missing{hint}")
             elif env_shapes[name] != shape:
                 problems.append(f"{name} is {list(shape)} for the policy, {list(env_shapes[name])} in the env")
             elif (kind == "VISUAL") != (by_name[name].kind in IMAGE_KINDS):
@@ -98,7 +101,7 @@ class ObservationMapper:
         if self.instruction is not None:
             batch["task"] = [self.instruction] * self.num_envs
         for s in self.sources:
-            arr = s.convert(flat[s.key], self.num_envs)
+            arr = s.take(flat, self.num_envs)
             if s.kind in IMAGE_KINDS:
                 tensor = torch.from_numpy(arr).permute(0, 3, 1, 2).float().div_(255.0)
             else:

@@ -44,6 +44,7 @@ from embodichain_lerobot.config import (
     robot_type_of,
 )
 from embodichain_lerobot.encoding import preload_lerobot
+from embodichain_lerobot.env_meta import write_env_meta
 from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
 from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
 from embodichain_lerobot.folders import clean_incomplete
@@ -76,7 +77,8 @@ class LeRobotRecorder(DatasetFunctor):
     ``vcodec``, ``streaming_encoding``, ``encoder_threads``, ``depth_format``,
     ``image_writer_threads``, ``image_writer_processes``, ``max_pending_episodes``
     (async variant only), ``min_free_mb``, ``writer_process`` (write in a child process;
-    default off here, on in the async variant). lerobot is imported on a thread once the
+    default off here, on in the async variant), ``environment_state`` (observation keys
+    recorded as one ``observation.environment_state`` vector). lerobot is imported on a thread once the
     first observation is recorded (the env build does not wait for it).
 
     Raises:
@@ -149,7 +151,7 @@ class LeRobotRecorder(DatasetFunctor):
     # -- recording -------------------------------------------------------------------------------
     def _ensure_spec(self, obs: Any) -> FeatureSpec:
         if self._spec is None:
-            self._spec = FeatureSpec(obs, self._env, self.params.depth_format)
+            self._spec = FeatureSpec(obs, self._env, self.params.depth_format, self.params.environment_state)
             if self._writer_process is None:
                 preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
         return self._spec
@@ -211,6 +213,7 @@ class LeRobotRecorder(DatasetFunctor):
         encoder_threads: Optional[int] = None,
         depth_format: Optional[str] = None,
         writer_process: Optional[bool] = None,
+        environment_state: Optional[list] = None,
     ) -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
 
@@ -285,6 +288,7 @@ class LeRobotRecorder(DatasetFunctor):
                 self._writer = self._writer_process
             else:
                 self._writer = DatasetWriter(root, *args, *more, **kwargs)
+            write_env_meta(root, self._env)  # what a replay rebuilds the env from
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
             raise
