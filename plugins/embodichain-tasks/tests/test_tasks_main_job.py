@@ -18,4 +18,5 @@ def test_main_job_records_pick_fork_demos_with_the_stereo_camera_as_video():
     assert recorder.func == "AsyncLeRobotRecorder"  # its writer process encodes beside stepping
     assert recorder.params["use_videos"] is True
     assert recorder.params["vcodec"] == "h264"
+    assert recorder.params["environment_state"] == ["fork_pose"]  # what state-based policies read
     assert [s.sensor_type for s in cfg.sensor] == ["StereoCamera"]
