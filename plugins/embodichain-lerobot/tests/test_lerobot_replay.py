@@ -138,3 +138,30 @@ def test_a_dataset_without_the_description_is_refused_clearly(dataset: Path, tmp
     code, _, err = _replay(capsys, str(bare))
     assert code == 2
     assert "embodichain_env.json does not exist" in err
+
+
+def test_eval_policy_builds_the_recorded_environment_state_from_the_env(dataset: Path) -> None:
+    """The policy's ``observation.environment_state`` is what the recorder stored (one mapping)."""
+    from types import SimpleNamespace
+
+    import torch
+    from lerobot.configs.types import FeatureType, PolicyFeature
+
+    from embodichain_core.cli import run_env
+    from embodichain_lerobot import eval_cli
+    from embodichain_lerobot.episode_reader import EpisodeFiles
+    from embodichain_lerobot.policy_inputs import ObservationMapper
+
+    config = dataset.parents[1] / "main_job_small.json"
+    args = eval_cli.build_parser().parse_args(["--policy", "-", "--gym_config", str(config), "--episodes", "2"])
+    env = run_env.make_env(eval_cli._plan(args))
+    seeds = [r["episode_seed"] for r in read_sidecar(dataset)[:2]]
+    try:
+        obs, _ = env.reset(options={"episode_seeds": seeds})
+        policy = SimpleNamespace(input_features={ENV_STATE: PolicyFeature(FeatureType.ENV, (16,))})
+        mapped = ObservationMapper(obs, env.unwrapped, policy)(obs)[ENV_STATE]
+    finally:
+        env.close()
+    for row in range(2):
+        recorded = EpisodeFiles(dataset, row).series(ENV_STATE)[0]
+        torch.testing.assert_close(mapped[row], torch.as_tensor(recorded, dtype=torch.float32), rtol=0, atol=0)
