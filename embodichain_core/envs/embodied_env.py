@@ -30,6 +30,7 @@ from embodichain_core.envs.spaces import batch_space, space_from_obs
 from embodichain_core.envs.summary import print_summary
 from embodichain_core.envs.task_api import TaskApi
 from embodichain_core.envs.timing import resolve_num_envs, resolve_timing
+from embodichain_core.managers.env_keys import check_after_first_reset
 from embodichain_core.viewing import attach_viewer
 
 
@@ -71,6 +72,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._pre_terms = self._post_terms = self._obs_terms = self._reward_terms = False  # set once built
         self.affordance_datas: dict[str, Any] = {}
         self._detached_uids_for_reset: list[str] = []
+        self._pending_env_keys: list = []  # env attributes to find after the first reset (env_keys)
         self.rollout_buffer: Optional[RolloutBuffer] = None
         self._closed = False
         self._viewer: Optional[Any] = None  # headless: false opens one once built (embodichain_core.viewing)
@@ -189,6 +191,9 @@ class EmbodiedEnv(TaskApi, gym.Env):
         ):
             if manager is not None:
                 manager.reset(ids)
+        if self._pending_env_keys:  # read by a functor, stored by no event: task code must have set them
+            check_after_first_reset(self, self._pending_env_keys)
+            self._pending_env_keys = []
         # 8. counters (through their numpy views: a torch index write costs several times more)
         rows = ids.cpu().numpy()
         self._elapsed_np[rows] = 0

@@ -3,7 +3,7 @@
 The env's ``__init__`` runs these in order: :func:`resolve_cfg` (config and keyword
 overrides) -> :func:`setup_scene` (extensions, scene, robot, active joints, default
 action space) -> :func:`build_managers` (event manager + startup events, observation,
-reward, action, dataset managers) -> the first observation and the spaces ->
+reward, action, dataset managers, the env attributes functors pass between them) -> the first observation and the spaces ->
 :func:`action_checker` (the boundary check of ``step``). The loop itself (``step``,
 ``reset``) lives in the env class, top to bottom.
 """
@@ -24,6 +24,7 @@ from embodichain_core.envs.robot_io import RobotIO
 from embodichain_core.envs.scene_setup import filter_functors, resolve_active_joints
 from embodichain_core.managers.action_manager import ActionManager
 from embodichain_core.managers.dataset_manager import DatasetManager
+from embodichain_core.managers.env_keys import check_env_keys
 from embodichain_core.managers.event_manager import EventManager
 from embodichain_core.managers.observation_manager import ObservationManager
 from embodichain_core.managers.reward_manager import RewardManager
@@ -110,6 +111,8 @@ def build_managers(env: Any, events: Any) -> None:
     if dataset is not None and not cfg.filter_dataset_saving:
         manager = DatasetManager(dataset, env)
         env.dataset_manager = manager if len(manager) else None
+    # functors passing an env attribute (randomize_target_pose -> target_position) agree on its name
+    env._pending_env_keys = check_env_keys(env)
 
 
 def recorders_need_buffer(manager: Optional[DatasetManager]) -> bool:

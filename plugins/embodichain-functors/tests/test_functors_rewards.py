@@ -55,9 +55,10 @@ def test_distance_to_target_needs_the_key_and_supports_xy(build) -> None:
             )
         }
     )
-    env.reset()
-    with pytest.raises(KeyError, match="goal_pose"):
+    with pytest.raises(KeyError, match="goal_pose"):  # before any reset: no goal yet
         terms(env)
+    with pytest.raises(ConfigError, match="env.goal_pose, which does not exist after the first reset"):
+        env.reset()  # no event stores it and the task did not set it
     env.goal_pose = torch.eye(4).repeat(4, 1, 1)
     env.goal_pose[:, :3, 3] = torch.tensor([0.5, 0.3, 1.0])
     assert torch.allclose(terms(env)["d"], torch.full((4,), -0.3), atol=2e-3)

@@ -215,7 +215,7 @@ def test_target_pose_relative_to_a_reference_entity(build) -> None:
         )
     )
     apply(env, [1])
-    assert torch.allclose(env.target_pose[1, :3, 3], torch.tensor(CUBE_POS) + torch.tensor([0, 0, 0.1]), atol=1e-5)
+    assert torch.allclose(env.goal_pose[1, :3, 3], torch.tensor(CUBE_POS) + torch.tensor([0, 0, 0.1]), atol=1e-5)
 
 
 def test_get_random_pose_is_reproducible() -> None:

@@ -129,3 +129,7 @@ def target_position(env: Any, obs: Any, target_pose_key: str = "goal_pose") -> t
         return torch.zeros(env.num_envs, 3)
     target = torch.as_tensor(target, dtype=torch.float32)
     return target[:, :3, 3].clone() if target.dim() == 3 else target[:, :3].clone()
+
+
+#: The param naming the env attribute it reads (checked against the writers at build).
+target_position.reads_env_key = "target_pose_key"  # type: ignore[attr-defined]

@@ -320,7 +320,7 @@ def _check_target(
     env: Any,
     position_range: Any = None,
     rotation_range: Any = None,
-    store_key: str = "target_pose",
+    store_key: str = "goal_pose",
     reference_entity_cfg: Any = None,
     **_: Any,
 ) -> None:
@@ -345,7 +345,7 @@ def randomize_target_pose(
     relative_position: bool = False,
     relative_rotation: bool = False,
     reference_entity_cfg: Optional[SceneEntityCfg] = None,
-    store_key: str = "target_pose",
+    store_key: str = "goal_pose",
 ) -> None:
     """Draw a virtual goal pose per env into ``env.<store_key>`` ((N, 4, 4), created on first use).
 
@@ -357,7 +357,8 @@ def randomize_target_pose(
         relative_position: add the draw to the reference entity's position (origin without one).
         relative_rotation: compose with the reference entity's orientation.
         reference_entity_cfg: entity whose current pose the relative draws start from.
-        store_key: env attribute receiving the poses (read by ``distance_to_target``).
+        store_key: env attribute receiving the poses (read by ``target_position``, ``distance_to_target``,
+            ``reaching_behind_object``: all default to ``goal_pose``).
 
     Example:
         ``{"func": "randomize_target_pose", "mode": "reset", "params": {"position_range":
@@ -380,3 +381,7 @@ def randomize_target_pose(
         target.numpy()[ids.numpy()] = mats
     else:
         target[ids] = torch.from_numpy(mats).to(target)
+
+
+#: The param naming the env attribute it writes (the readers are checked against it at build).
+randomize_target_pose.writes_env_key = "store_key"  # type: ignore[attr-defined]

@@ -120,7 +120,7 @@ def distance_to_target(
     action: Any,
     info: dict,
     source_entity_cfg: Any,
-    target_pose_key: str = "target_pose",
+    target_pose_key: str = "goal_pose",
     exponential: bool = False,
     sigma: float = 1.0,
     use_xy_only: bool = False,
@@ -165,6 +165,8 @@ class incremental_distance_to_target(CheckedFunctor):
         {"uid": "cube"}, "target_pose_key": "goal_pose", "tanh_scale": 10.0}}``
     """
 
+    reads_env_key = "target_pose_key"  # the param naming the env attribute it reads
+
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
         self._prev = torch.zeros(env.num_envs)
@@ -186,7 +188,7 @@ class incremental_distance_to_target(CheckedFunctor):
         action: Any,
         info: dict,
         source_entity_cfg: Any,
-        target_pose_key: str = "target_pose",
+        target_pose_key: str = "goal_pose",
         tanh_scale: float = 10.0,
         positive_weight: float = 1.0,
         negative_weight: float = 1.0,
@@ -273,3 +275,7 @@ def reaching_behind_object(
     point[:, 2] += height_offset
     ee = eef_pose(env.robot, default_part(env, env.robot, part_name))[:, :3, 3]
     return 1.0 - torch.tanh(distance_scale * (ee - point).norm(dim=-1))
+
+
+distance_to_target.reads_env_key = "target_pose_key"  # type: ignore[attr-defined]
+reaching_behind_object.reads_env_key = "target_pose_key"  # type: ignore[attr-defined]
