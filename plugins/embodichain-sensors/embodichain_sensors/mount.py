@@ -3,8 +3,10 @@
 ``parent`` names are resolved on the scene spec before compile:
 
 * an exact body name (``"table"``, ``"dexforce_w1/eyes"``, a ``"<robot uid>/<link>"``);
-* a link name of one articulation (``"eyes"`` -> ``"<robot uid>/eyes"``; robots first
-  when several articulations have that link);
+* a partial name: the trailing ``/``-separated parts of one full name (``"gripper_link"`` or
+  ``"vx300s_left/gripper_link"`` for ``"arm/vx300s_left/gripper_link"``; never a substring
+  within a part). When several full names end that way, the robot's are kept; more than one
+  left is an error listing them;
 * the same for sites (the camera is fixed to the site's body at the site's pose).
 """
 
@@ -79,5 +81,8 @@ def _match(name: str, names: list[str], records: dict, where: str) -> Optional[s
         robots = [n for n in hits if getattr(records.get(n.split("/", 1)[0]), "kind", "") == "robot"]
         hits = robots or hits
     if len(hits) > 1:
-        raise ConfigError(where, f"{name!r} is ambiguous: {hits}; name it as '<uid>/{name}'")
+        listed = ", ".join(repr(h) for h in sorted(hits))
+        raise ConfigError(
+            where, f"partial name {name!r} is ambiguous: {len(hits)} names end with it ({listed}); give one in full"
+        )
     return hits[0] if hits else None

@@ -206,3 +206,40 @@ def test_config_validation():
     assert isinstance(cfg, CameraCfg)
     assert cfg.extrinsics.eye == (1, 0, 1)
     assert cfg.fx == 48.8
+
+
+def _mount_spec(*names: str) -> "mujoco.MjSpec":
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    for name in names:
+        spec.worldbody.add_body(name=name)
+    return spec
+
+
+def test_a_partial_parent_name_matches_whole_trailing_parts() -> None:
+    from types import SimpleNamespace
+
+    from embodichain_sensors.mount import resolve_mount
+
+    spec = _mount_spec("arm/vx300s_left/gripper_link", "arm/vx300s_left/base", "drawer/gripper_link")
+    records = {"arm": SimpleNamespace(kind="robot"), "drawer": SimpleNamespace(kind="articulation")}
+    assert resolve_mount(spec, "vx300s_left/gripper_link", records, "s").body == "arm/vx300s_left/gripper_link"
+    # several articulations end with it: the robot's is kept
+    assert resolve_mount(spec, "gripper_link", records, "s").body == "arm/vx300s_left/gripper_link"
+    with pytest.raises(ConfigError, match="no link, body or site named 'ripper_link'"):
+        resolve_mount(spec, "ripper_link", records, "s")  # not a substring of a part
+
+
+def test_an_ambiguous_partial_parent_name_is_an_error_listing_the_matches() -> None:
+    from types import SimpleNamespace
+
+    from embodichain_sensors.mount import resolve_mount
+
+    spec = _mount_spec("aloha/vx300s_left/gripper_link", "aloha/vx300s_right/gripper_link")
+    records = {"aloha": SimpleNamespace(kind="robot")}
+    with pytest.raises(ConfigError) as err:
+        resolve_mount(spec, "gripper_link", records, "sensor[0].extrinsics.parent")
+    assert err.value.path == "sensor[0].extrinsics.parent"
+    assert "'aloha/vx300s_left/gripper_link', 'aloha/vx300s_right/gripper_link'" in err.value.reason
+    assert resolve_mount(spec, "vx300s_right/gripper_link", records, "s").body == "aloha/vx300s_right/gripper_link"
