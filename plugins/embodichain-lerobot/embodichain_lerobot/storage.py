@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import errno
 import json
+import logging
 import os
 import shutil
 import socket
@@ -213,3 +214,24 @@ def finish_orphaned(root: Path) -> bool:
     shutil.rmtree(Path(root) / STAGING, ignore_errors=True)
     (Path(root) / MARKER).unlink(missing_ok=True)
     return True
+
+
+class _EncoderDiskFull(logging.Filter):
+    """Drops lerobot's ``Encoder thread error: [Errno 28] ...`` log lines: the same error reaches
+    the save, which reports it once as a :class:`DiskFullError`."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        if not message.startswith("Encoder thread error"):
+            return True
+        return not any(mark in message for mark in ("Errno 28", "No space left", "Errno 122", "quota"))
+
+
+_ENCODER_FILTER = _EncoderDiskFull()
+
+
+def quiet_encoder_disk_full() -> None:
+    """Install the filter of lerobot's per-encoder-thread disk-full log lines on the root logger (idempotent)."""
+    root = logging.getLogger()
+    if _ENCODER_FILTER not in root.filters:
+        root.addFilter(_ENCODER_FILTER)

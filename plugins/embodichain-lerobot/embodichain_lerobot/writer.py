@@ -61,7 +61,7 @@ from embodichain_lerobot.encoding import (
 )
 from embodichain_lerobot.folders import STAGING
 from embodichain_lerobot.lossless_video import RoutedEncoder
-from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full
+from embodichain_lerobot.storage import DiskFullError, RecordingLock, is_disk_full, quiet_encoder_disk_full
 
 SIDECAR = "meta/embodichain_episodes.jsonl"
 SUBTASKS = "meta/subtasks.parquet"
@@ -163,6 +163,7 @@ class DatasetWriter:
                 "params.use_videos and params.streaming_encoding"
             )
         wait_lerobot()
+        quiet_encoder_disk_full()  # a full disk is reported once, by the save
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
         self.root = Path(root)

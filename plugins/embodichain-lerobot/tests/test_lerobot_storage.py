@@ -240,3 +240,29 @@ def test_a_live_recording_without_episodes_is_left_alone(make_env: Callable, tmp
         check_dataset_dir(writer.root)
     env.close()
     assert datasets_under(tmp_path) == []  # nothing saved: the folder is removed
+
+
+def test_lerobots_encoder_thread_disk_full_lines_are_dropped_and_other_errors_kept(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    import logging
+
+    storage.quiet_encoder_disk_full()
+    storage.quiet_encoder_disk_full()  # idempotent
+    assert logging.getLogger().filters.count(storage._ENCODER_FILTER) == 1
+    with caplog.at_level(logging.ERROR):
+        logging.error("Encoder thread error: [Errno 28] No space left on device")
+        logging.error("Encoder thread error: codec failed")
+    assert [r.getMessage() for r in caplog.records] == ["Encoder thread error: codec failed"]
+
+
+def test_finish_orphaned_removes_staging_and_a_dead_marker_only_from_a_saved_dataset(tmp_path: Path) -> None:
+    (tmp_path / "meta").mkdir()
+    (tmp_path / ".embodichain_staging").mkdir()
+    (tmp_path / storage.MARKER).write_text(json.dumps({"pid": 1, "locked": True}))
+    (tmp_path / "meta" / "info.json").write_text(json.dumps({"total_episodes": 0}))
+    assert not storage.finish_orphaned(tmp_path)  # no saved episode: left for clean_incomplete
+    (tmp_path / "meta" / "info.json").write_text(json.dumps({"total_episodes": 2}))
+    assert storage.finish_orphaned(tmp_path)
+    assert not (tmp_path / ".embodichain_staging").exists()
+    assert not (tmp_path / storage.MARKER).exists()
