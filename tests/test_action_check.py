@@ -123,3 +123,38 @@ def test_host_array_is_the_view_of_the_last_action_passed_as_it_was() -> None:
     with pytest.raises(ValueError, match="NaN"):
         check(torch.full((2, 7), float("nan")))
     assert check.host_array(action) is None
+
+
+def test_a_sparse_tensor_action_gets_a_clear_error(make_env) -> None:
+    env = make_env()
+    env.reset()
+    sparse = torch.zeros(2, ARM_ACTIVE).to_sparse()
+    with pytest.raises(TypeError, match=r"action is a torch.sparse_coo tensor; expected .* dense tensor .*to_dense"):
+        env.step(sparse)
+
+
+def _box(low: list, high: list):
+    import gymnasium as gym
+
+    return gym.spaces.Box(low=np.array([low] * 2, np.float32), high=np.array([high] * 2, np.float32))
+
+
+def test_out_of_space_values_are_counted_per_env_step() -> None:
+    check = ActionChecker(2, [3], torch.device("cpu"), _box([-1, -1, -1], [1, 1, 1]))
+    check(torch.zeros(2, 3))
+    assert check.out_of_space == 0
+    check(torch.tensor([[0.0, 5.0, 0.0], [0.0, 0.0, 0.0]]))
+    assert check.out_of_space == 1
+    check(np.full((2, 3), -2.0))  # the converted path counts too
+    assert check.out_of_space == 3
+    per_joint = ActionChecker(2, [3], torch.device("cpu"), _box([-1, -2, 0], [1, 2, 3]))
+    per_joint(torch.tensor([[0.5, -1.5, 2.5], [0.5, 1.5, -0.1]]))  # only env 1's last value is outside
+    assert per_joint.out_of_space == 1
+
+
+def test_strict_raises_naming_the_env_value_and_bounds() -> None:
+    check = ActionChecker(2, [3], torch.device("cpu"), _box([-1, -2, 0], [1, 2, 3]), strict=True)
+    check(torch.tensor([[1.0, -2.0, 3.0], [-1.0, 2.0, 0.0]]))  # the bounds are inside
+    with pytest.raises(ValueError, match=r"env\(s\) \[1\]: value 1e\+30 at index 1 is not in \[-2, 2\]"):
+        check(torch.tensor([[0.0, 0.0, 0.0], [0.0, 1e30, 0.0]]))
+    assert check.out_of_space == 0

@@ -106,7 +106,15 @@ def test_demo_runs_and_prints_a_summary(capsys: pytest.CaptureFixture) -> None:
     assert "env-steps/s" in out
     assert "wall time" in out
     assert "no dataset recorder" in out
+    assert "actions      0 env-step(s) outside the action space (clipped)" in out  # random actions: inside
     assert "Environment initialized" not in out  # --quiet
+
+
+def test_the_start_up_summary_names_the_backend(capsys: pytest.CaptureFixture) -> None:
+    assert embodichain(["run-env", "--max_episodes", "1", "--max_steps", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "Environment initialized" in out
+    assert "│ Backend  mujoco_batch (CPU threads: " in out
 
 
 def test_num_envs_overrides_only_when_given(tmp_path: Path, task: Callable) -> None:

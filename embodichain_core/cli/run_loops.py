@@ -227,6 +227,9 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
         f"  env steps    {stats.env_steps} ({speed:.1f} env-steps/s)",
         f"  wall time    {stats.build_s + stats.run_s:.2f} s (build {stats.build_s:.2f} s, run {stats.run_s:.2f} s)",
     ]
+    outside = getattr(env.unwrapped, "out_of_space_actions", None)
+    if outside is not None:
+        lines.append(f"  actions      {outside} env-step(s) outside the action space (clipped)")
     if stats.saved is not None:
         lines.append(f"  saved        {stats.saved} episode(s); failed {stats.failed}")
     if stats.discarded:

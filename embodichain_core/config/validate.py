@@ -81,6 +81,7 @@ def check_run_settings(cfg: Any, num_envs: Optional[int] = None) -> None:
         "filter_visual_rand",
         "filter_dataset_saving",
         "init_rollout_buffer",
+        "strict_actions",
     ):
         if not isinstance(getattr(cfg, name, False), bool):
             raise ConfigError(join_path("env", name), f"expected true/false, got {getattr(cfg, name)!r}")

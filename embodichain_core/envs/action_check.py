@@ -14,6 +14,13 @@ The rule (docs/embodied_env.md, "Actions"):
 * A dict action (for dict-driven action terms, or ``qpos``/``qvel``/``qf`` commands
   without action terms) must use the known keys; each value follows the rule above
   with its own width.
+* A sparse (or otherwise non-strided) tensor is a ``TypeError`` asking for ``to_dense()``.
+* Values outside the action space (a ``Box``'s ``low``/``high``) are accepted and left to
+  the action terms and drives, which clip them (``DeltaQposTerm`` clips its targets to the
+  joint limits, the drives their forces); :attr:`ActionChecker.out_of_space` counts the
+  env-steps that had one. With ``strict`` such an action is a ``ValueError`` naming the
+  envs, the value and the bounds. The bounds are checked for array actions of the action
+  space's width on the CPU (a GPU action only with ``strict``).
 
 The result is a float32 tensor ``(num_envs, width)`` (a dict of them for dict actions).
 """
@@ -50,6 +57,11 @@ class ActionChecker:
         space: the action space, shown in messages.
         dict_widths: accepted dict keys -> their accepted widths (empty: dicts rejected).
         detail: what the values mean, appended to shape errors (e.g. the terms' split).
+        strict: an action outside the action space's bounds raises instead of being counted.
+
+    Attributes:
+        out_of_space: env-steps whose action had a value outside the action space (clipped
+            downstream; see the module docstring).
     """
 
     def __init__(
@@ -60,6 +72,7 @@ class ActionChecker:
         space: Any,
         dict_widths: Mapping[str, Sequence[int]] | None = None,
         detail: str = "",
+        strict: bool = False,
     ):
         self.num_envs, self.widths = int(num_envs), [int(w) for w in widths]
         self.device, self.detail = torch.device(device), detail
@@ -69,18 +82,27 @@ class ActionChecker:
         self._shapes = frozenset((self.num_envs, w) for w in self.widths)  # taken as they are
         self._on_cpu = self.device.type == "cpu"
         self._last: tuple[Any, Any] = (None, None)  # (the last CPU action passed as is, its numpy view)
+        self.strict, self.out_of_space = bool(strict), 0
+        self._bounds = _box_bounds(space, self.widths[0])
 
     def __call__(self, action: Any) -> torch.Tensor | dict[str, torch.Tensor]:
-        if type(action) is torch.Tensor and action.dtype is torch.float32 and action.shape in self._shapes:
+        if (
+            type(action) is torch.Tensor
+            and action.dtype is torch.float32
+            and action.shape in self._shapes
+            and action.layout is torch.strided
+        ):
             # the common case: no conversion at all; on the CPU one numpy check
             if self._on_cpu and action.is_cpu and not action.requires_grad:
                 array = action.numpy()
                 if np.count_nonzero(np.isfinite(array)) == array.size:  # ~0.5 us; .all() takes ~1 us
+                    self._check_bounds(array)
                     self._last = (action, array)
                     return action
             self._last = (None, None)
             self._check_device(action, "action")
             self._check_finite(action, "action")
+            self._check_bounds_tensor(action)
             return action
         self._last = (None, None)
         if isinstance(action, Mapping):
@@ -113,13 +135,47 @@ class ActionChecker:
         self._check_device(tensor, what)
         tensor = self._shaped(tensor, widths, what).to(torch.float32)
         self._check_finite(tensor, what)
+        if what == "action":
+            self._check_bounds_tensor(tensor)
         return tensor
+
+    def _check_bounds_tensor(self, tensor: torch.Tensor) -> None:
+        if tensor.device.type == "cpu":
+            self._check_bounds(tensor.detach().numpy())
+        elif self.strict and self._bounds is not None and tensor.shape[-1] == self._bounds[0].shape[0]:
+            self._check_bounds(tensor.detach().cpu().numpy())
+
+    def _check_bounds(self, array: np.ndarray) -> None:
+        """Count (or with ``strict`` raise for) the envs whose action leaves the space."""
+        if self._bounds is None:
+            return
+        low, high, uniform = self._bounds
+        if array.shape[-1] != low.shape[0]:
+            return
+        if uniform and low[0] <= array.min() and array.max() <= high[0]:  # the common case: two reductions
+            return
+        outside = ((array < low) | (array > high)).reshape(-1, low.shape[0])
+        rows = outside.any(axis=-1)
+        count = int(np.count_nonzero(rows))
+        if not count:
+            return
+        if self.strict:
+            env, dim = (int(i) for i in np.argwhere(outside)[0])
+            value = float(array.reshape(-1, low.shape[0])[env, dim])
+            raise ValueError(
+                f"action outside the action space in env(s) {np.flatnonzero(rows)[:8].tolist()}: value {value:g} "
+                f"at index {dim} is not in [{low[dim]:g}, {high[dim]:g}] (action space {self.space}; strict "
+                "action check: without it the value would be clipped)"
+            )
+        self.out_of_space += count
 
     def _as_tensor(self, value: Any, widths: Sequence[int], what: str) -> torch.Tensor:
         expected = f"expected {self._expected(widths)} (action space {self.space})"
         if value is None or isinstance(value, (str, bytes)):
             raise TypeError(f"{what} is {type(value).__name__}; {expected}")
         if isinstance(value, torch.Tensor):
+            if value.layout != torch.strided:
+                raise TypeError(f"{what} is a {value.layout} tensor; {expected} as a dense tensor (use .to_dense())")
             tensor = value
         else:
             try:
@@ -167,3 +223,18 @@ class ActionChecker:
     def _expected(self, widths: Sequence[int]) -> str:
         alt = f" or {widths[1:]} values per env" if len(widths) > 1 else ""
         return f"shape ({self.num_envs}, {widths[0]}){alt}"
+
+
+def _box_bounds(space: Any, width: int) -> tuple[np.ndarray, np.ndarray, bool] | None:
+    """``(low, high, uniform)`` of one env's action (a Box of ``width`` values, batched or
+    not), ``None`` when the space has no such bounds or is unbounded everywhere."""
+    low, high = getattr(space, "low", None), getattr(space, "high", None)
+    if low is None or high is None:
+        return None
+    low, high = np.asarray(low, dtype=np.float32), np.asarray(high, dtype=np.float32)
+    if low.ndim == 2:
+        low, high = low[0], high[0]
+    if low.shape != (width,) or high.shape != (width,) or not (np.isfinite(low).any() or np.isfinite(high).any()):
+        return None
+    uniform = bool((low == low[0]).all() and (high == high[0]).all())
+    return low, high, uniform

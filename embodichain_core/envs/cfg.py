@@ -82,6 +82,9 @@ class EmbodiedEnvCfg(EnvCfg):
     filter_visual_rand: bool = False
     filter_dataset_saving: bool = False
     init_rollout_buffer: bool = False
+    #: An action outside the action space raises (``ValueError``) instead of being clipped
+    #: by the action terms and drives (and counted; docs/embodied_env.md, "Actions").
+    strict_actions: bool = False
 
     def validate(self, prefix: str = "", *, memory: bool = True) -> List[str]:
         """Check the config before the env builds anything.

@@ -306,6 +306,12 @@ class EmbodiedEnv(TaskApi, gym.Env):
         manager.commit(env_ids[keep])
         manager.discard(env_ids[~keep])
 
+    @property
+    def out_of_space_actions(self) -> int:
+        """Env-steps so far whose action had a value outside the action space (the action
+        terms and drives clipped it; ``strict_actions`` raises instead)."""
+        return int(self._check_action.out_of_space)
+
     def _seed_rng(self, seed: Optional[int]) -> None:
         """Seed ``env.generator``, ``env.np_random`` and the episode streams ``env.rng``."""
         if seed is None or seed == -1:

@@ -135,9 +135,10 @@ def action_checker(env: Any) -> ActionChecker:
             keys[name] = keys[term.input_key] = [term.action_dim]
         dims = [t.action_dim for t in terms.values()]
         detail = f"the action terms {list(terms)} take {dims} values in this order (total {sum(dims)})"
-        return ActionChecker(env.num_envs, [sum(dims)], env.device, env.action_space, keys, detail)
+        return ActionChecker(
+            env.num_envs, [sum(dims)], env.device, env.action_space, keys, detail, strict=env.cfg.strict_actions
+        )
     n_active = len(env.active_joint_ids)
     widths = sorted({n_active, env.robot.dof}, key=lambda w: w != n_active)
-    return ActionChecker(
-        env.num_envs, widths, env.device, env.action_space, {key: widths for key in ("qpos", "qvel", "qf")}
-    )
+    dict_widths = {key: widths for key in ("qpos", "qvel", "qf")}
+    return ActionChecker(env.num_envs, widths, env.device, env.action_space, dict_widths, strict=env.cfg.strict_actions)

@@ -10,6 +10,7 @@ def summary_text(env: Any) -> str:
     lines = [f"╭─ Environment initialized: {type(env).__name__}"]
     add = lines.append
     add(f"│ Parallel environments  {env.num_envs}   device {env.device}   seed {env.cfg.seed}")
+    add(f"│ Backend  {backend_text(env)}")
     add(
         f"│ Physics  {env.physics_dt:g} s ({env.physics_frequency:g} Hz, {env.cfg.sim_cfg.physics_substeps} MuJoCo substeps)"
     )
@@ -45,6 +46,16 @@ def summary_text(env: Any) -> str:
             add(f"│     [{mode}] {name}: {detail}")
     add("╰─ Ready")
     return "\n".join(lines)
+
+
+def backend_text(env: Any) -> str:
+    """``mujoco_batch (CPU threads: 2, float64)`` or ``warp (MuJoCo Warp on cuda:0, float32)``."""
+    sim_cfg = env.cfg.sim_cfg
+    backend = getattr(sim_cfg, "backend", "mujoco_batch")
+    if backend == "warp":
+        return f"warp (MuJoCo Warp on {sim_cfg.sim_device}, float32)"
+    threads = getattr(getattr(env, "sim", None), "nthread", None)
+    return f"{backend} (CPU threads: {threads if threads is not None else 'auto'}, float64)"
 
 
 def print_summary(env: Any) -> None:

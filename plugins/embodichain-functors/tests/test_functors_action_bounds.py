@@ -74,3 +74,23 @@ def test_sampled_actions_keep_every_env_finite(build, func) -> None:
         assert not info["diverged"].any()
         assert torch.isfinite(obs["robot"]["qpos"]).all()
         assert torch.isfinite(reward).all()
+
+
+def test_out_of_space_actions_are_clipped_and_counted_or_raise_when_strict(build) -> None:
+    env = build(actions=term(actions.DeltaQposTerm, scale=0.1))
+    env.reset()
+    assert env.out_of_space_actions == 0
+    env.step(torch.zeros(4, NA))
+    huge = torch.zeros(4, NA)
+    huge[1, 2] = 1e30
+    env.step(huge)  # DeltaQposTerm clips the target to the joint limit
+    limits = env.robot.get_qpos_limits()[1, env.active_joint_ids[2]]
+    assert env.robot.get_qpos(target=True)[1, env.active_joint_ids[2]] == pytest.approx(float(limits[1]))
+    assert env.out_of_space_actions == 1
+    env.step(torch.full((4, NA), 2.0))  # every env outside [-1, 1]
+    assert env.out_of_space_actions == 5
+    strict = build(actions=term(actions.DeltaQposTerm, scale=0.1), strict_actions=True)
+    strict.reset()
+    with pytest.raises(ValueError, match=r"env\(s\) \[1\]: value 1e\+30 at index 2 is not in \[-1, 1\]"):
+        strict.step(huge)
+    strict.step(torch.full((4, NA), 1.0))  # the bounds themselves are inside
