@@ -10,9 +10,12 @@ with stepping and rendering for this process's GIL, and lerobot is imported ther
 while the first episodes run. Stepping waits only when ``max_pending_episodes`` episodes are queued
 (0: never). A worker error is raised at the next commit, step or ``finalize()`` (a
 :class:`~embodichain_lerobot.storage.DiskFullError` as itself, others wrapped);
-``finalize()`` drains the queue first, so every committed episode is written
-(a ``SIGKILL`` of the recording process loses the episodes still queued in it; the
-writer process publishes the one it received and finalizes), and rejects later commits.
+``finalize()`` drains the queue first, so every committed episode is written, and
+rejects later commits. ``saved_episodes`` counts an episode only once it is published
+(loadable after any kill). After a ``SIGKILL`` of the recording process the writer
+process still writes every episode it had received (they are sent as they are
+committed), then finalizes; :meth:`AsyncLeRobotRecorder.wait` blocks until everything
+committed is published (``embodichain generate``'s workers call it before they report).
 """
 
 from __future__ import annotations

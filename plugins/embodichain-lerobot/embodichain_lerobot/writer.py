@@ -91,7 +91,7 @@ def deferred_sigint() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    held = {}
+    held: dict[int, Any] = {}
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         held[signal.SIGINT] = signal.default_int_handler
     term = signal.getsignal(signal.SIGTERM)
