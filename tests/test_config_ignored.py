@@ -110,3 +110,51 @@ def test_an_articulations_iteration_counts_are_mapped_too(owner: str) -> None:
         assert env.scene.model.opt.iterations == 74  # 4 + 70, above physics_config.iterations (50)
     finally:
         env.close()
+
+
+def _cube_tree_asleep(cfg: Any, steps: int = 60) -> tuple[Any, bool]:
+    env = EmbodiedEnv(cfg)
+    try:
+        env.reset(seed=0)
+        for _ in range(steps):
+            env.step(torch.zeros(env.action_space.shape))
+        model, data = env.scene.model, env.sim.get_data(0)
+        tree = int(model.body_treeid[env.scene["cube"].body_id])
+        return model, bool(data.tree_asleep[tree] >= 0)
+    finally:
+        env.close()
+
+
+def test_sleep_threshold_maps_onto_mujocos_sleeping_when_enabled() -> None:
+    import mujoco
+
+    cfg = base_cfg()
+    model, asleep = _cube_tree_asleep(cfg)
+    assert not asleep  # sleeping is off by default
+    assert not model.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    cfg = base_cfg()
+    cfg.sim_cfg.physics_config.enable_sleep = True
+    cfg.rigid_object[0].attrs.sleep_threshold = 0.002
+    model, asleep = _cube_tree_asleep(cfg)
+    assert asleep  # the resting cube's tree sleeps
+    assert model.opt.sleep_tolerance == pytest.approx((2 * 0.002) ** 0.5)  # the speed of that energy per kg
+    assert ignored_fields(cfg) == []  # mapped, so not reported
+    cfg.rigid_object[0].attrs.sleep_threshold = 0.0  # 0: never sleeps
+    model, asleep = _cube_tree_asleep(cfg)
+    assert not asleep
+    assert int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER) in model.tree_sleep_policy.tolist()
+
+
+@pytest.mark.parametrize("edit", ["warp", "not_persistent"])
+def test_sleeping_needs_a_persistent_cpu_batch(edit: str) -> None:
+    from embodichain_core.config.errors import ConfigError
+
+    cfg = base_cfg()
+    cfg.sim_cfg.physics_config.enable_sleep = True
+    if edit == "warp":
+        cfg.sim_cfg.backend = "warp"
+    else:
+        cfg.sim_cfg.persistent = False
+    with pytest.raises(ConfigError) as err:
+        cfg.validate(memory=False)
+    assert err.value.path == "sim_cfg.physics_config.enable_sleep"

@@ -25,7 +25,7 @@ __all__ = ["IgnoredField", "IgnoredFieldWarning", "ignored_fields", "warn_ignore
 
 _NO_CCD = "MuJoCo has no continuous collision detection; against tunnelling lower physics_dt or raise physics_substeps"
 _NO_CLAMP = "MuJoCo has no body velocity clamp; bound velocities with damping or joint drive limits"
-_SLEEP = "bodies never sleep here (every env steps every body)"
+_SLEEP = "bodies sleep only with physics_config.enable_sleep: true (MuJoCo's sleeping islands)"
 _BODY = {
     "max_depenetration_velocity": "penetration is resolved by the contact's solref time constant, not capped",
     "sleep_threshold": _SLEEP,
@@ -164,6 +164,8 @@ def ignored_fields(cfg: Any) -> list[IgnoredField]:
         shape = getattr(entity, "shape", None)
         if type(shape).__name__ == "MeshCfg":
             out += _scan(shape, "mesh", join_path(path, "shape"))
+    if sim.physics_config.enable_sleep:  # then every sleep_threshold is mapped (SceneBuilder.sleep_policy)
+        out = [f for f in out if not f.path.endswith("sleep_threshold")]
     return out
 
 

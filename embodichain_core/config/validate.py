@@ -117,6 +117,22 @@ def check_backend(sim: Any, path: str) -> None:
         )
 
 
+def check_sleep(sim: Any, where: str) -> None:
+    """``enable_sleep`` (MuJoCo's sleeping islands) needs a persistent ``mujoco_batch``."""
+    if not isinstance(sim.physics_config.enable_sleep, bool):
+        raise ConfigError(
+            join_path(where, "enable_sleep"), f"expected true/false, got {sim.physics_config.enable_sleep!r}"
+        )
+    if not sim.physics_config.enable_sleep:
+        return
+    if getattr(sim, "backend", "mujoco_batch") == "warp":
+        raise ConfigError(join_path(where, "enable_sleep"), "sleeping is not available on backend 'warp'")
+    if not sim.persistent:
+        raise ConfigError(
+            join_path(where, "enable_sleep"), "sleeping needs a persistent batch (sim_cfg.persistent: true)"
+        )
+
+
 def check_sim(sim: Any, path: str) -> None:
     """``SimulationManagerCfg``: time step, substeps, solver, gravity, window and render sizes."""
     check_number(
@@ -130,6 +146,7 @@ def check_sim(sim: Any, path: str) -> None:
         check_int(getattr(sim, name), join_path(path, name), low=0, high=4096)
     check_backend(sim, path)
     phys, where = sim.physics_config, join_path(path, "physics_config")
+    check_sleep(sim, where)
     check_vector(phys.gravity, 3, join_path(where, "gravity"), what="m/s^2")
     check_int(phys.iterations, join_path(where, "iterations"), low=1, high=10_000)
     for name in ("bounce_threshold", "length_tolerance", "speed_tolerance"):

@@ -38,6 +38,9 @@ class PhysicsCfg:
     solver: Literal["Newton", "CG", "PGS"] = "Newton"
     iterations: int = 50
     cone: Literal["pyramidal", "elliptic"] = "pyramidal"
+    #: MuJoCo's sleeping islands: resting bodies stop being simulated until something wakes
+    #: them. Each body's ``sleep_threshold`` then applies (0: never sleeps); off by default.
+    enable_sleep: bool = False
     enable_ccd: bool = False
     bounce_threshold: float = 2.0
     length_tolerance: float = 0.05

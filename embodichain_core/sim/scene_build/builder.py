@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+import math
+
 import mujoco
 import numpy as np
 
@@ -56,6 +58,7 @@ class SceneBuilder:
         self.records: dict[str, EntityRecord] = {}
         self._post_compile: list[Callable[[mujoco.MjModel], None]] = []
         self.collision_bit = 0  # the last articulation's collision bit (builder_articulation)
+        self._sleep_speed: float | None = None  # the sleep tolerance from sleep_threshold (sleep_policy)
         self._configure_options()
         self.add_ground()
 
@@ -75,6 +78,8 @@ class SceneBuilder:
         # a diverging simulation must surface (non-finite state) so the env can
         # warn and reset that env, instead of MuJoCo silently resetting it
         opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+        if phys.enable_sleep:
+            opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
         opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC if phys.cone == "elliptic" else mujoco.mjtCone.mjCONE_PYRAMIDAL
         self.spec.compiler.autolimits = True
         self.spec.visual.global_.offwidth = max(int(cfg.width), 640)
@@ -123,6 +128,20 @@ class SceneBuilder:
         for owner in owners:
             need = int(owner.min_position_iters) + int(owner.min_velocity_iters)
             self.spec.option.iterations = max(int(self.spec.option.iterations), need)
+
+    def sleep_policy(self, body: Any, threshold: float) -> None:
+        """Map a body's ``sleep_threshold`` (PhysX: kinetic energy per unit mass) onto MuJoCo's
+        sleeping, when ``physics_config.enable_sleep`` is on: 0 keeps the body's tree awake;
+        otherwise the model's velocity tolerance becomes at most ``sqrt(2 * threshold)`` (the
+        speed of that kinetic energy), the smallest of all bodies (MuJoCo has one tolerance)."""
+        if not self.sim_cfg.physics_config.enable_sleep:
+            return
+        if float(threshold) <= 0:
+            body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER
+            return
+        speed = math.sqrt(2.0 * float(threshold))
+        self._sleep_speed = speed if self._sleep_speed is None else min(self._sleep_speed, speed)
+        self.spec.option.sleep_tolerance = self._sleep_speed
 
     def on_compile(self, fn: Callable[[mujoco.MjModel], None]) -> None:
         """Run ``fn(model)`` on every compiled model (base and variants)."""

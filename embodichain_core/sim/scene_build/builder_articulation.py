@@ -60,6 +60,7 @@ def add_articulation(builder: SceneBuilder, cfg: ArticulationCfg, kind: str, pat
     )
     root_name = root.name or "base"
     root.name = root_name
+    builder.sleep_policy(root, cfg.sleep_threshold)
     bodies = bfs_bodies(root)
     builder.spec.attach(child, frame=frame, prefix=f"{cfg.uid}/")
     record.root_body = f"{cfg.uid}/{root_name}"

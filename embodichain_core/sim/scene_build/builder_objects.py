@@ -102,6 +102,7 @@ def _add_body(builder: SceneBuilder, cfg: RigidObjectCfg, name: str) -> Any:
     body.quat = init_quat_from_cfg(cfg.init_rot, cfg.init_local_pose)
     if cfg.body_type == "dynamic":
         body.add_freejoint(name=f"{name}/free")
+        builder.sleep_policy(body, cfg.attrs.sleep_threshold)
     else:
         body.mocap = True
     return body
