@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint format typecheck setup system-deps bench docs clean
+.PHONY: run test test-docs-slow lint format typecheck setup system-deps bench docs clean
 
 $(STAMP): pyproject.toml scripts/setup_env.sh $(wildcard plugins/*/pyproject.toml)
 	PYTHON=$(PYTHON) bash scripts/setup_env.sh
@@ -21,8 +21,14 @@ MAIN_JOB := plugins/embodichain-tasks/embodichain_tasks/configs/main_job.json
 run: $(STAMP)
 	$(VENV)/bin/embodichain run-env --gym_config $(MAIN_JOB) --headless
 
+# The docs harness runs in its own process (conftest.py, docs/contributing.md): every shell and
+# Python block of README.md and docs/*.md, in fast mode; the blocks marked slow run in .ci/run.
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests $(wildcard plugins/*/tests)
+	$(PY) -m pytest -q -m "not slow" README.md docs
+
+test-docs-slow: $(STAMP)
+	$(PY) -m pytest -q -m slow README.md docs
 
 # Lint gate (ruff: the lint rules and the formatter's check; settings in pyproject.toml [tool.ruff]).
 # `make format` applies the formatter.
@@ -39,6 +45,7 @@ typecheck: $(STAMP)
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q tests $(wildcard plugins/*/tests)
+	$(PY) -m pytest -q README.md docs
 
 # The docs site (mkdocs, material theme) into site/; strict: a broken link or anchor, or a
 # page missing from the nav in mkdocs.yml, fails the build.
