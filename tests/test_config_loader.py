@@ -129,6 +129,7 @@ ENV_FIELDS: dict[str, Any] = {
     "filter_visual_rand": True,
     "filter_dataset_saving": True,
     "init_rollout_buffer": True,
+    "strict_actions": True,
     "extensions": {"goal": [1, 2]},
     "sim_cfg": {"width": 320, "cpu_num": 2},
     "events": {"e": {"func": "f", "mode": "interval", "interval_step": 3, "is_global": True}},
@@ -147,6 +148,7 @@ SIM_KEYS = {
     "physics_config": {"gravity": [0, 0, -1.0], "solver": "CG"},
     "render_cfg": {"quality": "high", "renderer": "fast"},
     "renderer": "rt",
+    "physical_limits": {"mass": 1e5},
 }
 
 
@@ -167,9 +169,11 @@ def test_every_cfg_field_is_settable_from_a_file() -> None:
         "filter_visual_rand",
         "filter_dataset_saving",
         "init_rollout_buffer",
+        "strict_actions",
         "extensions",
     ):
         assert getattr(cfg, name) == ENV_FIELDS[name], name
+    assert cfg.sim_cfg.physical_limits == {"mass": 1e5}
     assert (cfg.sim_cfg.width, cfg.sim_cfg.cpu_num, cfg.sim_cfg.headless, cfg.sim_cfg.sim_device) == (
         320,
         2,
