@@ -10,7 +10,9 @@ element comes from (``fork_pose[0,3]``), and they are not recorded under their o
 names. ``eval-policy`` and ``dataset replay`` build the same vector from the env's
 observations with the same code (:class:`StateSource`, through
 :class:`~embodichain_lerobot.features.FeatureSpec`), reading the list from the gym
-config's dataset section (:func:`state_keys_of`).
+config's dataset section (:func:`state_keys_of`); ``eval-policy`` in a config without
+one reads it from the names of the dataset the policy was trained on
+(:func:`trained_state_keys`).
 
 Config::
 
@@ -20,6 +22,8 @@ Config::
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
@@ -27,7 +31,15 @@ import numpy as np
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.suggest import did_you_mean
 
-__all__ = ["ENV_STATE", "StateSource", "check_state_keys", "state_keys_of", "state_source"]
+__all__ = [
+    "ENV_STATE",
+    "StateSource",
+    "check_state_keys",
+    "keys_from_names",
+    "state_keys_of",
+    "state_source",
+    "trained_state_keys",
+]
 
 #: The feature name lerobot policies read as the environment state.
 ENV_STATE = "observation.environment_state"
@@ -62,6 +74,31 @@ def state_keys_of(dataset: Any) -> list[str]:
         if keys:
             return check_state_keys(keys, f"dataset.{name}.params.environment_state")
     return []
+
+
+def keys_from_names(names: Sequence[str]) -> list[str]:
+    """The observation keys of ``observation.environment_state``'s element names, in order."""
+    keys: list[str] = []
+    for name in names:
+        key = str(name).split("[", 1)[0]
+        if key not in keys:
+            keys.append(key)
+    return keys
+
+
+def trained_state_keys(policy_dir: str | Path) -> list[str]:
+    """The ``environment_state`` keys of the dataset a ``lerobot-train`` policy was trained on.
+
+    Read from the policy's ``train_config.json`` (its ``dataset.root``) and that dataset's
+    feature names; empty when either is not there.
+    """
+    try:
+        train = json.loads((Path(policy_dir) / "train_config.json").read_text(encoding="utf-8"))
+        info = Path(train["dataset"]["root"]) / "meta" / "info.json"
+        names = json.loads(info.read_text(encoding="utf-8"))["features"][ENV_STATE]["names"]
+    except (OSError, KeyError, TypeError, ValueError):
+        return []
+    return keys_from_names(names or [])
 
 
 def _element_names(key: str, shape: tuple) -> list[str]:

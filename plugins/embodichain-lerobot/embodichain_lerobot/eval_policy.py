@@ -16,6 +16,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 import torch
 
+from embodichain_lerobot.env_state import state_keys_of, trained_state_keys
 from embodichain_lerobot.policy_inputs import ObservationMapper
 from embodichain_lerobot.policy_io import LoadedPolicy
 from embodichain_lerobot.policy_state import PerEnvPolicy
@@ -35,6 +36,7 @@ class EpisodeResult:
     terminated: bool
     truncated: bool
     video: Optional[str] = None
+    episode_seed: Optional[int] = None  # the env's seed of the episode (compare with a dataset's)
 
 
 @dataclass
@@ -83,6 +85,13 @@ class _Rollout:
         self.returns = np.zeros(num_envs)
         self.lengths = np.zeros(num_envs, dtype=np.int64)
         self.frames: list[list[np.ndarray]] = [[] for _ in range(num_envs)]
+        self.seeds: list[Optional[int]] = [None] * num_envs  # episode seed of each env's running episode
+
+    def read_seeds(self, env: Any, env_ids: Any) -> None:
+        """Note the episode seeds of the episodes ``env_ids`` just started."""
+        seeds = getattr(env, "episode_seeds", None)
+        for i in env_ids:
+            self.seeds[i] = int(seeds[i]) if seeds is not None else None
 
     def add_frames(self, frames: dict[str, np.ndarray], env_ids: Any) -> None:
         if self.video_dir is not None:
@@ -97,6 +106,7 @@ class _Rollout:
             result = EpisodeResult(
                 self.index[i], i, success, float(self.returns[i]), int(self.lengths[i]), terminated, truncated
             )
+            result.episode_seed = self.seeds[i]
             if self.video_dir is not None:
                 result.video = str(self._write_video(self.index[i], self.frames[i], fps))
         self.index[i], self.started = self.started, self.started + 1
@@ -159,7 +169,9 @@ def evaluate(
 
     base = env.unwrapped
     obs, _ = env.reset(seed=seed)
-    mapper = ObservationMapper(obs, base, loaded.config, instruction)
+    # the recorder's list in the env config, else the one of the dataset the policy was trained on
+    keys = state_keys_of(getattr(base.cfg, "dataset", None)) or trained_state_keys(loaded.path)
+    mapper = ObservationMapper(obs, base, loaded.config, instruction, environment_state=keys)
     _check_action_dim(env, loaded)
     if video_dir is not None and not mapper.cameras:
         from embodichain_core.config.errors import ConfigError
@@ -168,6 +180,7 @@ def evaluate(
     fps = int(base.metadata.get("render_fps") or 25)
     runner = PerEnvPolicy(loaded.policy, mapper.num_envs)
     state = _Rollout(mapper.num_envs, episodes, Path(video_dir) if video_dir is not None else None)
+    state.read_seeds(base, range(mapper.num_envs))
     result = EvalResult()
     started = time.perf_counter()
     while len(result.episodes) < episodes:
@@ -211,4 +224,5 @@ def _step(
                 if progress is not None:
                     progress(episode)
         runner.reset(done)
+        state.read_seeds(env.unwrapped, done)
     return obs

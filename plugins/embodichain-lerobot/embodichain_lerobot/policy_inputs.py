@@ -12,7 +12,7 @@ LeRobot's dataset loader gives the policy during training). Depth and masks reco
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import torch
@@ -59,16 +59,27 @@ class ObservationMapper:
         config: the policy's ``PreTrainedConfig`` (its ``input_features``).
         instruction: the language instruction, given as the batch's ``"task"`` (one string
             per env, as lerobot's own eval does for language-conditioned policies).
+        environment_state: the observation keys of ``observation.environment_state``
+            (default: the ``environment_state`` of the env config's LeRobot recorder).
 
     Raises:
         ConfigError: ``policy``: the env lacks an input of the policy, or has it with another
             shape; the message lists the policy's inputs and the env's features.
     """
 
-    def __init__(self, obs: Any, env: Any, config: Any, instruction: str | None = None):
+    def __init__(
+        self,
+        obs: Any,
+        env: Any,
+        config: Any,
+        instruction: str | None = None,
+        environment_state: Sequence[str] | None = None,
+    ):
         self.instruction = instruction
         wanted = policy_inputs(config)
-        state_keys = state_keys_of(getattr(getattr(env, "cfg", None), "dataset", None))
+        state_keys = environment_state
+        if state_keys is None:
+            state_keys = state_keys_of(getattr(getattr(env, "cfg", None), "dataset", None))
         self.spec = FeatureSpec(obs, env, depth_format=_depth_format(wanted), environment_state=state_keys)
         self.num_envs = self.spec.num_envs
         by_name = {s.name: s for s in self.spec.sources}
@@ -76,7 +87,9 @@ class ObservationMapper:
         problems = []
         for name, (kind, shape) in wanted.items():
             if name not in by_name:
-                hint = " (the config's LeRobot recorder names it: params.environment_state)" if name == ENV_STATE else ""
+                hint = (
+                    " (the config's LeRobot recorder names it: params.environment_state)" if name == ENV_STATE else ""
+                )
                 problems.append(f"{name} {list(shape)} is missing{hint}")
             elif env_shapes[name] != shape:
                 problems.append(f"{name} is {list(shape)} for the policy, {list(env_shapes[name])} in the env")
