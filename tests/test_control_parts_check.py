@@ -97,3 +97,15 @@ def test_run_env_reports_it_as_a_config_error_and_exits_2(
     err = capsys.readouterr().err
     assert "robot.control_parts.arm[1]: no joint of the robot matches 'j_2'. Did you mean 'j2'" in err
     assert "Traceback" not in err
+
+
+def test_load_gym_config_checks_a_file_based_robot() -> None:
+    from embodichain_core.config.loader import load_gym_config
+
+    robot = {"uid": "arm", "mjcf": ARM_MJCF, "control_parts": {"arm": ["j1", "j9"]}}
+    data = {"id": "Any-v0", "env": {}, "robot": robot}
+    with pytest.raises(ConfigError) as err:
+        load_gym_config(data)
+    assert err.value.path == "robot.control_parts.arm[1]"
+    data["robot"]["control_parts"] = {"arm": ["j[1-3]"]}
+    assert load_gym_config(data)[0] == "Any-v0"

@@ -330,7 +330,8 @@ def load_gym_config(
     """Load a gym config file (or mapping), apply ``overrides``, return ``(id, cfg, extras)``.
 
     An ``id`` override replaces (or supplies) the config's ``id``. Relative asset paths
-    of a file are first looked up next to it (:func:`resolve_relative_paths`).
+    of a file are first looked up next to it (:func:`resolve_relative_paths`). The
+    ``control_parts`` of a robot from ``fpath``/``mjcf`` are checked against its joints.
     """
     if isinstance(path_or_dict, Mapping):
         data = copy.deepcopy(dict(path_or_dict))
@@ -345,4 +346,7 @@ def load_gym_config(
     # the env allocates per-env counters before it validates the rest: bound the count now
     for value, path in ((cfg.num_envs, "num_envs"), (cfg.sim_cfg.num_envs, "sim_cfg.num_envs")):
         check_int(value, path, low=1, high=MAX_NUM_ENVS, hint=" (each env is a separate MuJoCo simulation)")
+    from embodichain_core.config.joint_check import check_robot_joints
+
+    check_robot_joints(cfg.robot, "robot")  # a file-based robot's joints are known now
     return extras["id"], cfg, extras
