@@ -201,16 +201,21 @@ def finish_orphaned(root: Path) -> bool:
     folder and its marker (nobody holds it), as the writer's ``finalize()`` would have.
 
     Every published episode stays (the staging folder only holds unpublished files). A folder
-    whose marker is still held, or with no published episode, is left alone.
+    with no published episode (the writer died before its first save) is removed: it was
+    reserved by this recording and holds nothing saved. A folder whose marker is still held
+    (a live writer) is left alone.
 
     Returns:
-        Whether the folder was finished.
+        Whether the folder was finished (or removed).
     """
     from embodichain_lerobot.folders import STAGING, folder_status
 
     status = folder_status(root)
-    if not status.complete or status.owner is not None:
+    if status.owner is not None or not status.readable:
         return False
+    if not status.complete:
+        shutil.rmtree(root, ignore_errors=True)
+        return True
     shutil.rmtree(Path(root) / STAGING, ignore_errors=True)
     (Path(root) / MARKER).unlink(missing_ok=True)
     return True

@@ -256,12 +256,16 @@ def test_lerobots_encoder_thread_disk_full_lines_are_dropped_and_other_errors_ke
     assert [r.getMessage() for r in caplog.records] == ["Encoder thread error: codec failed"]
 
 
-def test_finish_orphaned_removes_staging_and_a_dead_marker_only_from_a_saved_dataset(tmp_path: Path) -> None:
+def test_finish_orphaned_removes_staging_and_a_dead_marker_and_an_unsaved_folder(tmp_path: Path) -> None:
+    unsaved = tmp_path / "unsaved"
+    (unsaved / "meta").mkdir(parents=True)
+    (unsaved / "meta" / "embodichain_env.json").write_text("{}")
+    assert storage.finish_orphaned(unsaved)
+    assert not unsaved.exists()  # reserved by the dead recording, nothing saved in it
     (tmp_path / "meta").mkdir()
     (tmp_path / ".embodichain_staging").mkdir()
     (tmp_path / storage.MARKER).write_text(json.dumps({"pid": 1, "locked": True}))
     (tmp_path / "meta" / "info.json").write_text(json.dumps({"total_episodes": 0}))
-    assert not storage.finish_orphaned(tmp_path)  # no saved episode: left for clean_incomplete
     (tmp_path / "meta" / "info.json").write_text(json.dumps({"total_episodes": 2}))
     assert storage.finish_orphaned(tmp_path)
     assert not (tmp_path / ".embodichain_staging").exists()
