@@ -54,7 +54,10 @@ class NativeViewer:
         self.frames = 0
         self.last: Optional[Snapshot] = None
         self._stop = threading.Event()
+        before = set(threading.enumerate())
         self.handle = mujoco.viewer.launch_passive(model, self.data, key_callback=self.on_key)
+        # the window's render thread: joined on close, so the process never exits mid-frame
+        self._window_threads = [t for t in threading.enumerate() if t not in before]
         self._thread = threading.Thread(target=self._loop, name="embodichain-native-viewer", daemon=True)
         self._thread.start()
 
@@ -105,6 +108,8 @@ class NativeViewer:
         self._stop.set()
         self._thread.join(timeout=2.0)
         self.handle.close()
+        for thread in self._window_threads:
+            thread.join(timeout=5.0)
 
 
 def overlay_text(snap: Snapshot, controls: Controls) -> tuple[str, str]:

@@ -1,0 +1,117 @@
+"""Screenshots of the viewers without a desktop: a private Xvfb display for the native
+window, headless Chromium for the browser page (Debian packages ``xvfb`` and ``chromium``).
+
+Used by the viewer tests and by ``scripts/screenshots.py`` (the images of docs/viewer.md).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
+
+
+def chromium() -> Optional[str]:
+    """The system Chromium's path, or ``None``."""
+    return next((p for p in map(shutil.which, CHROMIUM_NAMES) if p), None)
+
+
+def browser_screenshot(url: str, path: Path, size: tuple[int, int] = (1280, 800), wait_ms: int = 12000) -> Path:
+    """Load ``url`` in headless Chromium (software WebGL) and save a PNG of the page.
+
+    Args:
+        url: the viewer's page.
+        path: the PNG to write.
+        size: window width and height in pixels.
+        wait_ms: virtual time the page gets to connect and draw before the capture.
+
+    Raises:
+        RuntimeError: no Chromium, or it wrote no image.
+    """
+    exe = chromium()
+    if exe is None:
+        raise RuntimeError("no chromium found (apt-get install chromium)")
+    with tempfile.TemporaryDirectory(prefix="embodichain-chromium-") as profile:
+        cmd = [
+            exe,
+            "--headless",
+            "--no-sandbox",
+            "--enable-unsafe-swiftshader",
+            "--use-angle=swiftshader",
+            f"--user-data-dir={profile}",
+            f"--window-size={size[0]},{size[1]}",
+            f"--virtual-time-budget={wait_ms}",
+            f"--screenshot={path}",
+            url,
+        ]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    if not Path(path).is_file():
+        raise RuntimeError(f"chromium wrote no screenshot (exit {done.returncode}): {done.stderr[-500:]}")
+    return Path(path)
+
+
+class Xvfb:
+    """A private virtual X display (``with Xvfb() as display: ...``; ``display`` like ``":5"``)."""
+
+    def __init__(self, size: tuple[int, int] = (1280, 800)):
+        self.size = size
+        self.display = ""
+        self._proc: Optional[subprocess.Popen] = None
+
+    def __enter__(self) -> str:
+        exe = shutil.which("Xvfb")
+        if exe is None:
+            raise RuntimeError("no Xvfb found (apt-get install xvfb)")
+        read, write = os.pipe()
+        screen = f"{self.size[0]}x{self.size[1]}x24"
+        self._proc = subprocess.Popen(
+            [exe, "-displayfd", str(write), "-screen", "0", screen, "-nolisten", "tcp"],
+            pass_fds=(write,),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        os.close(write)
+        with os.fdopen(read) as pipe:
+            number = pipe.readline().strip()
+        if not number:
+            self.__exit__()
+            raise RuntimeError("Xvfb did not start")
+        self.display = f":{number}"
+        return self.display
+
+    def __exit__(self, *exc: object) -> None:
+        if self._proc is not None:
+            self._proc.terminate()
+            self._proc.wait(timeout=10)
+            self._proc = None
+
+
+def x_screenshot(display: str, path: Path) -> Path:
+    """Save a PNG of X display ``display`` (Pillow's X11 grab)."""
+    from PIL import ImageGrab
+
+    ImageGrab.grab(xdisplay=display).save(path)
+    return Path(path)
+
+
+def is_blank(path: Path, min_std: float = 4.0) -> bool:
+    """Whether the image is (nearly) one flat colour."""
+    from PIL import Image
+
+    return float(np.asarray(Image.open(path).convert("L"), dtype=np.float64).std()) < min_std
+
+
+def changed_fraction(a: Path, b: Path, threshold: int = 12) -> float:
+    """The fraction of pixels whose grey level differs by more than ``threshold`` between two PNGs."""
+    from PIL import Image
+
+    ga = np.asarray(Image.open(a).convert("L"), dtype=np.int16)
+    gb = np.asarray(Image.open(b).convert("L"), dtype=np.int16)
+    return float((np.abs(ga - gb) > threshold).mean())
