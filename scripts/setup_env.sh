@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Creates the project's virtual environment and installs the core (with its test and
-# `new` extras), every plugin under plugins/, and torch. Idempotent. The test fixture
+# `new` extras), every plugin under plugins/ (embodichain-viewer included: the viewers of
+# `headless: false`), and torch. Idempotent. The test fixture
 # plugins (tests/fixture_plugins/) are not installed: the tests expose them themselves.
 #
 # Environment variables:
@@ -52,6 +53,22 @@ if ! grep -q "libavcodec\.so\." <<<"$GL_LIBS"; then
     echo "[setup] warning: no FFmpeg shared libraries found; LeRobotDataset(...) with the default video" \
          "backend (torchcodec) cannot decode videos; install them (apt-get install --no-install-recommends" \
          "$FFMPEG_PKGS, or your system's FFmpeg 4-8 libraries) or pass video_backend='pyav'"
+  fi
+fi
+
+# Xvfb and Chromium: the viewer tests photograph MuJoCo's native window on a virtual X
+# display and the browser viewer's page in headless Chromium (plugins/embodichain-viewer).
+# Only when missing, and only when we may install packages (root with apt).
+VIEWER_TEST_PKGS="xvfb chromium"
+if ! command -v Xvfb >/dev/null 2>&1 || ! command -v chromium >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = "0" ]; then
+    echo "[setup] installing Xvfb and Chromium (the viewer tests' screenshots)"
+    # shellcheck disable=SC2086
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+        $VIEWER_TEST_PKGS >/dev/null) \
+      || echo "[setup] warning: could not install $VIEWER_TEST_PKGS; the viewer screenshot tests will skip"
+  else
+    echo "[setup] note: no Xvfb/Chromium; the viewer screenshot tests will skip (apt-get install $VIEWER_TEST_PKGS)"
   fi
 fi
 
