@@ -157,3 +157,11 @@ def test_ctrl_c_of_the_driver_merges_every_finished_episode_with_true_counts(
     merged = _check(out, summary)
     assert 4 <= merged < 6, summary  # both finished episodes of each worker were flushed and merged
     assert re.search(rf"not saved\s+{6 - merged} episode\(s\)", summary), summary
+    # resuming: the same run with the kept shards runs only the missing episodes
+    again = tmp_path / "again"
+    argv = ["--gym_config", config, "--episodes", "6", "--workers", "2", "--seed", "3", "--output", str(again)]
+    assert cli.main([*argv, "--quiet", "--shards", str(out.with_name("merged.shards"))]) == 0
+    summary = capsys.readouterr().out
+    assert f"resumed      {merged} episode(s)" in summary, summary
+    assert _check(again, summary) == 6
+    assert [line["generate"]["episode"] for line in sidecar(again)] == list(range(6))
