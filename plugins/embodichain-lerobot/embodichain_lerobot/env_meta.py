@@ -198,7 +198,8 @@ def build_env(meta: dict[str, Any], num_envs: int = 1, **fields: Any) -> Any:
     plain.setdefault("sim_cfg", {})["num_envs"] = num_envs
     plain["sim_cfg"]["headless"] = True
     plain.update(fields)
-    cfg = _cfg_class(meta["cfg_class"]).from_dict(plain, "")
+    cls: Any = _cfg_class(meta["cfg_class"])
+    cfg = cls.from_dict(plain, "")
     task_id = meta["task_id"]
     if task_id not in gym.registry:
         raise ValueError(f"the dataset was recorded by task {task_id!r}, which no installed plugin registers")

@@ -124,7 +124,7 @@ class _Compare:
             self._failed.add(name)
             self.result.failures.append({"feature": name, "frame": frame, "error": error})
 
-    def numeric(self, name: str, frame: int, replayed: np.ndarray, recorded: np.ndarray) -> None:
+    def numeric(self, name: str, frame: int, replayed: Any, recorded: Any) -> None:
         a, b = np.asarray(replayed, dtype=np.float64).ravel(), np.asarray(recorded, dtype=np.float64).ravel()
         err = float(np.max(np.abs(a - b))) if a.size == b.size else float("inf")
         if not np.isfinite(err) and np.array_equal(a, b, equal_nan=True):
@@ -196,12 +196,9 @@ class Replayer:
                 check.numeric(name, t, snap[name][0], recorded[name][t])
             if t in sampled:
                 shots[t] = {s.name: snap[s.name][0] for s in cams}
-            obs, reward, terminated, truncated, info = env.step(_action(env, recorded["action"][t]))
-            done = bool(to_numpy(terminated).reshape(-1)[0] or to_numpy(truncated).reshape(-1)[0])
-            success = bool(to_numpy(info.get("success", False)).reshape(-1)[0])
-            outcome = {"next.reward": to_numpy(reward).reshape(-1)[:1], "next.done": done, "next.success": success}
+            obs, outcome = _step(env, recorded["action"][t])
             for name in STEP_FEATURES:
-                check.numeric(name, t, np.float32(outcome[name]), recorded[name][t])
+                check.numeric(name, t, outcome[name], recorded[name][t])
         for s in cams if sampled else ():
             frames = files.camera_frames(s.name, sampled)
             for t, frame in zip(sampled, frames):
@@ -242,6 +239,18 @@ def _check_features(features: dict[str, dict], replayed: Sequence[str]) -> None:
     missing = sorted(recorded - set(replayed))
     if missing:
         raise ValueError(f"the rebuilt env does not produce the recorded feature(s) {missing}")
+
+
+def _step(env: Any, action: np.ndarray) -> tuple[Any, dict[str, np.ndarray]]:
+    """Step the one env with a recorded action: its observation and the step's recorded outcomes."""
+    obs, reward, terminated, truncated, info = env.step(_action(env, action))
+    first = [float(to_numpy(x).reshape(-1)[0]) for x in (reward, terminated, truncated, info.get("success", False))]
+    outcome = {
+        "next.reward": np.array([first[0]], dtype=np.float32),
+        "next.done": np.array([float(bool(first[1] or first[2]))]),
+        "next.success": np.array([float(bool(first[3]))]),
+    }
+    return obs, outcome
 
 
 def _action(env: Any, row: np.ndarray) -> Any:
