@@ -28,6 +28,7 @@ import importlib
 import json
 import os
 import platform
+import warnings
 from importlib import metadata
 from pathlib import Path
 from typing import Any, Optional, Sequence
@@ -134,10 +135,11 @@ def merge_env_meta(shards: Sequence[str | os.PathLike], output: str | os.PathLik
 
     The shards of one run are built from one config; their files differ only in the
     recorder's ``save_path``. The first shard's file is written, with ``merged_from``
-    (the number of shards) added.
+    (the number of shards) added, and ``shard_versions`` (each shard's) when their
+    versions differ (with a warning: the data is merged all the same).
 
     Raises:
-        ValueError: the shards were recorded by different tasks or versions (their
+        ValueError: the shards were recorded by different tasks or config classes (their
             episodes could not all be replayed from one description).
 
     Returns:
@@ -147,13 +149,18 @@ def merge_env_meta(shards: Sequence[str | os.PathLike], output: str | os.PathLik
     if not metas:
         return None
     first = metas[0]
+    extra: dict[str, Any] = {"merged_from": len(metas)}
     for other in metas[1:]:
-        for key in ("task_id", "cfg_class", "backend", "versions"):
+        for key in ("task_id", "cfg_class"):
             if other.get(key) != first.get(key):
                 raise ValueError(f"the shards disagree on {key}: {first.get(key)!r} and {other.get(key)!r}")
+    versions = [m.get("versions") for m in metas]
+    if any(v != versions[0] for v in versions):  # kept, and said: a replay warns about what differs
+        extra["shard_versions"] = versions
+        warnings.warn(f"the merged shards were recorded with different versions: {versions}", stacklevel=2)
     path = Path(output) / ENV_META
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({**first, "merged_from": len(metas)}, indent=1) + "\n", encoding="utf-8")
+    path.write_text(json.dumps({**first, **extra}, indent=1) + "\n", encoding="utf-8")
     return path
 
 

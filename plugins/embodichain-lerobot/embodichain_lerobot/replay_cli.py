@@ -40,7 +40,8 @@ def _seeds(root: Path, total: int) -> dict[int, Any]:
 
 def format_replay(result: EpisodeReplay, atol: float, min_psnr: float) -> str:
     """One episode's block: a line per feature, then the verdict."""
-    lines = [f"episode {result.episode}  seed {result.seed}  frames {result.frames}"]
+    worst = max(result.max_error.values(), default=0.0)
+    lines = [f"episode {result.episode}  seed {result.seed}  frames {result.frames}  max error {worst:.3g}"]
     for name, err in sorted(result.max_error.items()):
         lines.append(f"  {name:<40} max error {err:.3g}")
     for name, db in sorted(result.min_psnr.items()):

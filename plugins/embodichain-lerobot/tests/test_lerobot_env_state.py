@@ -1,4 +1,4 @@
-"""``observation.environment_state``: the mapping's pieces, and the IL pipeline's config."""
+"""``observation.environment_state``: the mapping's pieces; the IL pipeline's config; merged env descriptions."""
 
 from __future__ import annotations
 
@@ -73,3 +73,23 @@ def test_the_pipeline_config_drops_the_cameras_and_needs_environment_state(tmp_p
         state_config(tmp_path / "c.json", cameras=False)
     png = plot_curve([(0, 0.0), (1000, 0.4), (2000, 0.7)], tmp_path / "curve.png", "test")
     assert png.stat().st_size > 1000
+
+
+def test_merged_shards_keep_one_env_description(tmp_path: Path) -> None:
+    from embodichain_lerobot.env_meta import ENV_META, merge_env_meta, read_env_meta
+
+    meta = {"task_id": "PickFork-v1", "cfg_class": "m:Cfg", "env_cfg": {}, "versions": {"mujoco": "4.0.0"}}
+    shards = [tmp_path / "s0", tmp_path / "s1"]
+    for shard in shards:
+        (shard / "meta").mkdir(parents=True)
+        (shard / ENV_META).write_text(json.dumps(meta))
+    assert merge_env_meta(shards, tmp_path / "a") is not None
+    assert read_env_meta(tmp_path / "a")["merged_from"] == 2
+    (shards[1] / ENV_META).write_text(json.dumps({**meta, "versions": {"mujoco": "3.3.0"}}))
+    with pytest.warns(UserWarning, match="different versions"):
+        merge_env_meta(shards, tmp_path / "b")
+    assert len(read_env_meta(tmp_path / "b")["shard_versions"]) == 2
+    (shards[1] / ENV_META).write_text(json.dumps({**meta, "task_id": "OpenDrawer-v1"}))
+    with pytest.raises(ValueError, match="disagree on task_id"):
+        merge_env_meta(shards, tmp_path / "c")
+    assert merge_env_meta([tmp_path / "none"], tmp_path / "d") is None
