@@ -106,8 +106,16 @@ def contact_sheet(streams: dict[str, list[np.ndarray]], labels: Sequence[str], p
 
 
 def write_mp4(streams: dict[str, list[np.ndarray]], fps: int, path: Path) -> Path:
-    """All streams side by side per frame, encoded with PyAV (H.264, else MPEG-4)."""
+    """All streams side by side per frame, encoded with PyAV (H.264, else MPEG-4).
+
+    FFmpeg's own messages below errors are off: x264 prints a dozen lines of statistics per
+    video at its default level once lerobot's video helpers have restored FFmpeg's default log
+    callback, which would break ``--quiet`` (``eval-policy --video``, ``dataset preview``).
+    """
     import av
+    import av.logging
+
+    av.logging.set_libav_level(av.logging.ERROR)
 
     frames = [
         np.concatenate([np.asarray(_tile(s[t])) for s in streams.values()], axis=1)
