@@ -187,11 +187,12 @@ def setup_page(namespace: dict[str, Any]) -> None:
 def teardown_page(namespace: dict[str, Any]) -> None:
     """After a page: close the envs its blocks left open, restore cwd and variables, clean up."""
     state = namespace.pop("__harness__")
+    gym = sys.modules.get("gymnasium")
+    env_types = (gym.Env, gym.vector.VectorEnv) if gym is not None else ()
     for value in list(namespace.values()):
-        close = getattr(value, "close", None)
-        if callable(close) and type(value).__module__.split(".")[0] in ("gymnasium", "embodichain_core"):
+        if env_types and isinstance(value, env_types):
             try:
-                close()
+                value.close()
             except Exception:  # noqa: BLE001 - an env a block closed already
                 pass
     os.chdir(state["cwd"])
