@@ -162,21 +162,18 @@ class Scheduler:
 
     def stop(self, timeout: float) -> None:
         """Ask every worker to stop (the stop file) and take the batches they return within
-        ``timeout`` seconds (their episodes are durable); a second Ctrl-C stops waiting."""
+        ``timeout`` seconds (their episodes are durable); a second Ctrl-C is raised at once."""
         import ray
 
         self.spec.stop_file.touch()
         self.queue.clear()
         deadline = time.perf_counter() + timeout
-        try:
-            while self.inflight and time.perf_counter() < deadline:
-                left = max(deadline - time.perf_counter(), 0.0)
-                ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=min(left, 1.0))
-                for ref in ready:
-                    worker, batch = self.inflight.pop(ref)
-                    self._collect(ref, worker, batch, requeue=False)
-        except KeyboardInterrupt:
-            log.warning("second interrupt: the workers are not waited for")
+        while self.inflight and time.perf_counter() < deadline:  # a second Ctrl-C propagates: no more waiting
+            left = max(deadline - time.perf_counter(), 0.0)
+            ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=min(left, 1.0))
+            for ref in ready:
+                worker, batch = self.inflight.pop(ref)
+                self._collect(ref, worker, batch, requeue=False)
 
     def _collect(self, ref: Any, worker: int, batch: list | None, requeue: bool = True) -> bool:
         """Take a finished call's result; ``False`` when the worker is down (its batch re-queued)."""
