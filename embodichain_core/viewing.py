@@ -16,8 +16,9 @@ Example:
 
 from __future__ import annotations
 
+import contextlib
 import os
-from typing import Any, Mapping, Optional
+from typing import Any, Iterator, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.suggest import did_you_mean
@@ -26,6 +27,7 @@ from embodichain_core.utils.suggest import did_you_mean
 VIEWER_MODES = ("auto", "native", "browser", "none")
 #: The command that installs the viewers (printed when they are missing).
 INSTALL_HINT = "pip install -e plugins/embodichain-viewer  (or: pip install embodichain-viewer)"
+_forced: Optional[str] = None  # set by force_viewer()
 
 
 def has_display(environ: Optional[Mapping[str, str]] = None) -> bool:
@@ -57,6 +59,25 @@ def resolve_viewer_mode(mode: str, environ: Optional[Mapping[str, str]] = None) 
     return mode
 
 
+@contextlib.contextmanager
+def force_viewer(mode: Optional[str]) -> Iterator[None]:
+    """Within the block, every env built opens ``mode``'s viewer whatever its ``sim_cfg``
+    says (``"none"``: none); ``None`` changes nothing. For commands that build their envs
+    deep inside a library (``train-rl --play --viewer``).
+
+    Raises:
+        ConfigError: ``mode`` is not one of :data:`VIEWER_MODES`.
+    """
+    global _forced
+    if mode is not None and mode not in VIEWER_MODES:
+        raise ConfigError("viewer", f"unknown viewer {mode!r}.{did_you_mean(str(mode), VIEWER_MODES)}")
+    previous, _forced = _forced, mode if mode is not None else _forced
+    try:
+        yield
+    finally:
+        _forced = previous
+
+
 def attach_viewer(env: Any) -> Optional[Any]:
     """Open the viewer ``env.cfg.sim_cfg`` asks for; ``None`` (nothing imported) when headless.
 
@@ -71,9 +92,9 @@ def attach_viewer(env: Any) -> Optional[Any]:
         ConfigError: a bad ``sim_cfg.viewer``, or the viewer plugin is not installed.
     """
     sim_cfg = env.cfg.sim_cfg
-    if getattr(sim_cfg, "headless", True):
+    if _forced is None and getattr(sim_cfg, "headless", True):
         return None
-    mode = resolve_viewer_mode(str(getattr(sim_cfg, "viewer", "auto")))
+    mode = resolve_viewer_mode(_forced or str(getattr(sim_cfg, "viewer", "auto")))
     if mode == "none":
         return None
     try:

@@ -91,3 +91,18 @@ def test_a_headless_run_imports_nothing_for_viewing() -> None:
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert "LOADED []" in out.stdout
+
+
+def test_force_viewer_opens_one_for_envs_built_inside_the_block(monkeypatch: pytest.MonkeyPatch) -> None:
+    from embodichain_core.viewing import force_viewer
+
+    monkeypatch.setitem(sys.modules, "embodichain_viewer.session", None)  # an attempt to open one raises
+    with force_viewer("browser"), pytest.raises(ConfigError, match="embodichain-viewer plugin"):
+        attach_viewer(_env(True, "none"))
+    with force_viewer("none"):
+        assert attach_viewer(_env(False, "browser")) is None
+    with force_viewer(None):
+        assert attach_viewer(_env(True)) is None
+    assert attach_viewer(_env(True)) is None  # the block ended
+    with pytest.raises(ConfigError, match="unknown viewer"), force_viewer("window"):
+        pass

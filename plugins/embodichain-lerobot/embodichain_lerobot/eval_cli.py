@@ -65,6 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
     add("--seed", type=int, metavar="S", help="reset seed of the env and torch seed (default: the config's)")
     add("--video", metavar="DIR", help="write an mp4 per episode into this folder")
     add("--headless", action="store_true", help="run without a viewer window")
+    add(
+        "--viewer",
+        choices=("auto", "native", "browser", "none"),
+        help="watch the episodes: auto = a native window with a display, else a browser page on localhost",
+    )
     add("--json", metavar="FILE", help="write the results as JSON")
     add("--max_steps", type=int, metavar="N", help="episode step limit, max_episode_steps (default: the config's)")
     add(
@@ -90,6 +95,8 @@ def _plan(args: argparse.Namespace) -> Any:
         given["seed"] = args.seed
     if args.headless:
         given["headless"] = True
+    if args.viewer is not None:
+        given["viewer"] = args.viewer  # any but none turns headless off (launcher_overrides)
     ns = argparse.Namespace(
         task=args.task, gym_config=args.gym_config or "", max_steps=args.max_steps, quiet=True, **given
     )

@@ -4,6 +4,7 @@ Examples:
     $ embodichain train-rl --task PushCube-v1 --library rsl_rl --num_envs 64 --steps 2000000 --out outputs/rl
     $ embodichain train-rl --task PushCube-v1 --library sb3 --num_envs 16 --steps 200000 --out outputs/sb3
     $ embodichain train-rl --play outputs/rl/model_1302.pt --video outputs/rl/play.mp4
+    $ embodichain train-rl --play outputs/rl/model_1302.pt --viewer browser
 """
 
 from __future__ import annotations
@@ -32,6 +33,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--video", help="mp4 path for --play (default: play.mp4 next to the checkpoint)")
     parser.add_argument("--episodes", type=int, default=1, help="episodes for --play (default 1)")
+    parser.add_argument(
+        "--viewer",
+        choices=("auto", "native", "browser", "none"),
+        help="with --play: watch the episodes (auto: a native window with a display, else a browser page)",
+    )
     return parser
 
 
@@ -46,7 +52,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
         checkpoint = Path(args.play)
         video = Path(args.video) if args.video else checkpoint.parent / "play.mp4"
-        play(checkpoint, video, episodes=args.episodes, seed=args.seed)
+        from embodichain_core.viewing import force_viewer
+
+        with force_viewer(args.viewer):
+            play(checkpoint, video, episodes=args.episodes, seed=args.seed)
         return 0
     out = Path(args.out)
     if args.library == "rsl_rl":

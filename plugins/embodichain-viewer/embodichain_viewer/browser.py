@@ -85,9 +85,10 @@ class BrowserViewer:
 
     # -- drawing --------------------------------------------------------------------------------
     def _loop(self) -> None:
-        seen = 0
+        seen, selected = 0, int(self.scene.env_idx)
         while not self._stop.is_set():
-            self.controls.env_idx = int(self.scene.env_idx)
+            if int(self.scene.env_idx) != selected:  # the page's env selector moved
+                selected = self.controls.env_idx = int(self.scene.env_idx)
             seen, snap = self.slot.get(seen, timeout=0.1)
             if snap is not None:
                 self.draw(snap)

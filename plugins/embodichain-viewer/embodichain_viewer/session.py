@@ -10,6 +10,7 @@ viewer; only the user's own requests (pause, single step, speed, reset) hold the
 
 from __future__ import annotations
 
+import atexit
 import time
 from typing import Any, Optional
 
@@ -37,6 +38,9 @@ class ViewerSession:
         self.steps = 0
         self._last_publish = -1.0
         self._last_step = 0.0
+        self._closed = False
+        # a script that never closes its env (the seed tutorial) must not exit mid-frame
+        atexit.register(self.close)
 
     def before_step(self) -> None:
         """Apply a reset request, hold while paused, pace to the chosen speed."""
@@ -86,8 +90,11 @@ class ViewerSession:
         return snap
 
     def close(self) -> None:
-        """Stop the viewer (its window or server)."""
-        self.controls.closed = True
+        """Stop the viewer (its window or server); idempotent (also run at interpreter exit)."""
+        if self.controls.closed and self._closed:
+            return
+        self._closed = self.controls.closed = True
+        atexit.unregister(self.close)
         self.viewer.close()
 
 
