@@ -74,6 +74,14 @@ def test_mesh_and_render_fields_are_scanned() -> None:
     assert paths == {"rigid_object[0].shape.sdf_resolution", "sim_cfg.render_cfg.renderer"}
 
 
+def test_light_fields_without_a_mujoco_twin_are_reported() -> None:
+    cfg = base_cfg()
+    light = cfg.light.direct[0]
+    light.light_type, light.rect_width, light.halo_size = "rect", 2.0, 0.5
+    paths = {f.path for f in ignored_fields(cfg)}
+    assert paths == {"light.direct[0].light_type", "light.direct[0].rect_width", "light.direct[0].halo_size"}
+
+
 def test_the_table_explains_every_field() -> None:
     assert all(why.strip() for fields in IGNORED.values() for why in fields.values())
 

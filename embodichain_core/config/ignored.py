@@ -74,6 +74,14 @@ IGNORED: dict[str, dict[str, str]] = {
         "acd_method": "meshes are decomposed with coacd (max_convex_hull_num parts)",
         "sdf_resolution": "MuJoCo collides convex hulls, not SDFs",
     },
+    "light": {
+        "angular_radius": "MuJoCo's lights are points or directions, without an angular size",
+        "halo_size": "MuJoCo draws no light halos",
+        "halo_falloff": "MuJoCo draws no light halos",
+        "rect_width": "MuJoCo has no area lights; a rect light is drawn as a point light",
+        "rect_height": "MuJoCo has no area lights; a rect light is drawn as a point light",
+        "mesh_path": "MuJoCo has no mesh lights; a mesh light is drawn as a point light",
+    },
     "articulation": {
         "sleep_threshold": _SLEEP,
         "build_pk_chain": "kinematics come from the MuJoCo model; no pytorch-kinematics chain is built",
@@ -164,6 +172,12 @@ def ignored_fields(cfg: Any) -> list[IgnoredField]:
         shape = getattr(entity, "shape", None)
         if type(shape).__name__ == "MeshCfg":
             out += _scan(shape, "mesh", join_path(path, "shape"))
+    for i, light in enumerate(getattr(getattr(cfg, "light", None), "direct", None) or []):
+        path = f"light.direct[{i}]"
+        out += _scan(light, "light", path)
+        if light.light_type in ("rect", "mesh"):
+            why = f"MuJoCo has no {light.light_type} lights; it is drawn as a point light"
+            out.append(IgnoredField(join_path(path, "light_type"), light.light_type, why))
     if sim.physics_config.enable_sleep:  # then every sleep_threshold is mapped (SceneBuilder.sleep_policy)
         out = [f for f in out if not f.path.endswith("sleep_threshold")]
     return out
