@@ -14,8 +14,9 @@ from typing import Any, Optional
 
 import mujoco
 import numpy as np
+import viser
 
-from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, speed_label
+from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, camera_distance, speed_label
 
 
 class BrowserViewer:
@@ -29,7 +30,6 @@ class BrowserViewer:
     """
 
     def __init__(self, model: mujoco.MjModel, num_envs: int, port: int = 8080, title: str = ""):
-        import viser
         from mjviser import ViserMujocoScene
 
         self.controls = Controls()
@@ -53,8 +53,8 @@ class BrowserViewer:
     # -- gui ------------------------------------------------------------------------------------
     def _build_gui(self, title: str) -> None:
         gui = self.server.gui
-        tabs = self.scene.create_visualization_gui()
-        with tabs.add_tab("Run"):
+        tabs = gui.add_tab_group()
+        with tabs.add_tab("Run", icon=viser.Icon.PLAYER_PLAY):
             gui.add_markdown(f"**{title}**" if title else "")
             paused = gui.add_checkbox("Paused", initial_value=False, hint="Hold the env loop before its next step")
             step = gui.add_button("Single step", hint="Run one control step, then hold")
@@ -62,7 +62,11 @@ class BrowserViewer:
             labels = [speed_label(s) for s in SPEEDS]
             speed = gui.add_dropdown("Speed", labels, initial_value=labels[0], hint="Multiple of real time")
             self._status = gui.add_markdown("waiting for the first step")
-        self._cameras_tab = tabs.add_tab("Cameras")
+        with tabs.add_tab("Scene", icon=viser.Icon.VIDEO):  # env selector, camera
+            self.scene.create_scene_gui(camera_distance=camera_distance(self.model))
+        with tabs.add_tab("Visualization", icon=viser.Icon.EYE):  # contacts, frames, ...
+            self.scene.create_overlay_gui()
+        self._cameras_tab = tabs.add_tab("Cameras", icon=viser.Icon.CAMERA)
         with self._cameras_tab:
             self._no_images = gui.add_markdown("no camera sensor in this env")
 

@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -23,17 +24,15 @@ def chromium() -> Optional[str]:
     return next((p for p in map(shutil.which, CHROMIUM_NAMES) if p), None)
 
 
-def browser_screenshot(url: str, path: Path, size: tuple[int, int] = (1280, 800), wait_ms: int = 12000) -> Path:
-    """Load ``url`` in headless Chromium (software WebGL) and save a PNG of the page.
+def browser_screenshot(url: str, path: Path, size: tuple[int, int] = (1280, 800), wait_s: float = 12.0) -> Path:
+    """Open ``url`` in headless Chromium (software WebGL), let it run ``wait_s`` seconds of
+    real time (the page connects to the viewer and draws), then save a PNG of it.
 
-    Args:
-        url: the viewer's page.
-        path: the PNG to write.
-        size: window width and height in pixels.
-        wait_ms: virtual time the page gets to connect and draw before the capture.
+    The capture goes through the DevTools protocol (``Page.captureScreenshot``), since
+    Chromium's own ``--screenshot`` fires before the page's websocket has delivered the scene.
 
     Raises:
-        RuntimeError: no Chromium, or it wrote no image.
+        RuntimeError: no Chromium, or no page to capture.
     """
     exe = chromium()
     if exe is None:
@@ -45,16 +44,48 @@ def browser_screenshot(url: str, path: Path, size: tuple[int, int] = (1280, 800)
             "--no-sandbox",
             "--enable-unsafe-swiftshader",
             "--use-angle=swiftshader",
+            "--remote-debugging-address=127.0.0.1",
+            "--remote-debugging-port=0",
             f"--user-data-dir={profile}",
             f"--window-size={size[0]},{size[1]}",
-            f"--virtual-time-budget={wait_ms}",
-            f"--screenshot={path}",
             url,
         ]
-        done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    if not Path(path).is_file():
-        raise RuntimeError(f"chromium wrote no screenshot (exit {done.returncode}): {done.stderr[-500:]}")
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            png = _devtools_capture(Path(profile), wait_s)
+        finally:
+            proc.terminate()
+            proc.wait(timeout=20)
+    Path(path).write_bytes(png)
     return Path(path)
+
+
+def _devtools_capture(profile: Path, wait_s: float) -> bytes:
+    """PNG bytes of the first page of the Chromium whose profile is ``profile``."""
+    import base64
+    import json
+    import urllib.request
+
+    from websockets.sync.client import connect
+
+    port_file = profile / "DevToolsActivePort"
+    end = time.monotonic() + 30
+    while not port_file.is_file() or not port_file.read_text().strip():
+        if time.monotonic() > end:
+            raise RuntimeError("chromium opened no DevTools port")
+        time.sleep(0.1)
+    port = int(port_file.read_text().split()[0])
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10) as answer:
+        pages = [t for t in json.load(answer) if t.get("type") == "page"]
+    if not pages:
+        raise RuntimeError("chromium shows no page")
+    time.sleep(wait_s)
+    with connect(pages[0]["webSocketDebuggerUrl"], max_size=None) as ws:
+        ws.send(json.dumps({"id": 1, "method": "Page.captureScreenshot", "params": {"format": "png"}}))
+        while True:
+            reply = json.loads(ws.recv(timeout=60))
+            if reply.get("id") == 1:
+                return base64.b64decode(reply["result"]["data"])
 
 
 class Xvfb:

@@ -3,7 +3,7 @@
 MuJoCo's viewer brings the 3-D view, its camera, and the overlay toggles of its left panel
 (contact points and forces, joint and body frames, ...). This module draws the newest
 snapshot on its own ``MjData`` and adds, as overlays, the viewed env's readings (top left)
-and its camera images (bottom left), and these keys:
+and its camera images (bottom right), and these keys:
 
 =============  ==================================================
 Key            Action
@@ -26,7 +26,7 @@ from typing import Any, Optional
 import mujoco
 import numpy as np
 
-from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, speed_label
+from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, camera_distance, speed_label
 
 #: GLFW key codes of the keys above.
 KEYS = {"pause": 80, "step": 78, "reset": 82, "next": 93, "prev": 91, "faster": 61, "slower": 45}
@@ -58,6 +58,10 @@ class NativeViewer:
         self.handle = mujoco.viewer.launch_passive(model, self.data, key_callback=self.on_key)
         # the window's render thread: joined on close, so the process never exits mid-frame
         self._window_threads = [t for t in threading.enumerate() if t not in before]
+        with self.handle.lock():  # the whole scene in view, as the browser viewer starts
+            self.handle.cam.lookat[:] = model.stat.center
+            self.handle.cam.distance = camera_distance(model)
+            self.handle.cam.azimuth, self.handle.cam.elevation = 150.0, -25.0
         self._thread = threading.Thread(target=self._loop, name="embodichain-native-viewer", daemon=True)
         self._thread.start()
 
@@ -94,7 +98,9 @@ class NativeViewer:
                 self.data.mocap_quat[:] = snap.mocap_quat[i]
             mujoco.mj_forward(self.model, self.data)  # contacts too, for the contact overlay
         self.handle.set_texts([(None, mujoco.mjtGridPos.mjGRID_TOPLEFT, *overlay_text(snap, self.controls))])
-        self.handle.set_images(image_viewports(snap.images))
+        viewport = self.handle.viewport
+        right = viewport.left + viewport.width if viewport is not None else 0
+        self.handle.set_images(image_viewports(snap.images, right=right))
         self.handle.sync()
         self.last = snap
         self.frames += 1
@@ -126,12 +132,23 @@ def overlay_text(snap: Snapshot, controls: Controls) -> tuple[str, str]:
     return "\n".join(r[0] for r in rows), "\n".join(r[1] for r in rows)
 
 
-def image_viewports(images: dict[str, np.ndarray], height: int = 160) -> list[tuple[Any, np.ndarray]]:
-    """Camera images scaled to ``height`` px, side by side along the window's bottom edge."""
-    out, left = [], 0
-    for image in images.values():
-        step = max(1, int(np.ceil(image.shape[0] / height)))
-        small = np.ascontiguousarray(image[::step, ::step])
+def image_viewports(images: dict[str, np.ndarray], right: int = 0, height: int = 160) -> list[tuple[Any, np.ndarray]]:
+    """Camera images shrunk to at most ``height`` px, side by side along the bottom edge,
+    ending at x = ``right`` (the 3-D view's right edge; 0: start at the left edge) and
+    together at most half as wide as ``right`` (shrunk further when needed)."""
+    if not images:
+        return []
+    widest = right // 2 if right else None
+    step = max(1, int(np.ceil(max(i.shape[0] for i in images.values()) / height)))
+    while True:
+        smalls = [np.ascontiguousarray(i[::step, ::step]) for i in images.values()]
+        width = sum(s.shape[1] + 4 for s in smalls)
+        if widest is None or width <= widest or step > 64:
+            break
+        step += 1
+    left = max(0, right - width) if right else 0
+    out = []
+    for small in smalls:
         out.append((mujoco.MjrRect(left, 0, small.shape[1], small.shape[0]), small))
         left += small.shape[1] + 4
     return out

@@ -127,6 +127,12 @@ class Controls:
             return asked
 
 
+def camera_distance(model: Any) -> float:
+    """How far a viewer's camera starts from the scene: three extents, at most 2.5 m (a
+    floor plane makes the model's extent far larger than a table top)."""
+    return float(min(3.0 * model.stat.extent, 2.5))
+
+
 def image_rgb(value: Any) -> Optional[np.ndarray]:
     """One env's camera output as ``(H, W, 3)`` uint8: colour as it is, depth or a mask
     scaled to grey; ``None`` for what is not an image."""
