@@ -88,7 +88,7 @@ def test_every_episode_replays_exactly_including_those_after_an_autoreset(
     for episode in data["episodes"]:
         assert set(episode["max_error"]) >= {"observation.state", ENV_STATE, "observation.qvel", "next.success"}
         assert max(episode["max_error"].values()) == 0.0
-        assert min(episode["min_psnr"].values()) > 28.0
+        assert min(episode["min_psnr"].values()) > 25.0
 
 
 def _alter_action(src: Path, dest: Path, episode: int, frame: int) -> None:
