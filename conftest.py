@@ -273,3 +273,12 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         start = item.example.region.start
         if any(end <= start and not document.text[end:start].strip() for end in getattr(document, "slow_ends", ())):
             item.add_marker(pytest.mark.slow)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: Any) -> Any:
+    """A skipped block is reported at its page and line (not where Sybil raised the skip)."""
+    outcome = yield
+    report = outcome.get_result()
+    if Sybil is not None and isinstance(item, SybilItem) and report.skipped and isinstance(report.longrepr, tuple):
+        report.longrepr = (str(item.path), item.example.line - 1, report.longrepr[2])
