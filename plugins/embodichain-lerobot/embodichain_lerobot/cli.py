@@ -14,6 +14,9 @@ Commands:
         rebuild the env from ``meta/embodichain_env.json``, replay each episode's recorded
         actions from its recorded seed and compare the re-simulated features frame by
         frame (:mod:`embodichain_lerobot.replay`); exit 1 when one is past tolerance.
+    view PATH [--episode N] [--viewer auto|native|browser] [--port P] [--speed X] [--exit]
+        the same replay of one episode in the viewer, the recorded camera frames beside
+        the re-rendered ones (needs the embodichain-viewer plugin).
 
 Exit codes: 0 success, 1 the command failed, 2 usage error or not a dataset.
 
@@ -62,7 +65,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     prev.add_argument("--frames", type=int, default=8, metavar="K", help="frames in the contact sheet (default 8)")
     _add_replay(sub)
+    _add_view(sub)
     return parser
+
+
+def _add_view(sub: Any) -> None:
+    view = sub.add_parser("view", help="replay an episode in the viewer, the recorded camera frames beside it")
+    try:
+        from embodichain_viewer.dataset_view import add_view_arguments
+    except ImportError:  # run() prints how to install it
+        view.add_argument("rest", nargs=argparse.REMAINDER)
+        return
+    add_view_arguments(view)
 
 
 def _add_replay(sub: Any) -> None:
@@ -85,6 +99,18 @@ def _add_replay(sub: Any) -> None:
     )
 
 
+def _view(args: argparse.Namespace) -> int:
+    """``dataset view`` lives in the embodichain-viewer plugin; without it, how to install it."""
+    try:
+        from embodichain_viewer.dataset_view import run_view
+    except ImportError:
+        from embodichain_core.viewing import INSTALL_HINT
+
+        print(f"{PROG} view: needs the embodichain-viewer plugin; install it with: {INSTALL_HINT}", file=sys.stderr)
+        return 2
+    return run_view(args)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run ``embodichain dataset`` with ``argv``; return the exit code."""
     args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
@@ -98,6 +124,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             from embodichain_lerobot.replay_cli import run_replay
 
             return run_replay(args)
+        if args.command == "view":
+            return _view(args)
         return _preview(args)
     except BrokenPipeError:  # the output was piped into `head` or similar
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import atexit
 import time
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -39,6 +39,9 @@ class ViewerSession:
         self._last_publish = -1.0
         self._last_step = 0.0
         self._closed = False
+        #: Further images shown beside the env's cameras (``name -> (H, W, 3)`` uint8), asked for
+        #: at each snapshot: ``embodichain dataset view`` shows the recorded frames with it.
+        self.extra_images: Optional[Callable[[], dict[str, np.ndarray]]] = None
         # a script that never closes its env (the seed tutorial) must not exit mid-frame
         atexit.register(self.close)
 
@@ -87,6 +90,8 @@ class ViewerSession:
         for name, values in (info.get("rewards") or {}).items():
             snap.terms[str(name)] = float(np.asarray(_host(values)).reshape(-1)[i])
         snap.images = camera_images(obs, i)
+        if self.extra_images is not None:
+            snap.images.update(self.extra_images())
         return snap
 
     def close(self) -> None:
