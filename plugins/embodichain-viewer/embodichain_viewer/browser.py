@@ -77,7 +77,7 @@ class BrowserViewer:
         @step.on_click
         def _(_: Any) -> None:
             self.controls.request_step()
-            paused.value = True
+            paused.value = True  # type: ignore[misc]  # viser sets it (its stub types the property read-only)
 
         @reset.on_click
         def _(_: Any) -> None:
