@@ -212,7 +212,11 @@ def launcher_overrides(args: argparse.Namespace) -> dict[str, Any]:
     Returns:
         Only the keys given on the command line, among ``num_envs``, ``headless``,
         ``device``, ``renderer``, ``backend``, ``max_episodes``, ``seed``, ``filter_visual_rand``,
-        ``filter_dataset_saving`` (``--preview`` forces it to ``True``).
+        ``filter_dataset_saving`` (``--preview`` forces it to ``True``) and ``viewer``
+        (``--viewer`` other than ``none`` sets ``headless`` to ``False``).
+
+    Raises:
+        ConfigError: ``--viewer`` (other than ``none``) together with ``--headless``.
     """
     given: set[str] = getattr(args, GIVEN_ATTR, set())
     values = {key: getattr(args, key) for key in OVERRIDE_KEYS if key in given}
