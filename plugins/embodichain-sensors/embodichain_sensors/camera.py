@@ -1,8 +1,12 @@
 """``Camera``: a batched pinhole camera sensor rendered with MuJoCo.
 
-One :class:`~embodichain_sensors.renderer.SensorRenderer` per sensor, created on
-the first update and reused: N envs cost N renders (each from env ``i``'s model
-and data, so per-env light and material changes show). Outputs (``N`` envs):
+With ``renderer: opengl`` one :class:`~embodichain_sensors.renderer.SensorRenderer`
+per sensor, created on the first update and reused: N envs cost N renders (each from
+env ``i``'s model and data, so per-env light and material changes show). With
+``renderer: warp`` (the default on ``sim_cfg.backend: warp``) one
+:class:`~embodichain_sensors.warp_renderer.WarpCameraRenderer` traces every env and
+view in one launch on the sim device; outputs are then tensors on that device.
+Outputs (``N`` envs):
 
 =============  ===========================  ==========================================
 key            dtype / shape                meaning
@@ -39,6 +43,7 @@ from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
 from embodichain_sensors.renderer import SensorRenderer
+from embodichain_sensors.warp_renderer import WarpCameraRenderer
 
 
 @dataclass
@@ -71,6 +76,8 @@ class Camera(BaseSensor):
         self._local_pos, self._local_rot = self._initial_local_pose()
         self.views = self._make_views()
         self._renderer: Optional[SensorRenderer] = None
+        self._warp: Optional[WarpCameraRenderer] = None
+        self._path = f"sensor {self.uid!r}"
         self._ids: Optional[EntityIds] = None
         self._data: dict[str, torch.Tensor] = {}
         self._envs = EnvReader(scene)
@@ -95,6 +102,7 @@ class Camera(BaseSensor):
         """Resolve the parent and add one MuJoCo camera per view to the spec."""
         cfg, spec = self.cfg, builder.spec
         path = getattr(builder.records.get(self.uid), "path", "")  # claimed with its config path (sensor[0])
+        self._path = path or self._path
         where = f"{path}.extrinsics.parent" if path else f"sensor {self.uid!r}: extrinsics.parent"
         try:
             self.mount = resolve_mount(spec, cfg.extrinsics.parent, builder.records, where)
@@ -116,6 +124,28 @@ class Camera(BaseSensor):
         for view in self.views:
             view.camera_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, view.camera)
         self._ids = EntityIds.from_scene(self.scene)
+        self.renderer_name = self._check_renderer()
+
+    def _check_renderer(self) -> str:
+        """The renderer in effect (see ``CameraCfg.renderer``); what it cannot do raises here."""
+        sim_cfg = self.scene.sim_cfg
+        backend = getattr(sim_cfg, "backend", "mujoco_batch")
+        chosen = getattr(self.cfg, "renderer", None) or ("warp" if backend == "warp" else "opengl")
+        key = f"{self._path}.renderer"
+        if chosen == "warp" and backend != "warp":
+            raise ConfigError(
+                key,
+                f"renderer 'warp' renders the worlds of sim_cfg.backend 'warp', not backend {backend!r}; "
+                "use renderer 'opengl' (or leave it unset)",
+            )
+        quality = getattr(getattr(sim_cfg, "render_cfg", None), "quality", "fast")
+        if chosen == "warp" and quality != "fast":
+            raise ConfigError(
+                "sim_cfg.render_cfg.quality",
+                f"{quality!r}: MuJoCo Warp's renderer (camera {self.uid!r}, backend 'warp') has no reflections "
+                "or MSAA; use quality 'fast', or renderer: 'opengl' on this camera",
+            )
+        return chosen
 
     # -- rendering -------------------------------------------------------------------------
     @property
@@ -137,6 +167,9 @@ class Camera(BaseSensor):
 
     def update(self) -> None:
         """Render every env and every view; results go to :meth:`get_data`."""
+        if getattr(self, "renderer_name", "opengl") == "warp":
+            self._update_warp()
+            return
         wants, (n, h, w) = self._wants(), (self.num_envs, self.cfg.height, self.cfg.width)
         raw = {f"{key}{v.suffix}": _alloc(key, n, h, w) for v in self.views for key, on in wants.items() if on}
         poses = self.get_view_poses()
@@ -151,6 +184,41 @@ class Camera(BaseSensor):
                 self._render_view(renderer, view.suffix, i, wants, raw)
         self._data = self._outputs(raw)
 
+    @property
+    def warp_renderer(self) -> WarpCameraRenderer:
+        """The batched renderer of ``renderer: warp`` (created on first use; compiles once)."""
+        if self._warp is None:
+            cfg = self.cfg
+            self._warp = WarpCameraRenderer(
+                self.scene.sim,
+                [v.camera_id for v in self.views],
+                cfg.width,
+                cfg.height,
+                self._wants(),
+                cfg.near,
+                cfg.far,
+                f"{self._path}.renderer",
+            )
+        return self._warp
+
+    def _update_warp(self) -> None:
+        """Every env and view in one MuJoCo Warp launch, from the device state."""
+        renderer, wants = self.warp_renderer, self._wants()
+        renderer.check_supported()
+        for k, view in enumerate(self.views):
+            renderer.set_intrinsics(k, view.intrinsics)
+        renderer.set_poses(self.get_view_poses())  # reads the current (forwarded) link poses
+        renderer.render()
+        raw: dict[str, Any] = {}
+        for k, view in enumerate(self.views):
+            if wants["color"]:
+                raw["color" + view.suffix] = renderer.color(k)
+            if wants["depth"]:
+                raw["depth" + view.suffix] = renderer.depth(k)
+            if wants["mask"]:
+                raw["mask" + view.suffix] = renderer.mask(k, self._bound_ids().geom_to_id)
+        self._data = self._outputs(raw)
+
     def _render_view(self, renderer: SensorRenderer, sfx: str, i: int, wants: dict, raw: dict) -> None:
         rgb, depth = renderer.render(color=wants["color"], depth=wants["depth"])
         if rgb is not None:  # rows flipped (OpenGL is bottom-up); one channel at a time is
@@ -162,8 +230,9 @@ class Camera(BaseSensor):
         if wants["mask"]:
             raw["mask" + sfx][i] = renderer.render_segmentation(self._bound_ids().geom_to_id)[::-1]
 
-    def _outputs(self, raw: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
-        """Requested outputs (with the derived ones) as tensors."""
+    def _outputs(self, raw: dict[str, Any]) -> dict[str, torch.Tensor]:
+        """Requested outputs (with the derived ones) as tensors (numpy images, or tensors of
+        the warp renderer on the sim device; derived outputs are computed on the host)."""
         cfg, out = self.cfg, {}
         for view in self.views:
             sfx = view.suffix
@@ -174,8 +243,13 @@ class Camera(BaseSensor):
             if cfg.enable_mask:
                 out["mask" + sfx] = _trailing(raw["mask" + sfx], self.image_dims["mask"])
             if cfg.enable_position or cfg.enable_normal:
-                self._geometric(out, sfx, raw["depth" + sfx], view.intrinsics)
-        return {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in out.items()}
+                self._geometric(out, sfx, _host(raw["depth" + sfx]), view.intrinsics)
+        return {k: _tensor(v, self._out_device) for k, v in out.items()}
+
+    @property
+    def _out_device(self) -> torch.device:
+        """Where outputs live: the sim device with the warp renderer, else the CPU."""
+        return self.scene.sim.device if self._warp is not None else torch.device("cpu")
 
     def _geometric(self, out: dict, sfx: str, depth: np.ndarray, intrinsics: np.ndarray) -> None:
         points = np.stack([geo.depth_to_points(depth[i], intrinsics[i]) for i in range(self.num_envs)])
@@ -259,6 +333,7 @@ class Camera(BaseSensor):
         """Nothing per env to clear (poses persist across resets, as in EmbodiChain)."""
 
     def close(self) -> None:
+        self._warp = None
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
@@ -272,8 +347,20 @@ def _alloc(key: str, n: int, h: int, w: int) -> np.ndarray:
     return np.empty((n, h, w), dtype=np.int32 if key == "mask" else np.float32)
 
 
-def _trailing(arr: np.ndarray, dims: int) -> np.ndarray:
+def _trailing(arr: Any, dims: int) -> Any:
     return arr[..., None] if dims else arr
+
+
+def _host(arr: Any) -> np.ndarray:
+    """A numpy array of ``arr`` (a tensor is copied from its device)."""
+    return arr.detach().cpu().numpy() if isinstance(arr, torch.Tensor) else arr
+
+
+def _tensor(arr: Any, device: torch.device) -> torch.Tensor:
+    """``arr`` as a contiguous tensor on ``device``."""
+    if isinstance(arr, torch.Tensor):
+        return arr.to(device).contiguous()
+    return torch.from_numpy(np.ascontiguousarray(arr)).to(device)
 
 
 def _set_intrinsics(view: View, intrinsics: Any, ids: np.ndarray) -> None:

@@ -25,6 +25,8 @@ from embodichain_core.utils.configclass import MISSING, configclass
 #: Largest image side accepted (pixels): MuJoCo's offscreen buffer is an OpenGL framebuffer.
 MAX_IMAGE_SIDE = 16384
 #: Bytes per pixel of each camera output (colour is RGBA uint8; depth/mask 4 bytes; normal/position 3 float32).
+#: Camera renderers (``CameraCfg.renderer``).
+RENDERERS = ("warp", "opengl")
 _BYTES_PER_PIXEL = {"color": 4, "depth": 4, "mask": 4, "normal": 12, "position": 12}
 
 
@@ -64,6 +66,10 @@ class CameraCfg(SensorCfg):
         extrinsics: look-at (``eye``, ``target``, ``up``) or an offset (``pos``,
             ``quat``) from ``parent`` (a robot link, a body or a site; ``None``: the env frame).
         enable_*: which outputs :meth:`Camera.get_data` returns.
+        renderer: ``"warp"`` (MuJoCo Warp's batched ray tracer: every env in one launch,
+            on ``sim_cfg.backend: warp`` only), ``"opengl"`` (MuJoCo's OpenGL renderer, one
+            env at a time, any backend) or ``None``: ``"warp"`` on the warp backend, else
+            ``"opengl"`` (docs/sensors.md).
     """
 
     @configclass
@@ -106,8 +112,13 @@ class CameraCfg(SensorCfg):
     enable_mask: bool = False
     enable_normal: bool = False
     enable_position: bool = False
+    renderer: Optional[str] = None
 
     def __post_init__(self) -> None:
+        if self.renderer is not None and self.renderer not in RENDERERS:
+            raise ConfigError(
+                "renderer", f"must be one of {', '.join(map(repr, RENDERERS))} or None (auto), got {self.renderer!r}"
+            )
         for name in ("width", "height"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value <= 0:

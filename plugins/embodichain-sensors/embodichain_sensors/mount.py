@@ -41,8 +41,8 @@ class Mount:
 
     def body_poses(self, sim: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(N, 3)`` positions and ``(N, 3, 3)`` rotations of the mount frame in each env."""
-        xpos = sim.xpos[:, self.body_id].numpy()
-        xmat = sim.xmat[:, self.body_id].numpy().reshape(-1, 3, 3)
+        xpos = sim.xpos[:, self.body_id].detach().cpu().numpy()  # a few floats per env, also from a GPU
+        xmat = sim.xmat[:, self.body_id].detach().cpu().numpy().reshape(-1, 3, 3)
         if self.body is None or (not self.pos.any() and np.array_equal(self.rot, np.eye(3))):
             return xpos, xmat
         return xpos + xmat @ self.pos, xmat @ self.rot

@@ -30,7 +30,7 @@ import torch
 from embodichain_core.sim.entities.base import env_index
 from embodichain_core.utils.math import euler_xyz_to_quat, quat_to_matrix
 from embodichain_sensors import geometry as geo
-from embodichain_sensors.camera import Camera, View, _pose_out, _set_intrinsics
+from embodichain_sensors.camera import Camera, View, _host, _pose_out, _set_intrinsics
 
 
 class StereoCamera(Camera):
@@ -57,7 +57,7 @@ class StereoCamera(Camera):
     def _outputs(self, raw: dict[str, np.ndarray]) -> dict[str, torch.Tensor]:
         out = super()._outputs(raw)
         if self.cfg.enable_disparity:
-            out["disparity"] = torch.from_numpy(self._disparity(raw["depth"]))
+            out["disparity"] = torch.from_numpy(self._disparity(_host(raw["depth"]))).to(self._out_device)
         return out
 
     def _disparity(self, depth: np.ndarray) -> np.ndarray:

@@ -1,6 +1,7 @@
-"""The sensors on the warp backend (MuJoCo Warp on Warp's CPU device): the cameras render
-each world on the host from ``sim.get_model(i)``/``get_data(i)`` and see what they see on
-mujoco_batch; the contact sensor reads MuJoCo Warp's contacts with the right geoms."""
+"""The sensors on the warp backend (MuJoCo Warp on Warp's CPU device): with ``renderer:
+opengl`` the cameras render each world on the host from ``sim.get_model(i)``/``get_data(i)``
+and see what they see on mujoco_batch; the contact sensor reads MuJoCo Warp's contacts with
+the right geoms. The batched Warp renderer's parity: test_sensors_warp_render.py."""
 
 from __future__ import annotations
 
@@ -16,7 +17,11 @@ from test_sensors_camera import down_camera
 def _run(backend: str) -> tuple[dict, dict, float, object]:
     touch = ContactSensorCfg(uid="touch", rigid_uid_list=["cube", "table"], max_contacts_per_env=8)
     scene, (cam, contact) = make_scene(
-        down_camera(), touch, num_envs=2, cube_dynamic=True, sim_cfg=SimulationManagerCfg(backend=backend)
+        down_camera(renderer="opengl"),
+        touch,
+        num_envs=2,
+        cube_dynamic=True,
+        sim_cfg=SimulationManagerCfg(backend=backend),
     )
     scene["cube"].set_local_pose(torch.tensor([[TABLE_POS[0], TABLE_POS[1], 0.425, 1.0, 0.0, 0.0, 0.0]]).repeat(2, 1))
     for _ in range(60):
@@ -43,7 +48,9 @@ def test_stereo_camera_renders_the_same_images_on_warp() -> None:
 
     images = {}
     for backend in ("mujoco_batch", "warp"):
-        scene, (cam,) = make_scene(stereo_cfg(), num_envs=2, sim_cfg=SimulationManagerCfg(backend=backend))
+        scene, (cam,) = make_scene(
+            stereo_cfg(renderer="opengl"), num_envs=2, sim_cfg=SimulationManagerCfg(backend=backend)
+        )
         scene.sim.step(1)
         cam.update()
         images[backend] = cam.get_data()

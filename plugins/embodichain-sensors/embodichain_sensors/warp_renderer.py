@@ -1,0 +1,178 @@
+"""Batched camera rendering on the ``warp`` backend with MuJoCo Warp's ray tracer.
+
+One :class:`WarpCameraRenderer` per camera sensor renders every view of every world in
+one ``mujoco_warp.render`` launch, from the device state (no host copy), into torch tensors
+on the sim device. It keeps the OpenGL path's conventions:
+
+* **Intrinsics**: the primary rays are written from the sensor's ``(fx, fy, cx, cy)``
+  (OpenCV pixels, pixel centres at integer coordinates), not from MuJoCo's camera
+  model, so a ``set_intrinsics`` shows at the next update (one value for every env).
+* **Extrinsics**: each view's pose is written into the worlds' ``cam_xpos``/``cam_xmat``
+  before the launch, from the same :meth:`Camera.get_view_poses` the OpenGL path uses
+  (cameras on moving links, ``set_local_pose`` and ``look_at`` included).
+* **Images**: rows top-down; colour uint8 RGBA (alpha 255); depth float32 z-depth in
+  metres, ``far`` where nothing is hit within ``far``; masks int32 entity ids, -1 none.
+
+What the ray tracer does not render is refused (:class:`ConfigError`), never ignored:
+``render_cfg.quality: high`` (reflections), per-env visual fields that MuJoCo Warp does not
+hold (kept on the host for the OpenGL renderer, e.g. ``light_intensity``) and per-env
+intrinsics. ``renderer: opengl`` on the camera renders those with OpenGL, one world at a time.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import mujoco
+import numpy as np
+import torch
+
+from embodichain_core.config.errors import ConfigError
+
+_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
+
+
+def pixel_rays(intrinsics: Sequence[float], width: int, height: int) -> np.ndarray:
+    """Unit ray directions ``(H * W, 3)`` in the OpenGL camera frame, row-major from the
+    top-left pixel, for OpenCV intrinsics ``(fx, fy, cx, cy)``."""
+    fx, fy, cx, cy = (float(v) for v in intrinsics)
+    v, u = np.meshgrid(np.arange(height, dtype=np.float64), np.arange(width, dtype=np.float64), indexing="ij")
+    rays = np.stack([(u - cx) / fx, -(v - cy) / fy, -np.ones_like(u)], axis=-1).reshape(-1, 3)
+    return (rays / np.linalg.norm(rays, axis=1, keepdims=True)).astype(np.float32)
+
+
+def _no_falloff(attenuation: torch.Tensor) -> None:
+    """Zero attenuation (MuJoCo 4.0's default) means no falloff, as in the OpenGL path:
+    write it as ``(1, 0, 0)``, which the ray tracer reads that way."""
+    if attenuation.numel():
+        zero = (attenuation == 0).all(dim=-1)
+        if bool(zero.any()):
+            attenuation[zero] = torch.tensor([1.0, 0.0, 0.0], dtype=attenuation.dtype, device=attenuation.device)
+
+
+class WarpCameraRenderer:
+    """Every view of one camera sensor, for every world of a ``WarpSim``.
+
+    Args:
+        sim: the scene's :class:`~embodichain_core.sim.backend.warp_sim.WarpSim`.
+        camera_ids: the MuJoCo camera of each view.
+        width, height: image size.
+        wants: ``{"color", "depth", "mask"}`` -> whether to render it.
+        near, far: clipping distances (metres).
+        where: config path of the sensor, for errors.
+    """
+
+    def __init__(
+        self,
+        sim: Any,
+        camera_ids: Sequence[int],
+        width: int,
+        height: int,
+        wants: dict[str, bool],
+        near: float,
+        far: float,
+        where: str,
+    ):
+        self.sim, self.where = sim, where
+        self.camera_ids = [int(c) for c in camera_ids]
+        self.width, self.height = int(width), int(height)
+        self.wants, self.near, self.far = dict(wants), float(near), float(far)
+        wp, mjw = sim.wp, sim.mjw
+        with wp.ScopedDevice(sim.wp_device):
+            self.rc = mjw.create_render_context(
+                sim._host_model,
+                nworld=sim.num_envs,
+                cam_res=(self.width, self.height),
+                render_rgb=bool(wants["color"]),
+                render_depth=bool(wants["depth"]),
+                render_seg=bool(wants["mask"]),
+                use_textures=True,
+                use_shadows=False,
+                cam_active=self.camera_ids,
+                render_skybox=True,
+                use_precomputed_rays=True,
+            )
+        self.rc.znear, self.rc.zfar = self.near, self.far  # read when the kernel is specialised
+        self._rays = wp.to_torch(self.rc.ray)
+        self._intrinsics: list[tuple] = [() for _ in self.camera_ids]
+        dev = sim.device
+        self._cam_xpos = wp.to_torch(sim.wp_data.cam_xpos)
+        self._cam_xmat = wp.to_torch(sim.wp_data.cam_xmat)
+        self._ids = torch.as_tensor(self.camera_ids, device=dev, dtype=torch.long)
+        self._lut: torch.Tensor | None = None
+
+    # -- inputs ---------------------------------------------------------------------------------
+    def check_supported(self) -> None:
+        """Raise :class:`ConfigError` for per-env visual fields the ray tracer would not show."""
+        host = sorted(getattr(self.sim, "_host", {}) or {})
+        if host:
+            raise ConfigError(
+                self.where,
+                f"model field {host[0]!r} has per-env values that MuJoCo Warp's renderer does not use on "
+                "backend 'warp' (only the OpenGL renderer reads it); set renderer: 'opengl' on this camera, "
+                "or randomize a field MuJoCo Warp batches (light_diffuse, mat_rgba, geom_rgba...)",
+            )
+
+    def set_intrinsics(self, view: int, intrinsics: np.ndarray) -> None:
+        """Write view ``view``'s primary rays from ``(N, 4)`` intrinsics (one value for all envs)."""
+        first = tuple(float(v) for v in intrinsics[0])
+        if not np.allclose(intrinsics, np.asarray(first)[None]):
+            raise ConfigError(
+                self.where + ".intrinsics",
+                "MuJoCo Warp's renderer traces one set of rays per camera for every world: per-env "
+                "intrinsics need renderer: 'opengl' on this camera",
+            )
+        if first == self._intrinsics[view]:
+            return
+        n = self.width * self.height
+        rays = torch.from_numpy(pixel_rays(first, self.width, self.height)).to(self._rays.device)
+        self._rays[view * n : (view + 1) * n] = rays
+        self._intrinsics[view] = first
+
+    def set_poses(self, poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> None:
+        """Write each view's ``(pos (N, 3), rot (N, 3, 3))`` into the worlds' camera frames."""
+        dev = self._cam_xpos.device
+        pos = torch.as_tensor(np.stack([p for p, _ in poses], axis=1), dtype=torch.float32, device=dev)
+        rot = torch.as_tensor(np.stack([r for _, r in poses], axis=1), dtype=torch.float32, device=dev)
+        self._cam_xpos[:, self._ids] = pos
+        self._cam_xmat[:, self._ids] = rot
+
+    # -- rendering --------------------------------------------------------------------------------
+    def render(self) -> None:
+        """Refit the scene's bounding volumes and trace every view of every world (one launch)."""
+        sim = self.sim
+        _no_falloff(sim.wp.to_torch(sim.wp_model.light_attenuation))
+        with sim.wp.ScopedDevice(sim.wp_device):
+            sim.mjw.refit_bvh(sim.wp_model, sim.wp_data, self.rc)
+            sim.mjw.render(sim.wp_model, sim.wp_data, self.rc)
+
+    def color(self, view: int) -> torch.Tensor:
+        """``(N, H, W, 4)`` uint8 RGBA of view ``view`` (alpha 255)."""
+        packed = self._slice(self.rc.rgb_data, view).view(torch.int32)
+        out = torch.empty(packed.shape + (4,), dtype=torch.uint8, device=packed.device)
+        for c, shift in enumerate((16, 8, 0)):  # packed ARGB
+            out[..., c] = ((packed >> shift) & 0xFF).to(torch.uint8)
+        out[..., 3] = 255
+        return out
+
+    def depth(self, view: int) -> torch.Tensor:
+        """``(N, H, W)`` float32 z-depth in metres, ``far`` where nothing is hit."""
+        z = self._slice(self.rc.depth_data, view).clone()
+        far = torch.tensor(self.far, dtype=z.dtype, device=z.device)
+        return torch.where((z <= 0) | (z > far), far, z)
+
+    def mask(self, view: int, geom_to_id: np.ndarray) -> torch.Tensor:
+        """``(N, H, W)`` int32 entity ids (``geom_to_id`` of the hit geom), -1 where none."""
+        seg = self._slice(self.rc.seg_data, view)  # (N, H, W, 2): object id, object type
+        if self._lut is None:
+            lut = np.append(np.asarray(geom_to_id, dtype=np.int32), np.int32(-1))  # index -1 -> -1
+            self._lut = torch.as_tensor(lut, device=seg.device)
+        geom = torch.where(seg[..., 1] == _GEOM, seg[..., 0], torch.full_like(seg[..., 0], -1))
+        return self._lut[geom.long()]
+
+    def _slice(self, array: Any, view: int) -> torch.Tensor:
+        """One view's pixels of a context buffer ``(nworld, views * H * W, ...)`` as ``(N, H, W, ...)``."""
+        data = self.sim.wp.to_torch(array)
+        n = self.width * self.height
+        part = data[:, view * n : (view + 1) * n]
+        return part.reshape((data.shape[0], self.height, self.width) + tuple(data.shape[2:]))
