@@ -99,8 +99,9 @@ class BrowserViewer:
 
     def draw(self, snap: Snapshot) -> None:
         """Pose every env's bodies from ``snap`` and refresh the readings and images."""
-        xpos, xmat = body_poses(self.model, self._data, snap)
         sel = min(int(self.scene.env_idx), self.num_envs - 1)
+        # with the others hidden (the default) only the selected env's kinematics are computed
+        xpos, xmat = body_poses(self.model, self._data, snap, only=sel if self.scene.show_only_selected else None)
         self.scene.update_from_arrays(
             xpos,
             xmat,
@@ -137,13 +138,16 @@ class BrowserViewer:
         self.server.stop()
 
 
-def body_poses(model: mujoco.MjModel, data: mujoco.MjData, snap: Snapshot) -> tuple[np.ndarray, np.ndarray]:
+def body_poses(
+    model: mujoco.MjModel, data: mujoco.MjData, snap: Snapshot, only: Optional[int] = None
+) -> tuple[np.ndarray, np.ndarray]:
     """``(num_envs, nbody, 3)`` positions and ``(num_envs, nbody, 3, 3)`` rotations of ``snap``
-    (forward kinematics on the viewer's own ``MjData``)."""
+    (forward kinematics on the viewer's own ``MjData``); ``only``: compute that env alone and
+    give every env its poses (the others are hidden)."""
     n = snap.qpos.shape[0]
     xpos = np.empty((n, model.nbody, 3))
     xmat = np.empty((n, model.nbody, 3, 3))
-    for e in range(n):
+    for e in range(n) if only is None else (only,):
         data.qpos[:] = snap.qpos[e]
         if model.nmocap:
             data.mocap_pos[:] = snap.mocap_pos[e]
@@ -151,6 +155,8 @@ def body_poses(model: mujoco.MjModel, data: mujoco.MjData, snap: Snapshot) -> tu
         mujoco.mj_kinematics(model, data)
         xpos[e] = data.xpos
         xmat[e] = data.xmat.reshape(-1, 3, 3)
+    if only is not None:
+        xpos[:], xmat[:] = xpos[only], xmat[only]
     return xpos, xmat
 
 
