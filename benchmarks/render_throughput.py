@@ -11,8 +11,13 @@ and the mask from a second. MuJoCo's default settings (shadows, reflections,
 
 Timing follows benchmarks/common.py: warm-up, interleaved rounds, medians.
 
+A second table (benchmarks/render_warp.py) puts cameras on backend ``warp``: MuJoCo Warp's
+batched renderer beside the per-world OpenGL renderer, frames/s and env-steps/s at
+``--warp-worlds`` worlds, 128x128 and 320x180.
+
 Usage:
     .venv/bin/python benchmarks/render_throughput.py [--rounds 7] [--frames 20] [--num-envs 1]
+    .venv/bin/python benchmarks/render_throughput.py --device cuda --warp-worlds 1024,4096  # GPU
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import embodichain_core.sim  # noqa: E402,F401  (chooses MUJOCO_GL before mujoco is imported)
 import mujoco  # noqa: E402
 
+from render_warp import WARP_COLUMNS, add_arguments, warp_rows  # noqa: E402
 from common import (
     interleaved_timings,
     machine_info,
@@ -39,7 +45,7 @@ from common import (
 
 RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "render_throughput.json")
 SIZES = ((128, 128), (640, 480))
-MODES = {"rgb": {}, "rgb+depth+mask": {"enable_depth": True, "enable_mask": True}}
+MODES: dict[str, dict[str, Any]] = {"rgb": {}, "rgb+depth+mask": {"enable_depth": True, "enable_mask": True}}
 
 
 def build(width: int, height: int, num_envs: int, mode: str) -> tuple[Any, Any]:
@@ -154,8 +160,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--num-envs", type=int, default=1)
     parser.add_argument("--skip-default", action="store_true", help="skip MuJoCo's default (slow) settings")
     parser.add_argument("--out", default=RESULTS)
+    parser.add_argument("--skip-opengl-table", action="store_true", help="only the backend-warp table")
+    add_arguments(parser)
     args = parser.parse_args(argv)
-    rows = [measure(w, h, mode, args) for (w, h) in SIZES for mode in MODES]
+    rows = [] if args.skip_opengl_table else [measure(w, h, mode, args) for (w, h) in SIZES for mode in MODES]
     columns = [
         ("resolution", "resolution", "s"),
         ("mode", "outputs", "s"),
@@ -164,9 +172,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         ("ratio", "ratio", ".2f"),
         ("default_settings_fps", "MuJoCo defaults fps", ".1f"),
     ]
-    print_table(
-        rows, columns, title=f"Camera rendering, {args.num_envs} env(s), MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
-    )
+    if rows:
+        print_table(
+            rows, columns, title=f"Camera rendering, {args.num_envs} env(s), MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+        )
+    warp = warp_rows(args)
+    if warp:
+        print_table(warp, WARP_COLUMNS, title=f"Cameras on backend warp (RGB, device {args.device})")
     payload = {
         "benchmark": "render_throughput",
         "target_ratio": 0.8,
@@ -174,6 +186,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "settings": vars(args),
         "machine": machine_info(),
         "rows": rows,
+        "warp_rows": warp,
     }
     write_json(args.out, payload)
     print(f"wrote {args.out}")

@@ -148,10 +148,10 @@ class WarpCameraRenderer:
 
     def color(self, view: int) -> torch.Tensor:
         """``(N, H, W, 4)`` uint8 RGBA of view ``view`` (alpha 255)."""
-        packed = self._slice(self.rc.rgb_data, view).view(torch.int32)
-        out = torch.empty(packed.shape + (4,), dtype=torch.uint8, device=packed.device)
-        for c, shift in enumerate((16, 8, 0)):  # packed ARGB
-            out[..., c] = ((packed >> shift) & 0xFF).to(torch.uint8)
+        packed = self._slice(self.rc.rgb_data, view)  # (N, H, W) uint32 ARGB
+        channels = packed.contiguous().view(torch.uint8).reshape(packed.shape + (4,))  # little-endian: B, G, R, A
+        out = torch.empty_like(channels)
+        out[..., :3] = channels[..., :3].flip(-1)  # a flip is ~10x faster than an index gather
         out[..., 3] = 255
         return out
 
