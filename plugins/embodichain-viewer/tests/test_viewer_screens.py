@@ -46,7 +46,7 @@ def test_native_window_under_xvfb_shows_the_scene_move(tmp_path: Path) -> None:
     a, b = tmp_path / "native_a.png", tmp_path / "native_b.png"
     assert not is_blank(a)
     assert not is_blank(b)
-    assert changed_fraction(a, b) > 0.005  # the arm is drawn in another pose
+    assert changed_fraction(a, b) > 0.002  # the arm is drawn in another pose (the overlay text alone: < 0.001)
 
 
 @pytest.mark.skipif(chromium() is None, reason="needs Chromium (apt-get install chromium)")
