@@ -64,4 +64,4 @@ def test_browser_page_in_headless_chromium_shows_the_scene_move(tmp_path: Path, 
         env.close()
     assert not is_blank(shots[0])
     assert not is_blank(shots[1])
-    assert changed_fraction(*shots) > 0.001
+    assert changed_fraction(*shots) > 0.001  # measured 0.0055; a viewer that never poses the bodies: 0.0001
