@@ -18,7 +18,7 @@ import argparse
 import time
 from typing import Any
 
-WARP_SIZES = ((128, 128), (320, 180))
+WARP_SIZES = "128x128,320x180"
 
 
 def build_warp(width: int, height: int, num_envs: int, renderer: str, device: str) -> tuple[Any, Any]:
@@ -92,7 +92,7 @@ def measure_warp(width: int, height: int, worlds: int, renderer: str, args: argp
 def warp_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every (size, worlds, renderer) row the arguments ask for."""
     rows = []
-    for width, height in WARP_SIZES:
+    for width, height in (tuple(int(v) for v in size.split("x")) for size in args.warp_sizes.split(",") if size):
         for worlds in (int(w) for w in args.warp_worlds.split(",") if w):
             for renderer in ("warp", "opengl"):
                 if renderer == "opengl" and worlds > args.opengl_max_worlds:
@@ -116,6 +116,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--warp-worlds", default="1,16,64", help="world counts on backend warp ('' skips; GPU: 1024,4096)"
     )
+    parser.add_argument("--warp-sizes", default=WARP_SIZES, help="image sizes WxH of the warp rows")
     parser.add_argument("--device", default="cpu", help="sim_cfg.sim_device of the warp rows: cpu or cuda")
     parser.add_argument("--opengl-max-worlds", type=int, default=64, help="skip OpenGL rows above this")
     parser.add_argument("--min-seconds", type=float, default=2.0, help="time per warp-row measurement")
