@@ -52,7 +52,8 @@ IGNORED: dict[str, dict[str, str]] = {
         "arena_space": "every env is its own MuJoCo simulation; there is no shared arena to space envs in",
     },
     "render": {
-        "renderer": "MuJoCo's OpenGL renderer draws every image (MUJOCO_GL picks its backend)",
+        "renderer": "a camera's own 'renderer' (warp or opengl) picks how it renders; EmbodiChain's "
+        "renderer names select nothing here",
         "spp": "no path tracer; quality 'high' turns on MSAA",
         "tone_mapping_enabled": "MuJoCo's renderer has no tone mapping",
         "tone_mapping_exposure": "MuJoCo's renderer has no tone mapping",
