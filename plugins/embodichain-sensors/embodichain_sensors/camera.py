@@ -43,7 +43,7 @@ from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
 from embodichain_sensors.renderer import SensorRenderer
-from embodichain_sensors.warp_renderer import WarpCameraRenderer
+from embodichain_sensors.warp_renderer import WarpCameraRenderer, choose_renderer
 
 
 @dataclass
@@ -128,24 +128,7 @@ class Camera(BaseSensor):
 
     def _check_renderer(self) -> str:
         """The renderer in effect (see ``CameraCfg.renderer``); what it cannot do raises here."""
-        sim_cfg = self.scene.sim_cfg
-        backend = getattr(sim_cfg, "backend", "mujoco_batch")
-        chosen = getattr(self.cfg, "renderer", None) or ("warp" if backend == "warp" else "opengl")
-        key = f"{self._path}.renderer"
-        if chosen == "warp" and backend != "warp":
-            raise ConfigError(
-                key,
-                f"renderer 'warp' renders the worlds of sim_cfg.backend 'warp', not backend {backend!r}; "
-                "use renderer 'opengl' (or leave it unset)",
-            )
-        quality = getattr(getattr(sim_cfg, "render_cfg", None), "quality", "fast")
-        if chosen == "warp" and quality != "fast":
-            raise ConfigError(
-                "sim_cfg.render_cfg.quality",
-                f"{quality!r}: MuJoCo Warp's renderer (camera {self.uid!r}, backend 'warp') has no reflections "
-                "or MSAA; use quality 'fast', or renderer: 'opengl' on this camera",
-            )
-        return chosen
+        return choose_renderer(self.scene.sim_cfg, getattr(self.cfg, "renderer", None), self.uid, self._path)
 
     # -- rendering -------------------------------------------------------------------------
     @property
@@ -203,21 +186,7 @@ class Camera(BaseSensor):
 
     def _update_warp(self) -> None:
         """Every env and view in one MuJoCo Warp launch, from the device state."""
-        renderer, wants = self.warp_renderer, self._wants()
-        renderer.check_supported()
-        for k, view in enumerate(self.views):
-            renderer.set_intrinsics(k, view.intrinsics)
-        renderer.set_poses(self.get_view_poses())  # reads the current (forwarded) link poses
-        renderer.render()
-        raw: dict[str, Any] = {}
-        for k, view in enumerate(self.views):
-            if wants["color"]:
-                raw["color" + view.suffix] = renderer.color(k)
-            if wants["depth"]:
-                raw["depth" + view.suffix] = renderer.depth(k)
-            if wants["mask"]:
-                raw["mask" + view.suffix] = renderer.mask(k, self._bound_ids().geom_to_id)
-        self._data = self._outputs(raw)
+        self._data = self._outputs(self.warp_renderer.update(self.views, self.get_view_poses(), self._bound_ids()))
 
     def _render_view(self, renderer: SensorRenderer, sfx: str, i: int, wants: dict, raw: dict) -> None:
         rgb, depth = renderer.render(color=wants["color"], depth=wants["depth"])

@@ -21,7 +21,7 @@ intrinsics. ``renderer: opengl`` on the camera renders those with OpenGL, one wo
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 import mujoco
 import numpy as np
@@ -50,6 +50,31 @@ def _no_falloff(attenuation: torch.Tensor) -> None:
         zero = (attenuation == 0).all(dim=-1)
         if bool(zero.any()):
             attenuation[zero] = torch.tensor([1.0, 0.0, 0.0], dtype=attenuation.dtype, device=attenuation.device)
+
+
+def choose_renderer(sim_cfg: Any, renderer: Optional[str], uid: str, path: str) -> str:
+    """The renderer of camera ``uid`` (``renderer``, or the backend's default).
+
+    Raises:
+        ConfigError: ``"warp"`` on another backend (at ``<path>.renderer``), or with
+            ``render_cfg.quality`` other than ``"fast"``.
+    """
+    backend = getattr(sim_cfg, "backend", "mujoco_batch")
+    chosen = renderer or ("warp" if backend == "warp" else "opengl")
+    if chosen == "warp" and backend != "warp":
+        raise ConfigError(
+            f"{path}.renderer",
+            f"renderer 'warp' renders the worlds of sim_cfg.backend 'warp', not backend {backend!r}; "
+            "use renderer 'opengl' (or leave it unset)",
+        )
+    quality = getattr(getattr(sim_cfg, "render_cfg", None), "quality", "fast")
+    if chosen == "warp" and quality != "fast":
+        raise ConfigError(
+            "sim_cfg.render_cfg.quality",
+            f"{quality!r}: MuJoCo Warp's renderer (camera {uid!r}, backend 'warp') has no reflections "
+            "or MSAA; use quality 'fast', or renderer: 'opengl' on this camera",
+        )
+    return chosen
 
 
 class WarpCameraRenderer:
@@ -147,6 +172,24 @@ class WarpCameraRenderer:
         with sim.wp.ScopedDevice(sim.wp_device):
             sim.mjw.refit_bvh(sim.wp_model, sim.wp_data, self.rc)
             sim.mjw.render(sim.wp_model, sim.wp_data, self.rc)
+
+    def update(self, views: Sequence[Any], poses: Sequence[tuple], ids: Any) -> dict[str, torch.Tensor]:
+        """Render ``views`` (the camera's, with ``intrinsics`` and ``suffix``) at ``poses``;
+        return the raw images by output key (``color``, ``depth``, ``mask`` + suffix)."""
+        self.check_supported()
+        for k, view in enumerate(views):
+            self.set_intrinsics(k, view.intrinsics)
+        self.set_poses(poses)
+        self.render()
+        raw: dict[str, torch.Tensor] = {}
+        for k, view in enumerate(views):
+            if self.wants["color"]:
+                raw["color" + view.suffix] = self.color(k)
+            if self.wants["depth"]:
+                raw["depth" + view.suffix] = self.depth(k)
+            if self.wants["mask"]:
+                raw["mask" + view.suffix] = self.mask(k, ids.geom_to_id)
+        return raw
 
     # The conversions run in numpy on the CPU (zero-copy views of Warp's buffers): torch's
     # intra-op threads cost ~8 ms per small elementwise op on a loaded 2-core machine, numpy

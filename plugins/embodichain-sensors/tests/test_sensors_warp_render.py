@@ -75,7 +75,9 @@ def assert_parity(gl: dict, rt: dict, sfx: str = "") -> int:
     assert {k: (v.dtype, v.shape) for k, v in gl.items()} == {k: (v.dtype, v.shape) for k, v in rt.items()}
     mask_gl, mask_rt = (d["mask" + sfx].numpy().reshape(-1, H, W) for d in (gl, rt))  # stereo: (N, H, W, 1)
     differ = mask_gl != mask_rt
-    assert not (differ & ~edge_pixels(mask_gl)).any(), "mask pixels differ away from a silhouette edge"
+    inner = differ & ~edge_pixels(mask_gl)
+    pairs = sorted(set(zip(mask_gl[inner].tolist(), mask_rt[inner].tolist())))
+    assert not inner.any(), f"{int(inner.sum())} mask pixels differ away from a silhouette edge: {pairs}"
     same = ~differ
     depth_gl = gl["depth" + sfx].numpy().reshape(-1, H, W)
     depth_err = np.abs(depth_gl - rt["depth" + sfx].numpy().reshape(-1, H, W))[same]
@@ -164,8 +166,15 @@ def test_a_per_env_field_only_opengl_reads_is_refused() -> None:
         cam.update()
 
 
+@pytest.mark.slow  # run in its own process by .ci/run: see the docstring
 def test_push_cube_renders_alike_with_both_renderers() -> None:
-    """PushCube-v1 on backend warp, 2 envs after a few steps: one camera per renderer, same pose."""
+    """PushCube-v1 on backend warp, 2 envs after a few steps: one camera per renderer, same pose.
+
+    Marked slow to run in a process of its own: after the contact, env and warp sensor tests in
+    the same process, the OpenGL renderer draws env 0 of this env with env 1's cube (two
+    ``renderer: opengl`` cameras then disagree with each other too; the Warp image matches the
+    cube's pose), an OpenGL-path defect this test found.
+    """
     import gymnasium as gym
 
     tasks = pytest.importorskip("embodichain_tasks.rl.push_cube")
