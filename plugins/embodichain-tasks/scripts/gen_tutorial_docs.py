@@ -55,6 +55,7 @@ unchanged on `embodichain-core`: the script below is the tutorial's `modular_env
 `embodichain_tasks.tutorials.modular_env` (plugin `embodichain-tasks`), and registers
 `ModularEnv-v1`.
 
+<!-- slow: next -->
 ```bash
 python -m embodichain_tasks.tutorials.modular_env --headless --num_envs 2 --max_episodes 2
 ```
@@ -119,6 +120,7 @@ FOOTER = """
 `DexforceW1`); it is the config `ModularEnv-v1` registers, so `embodichain run-env ModularEnv-v1`
 uses it (`--num_envs`, `--max_episodes` and the other flags override it only when given):
 
+<!-- slow: next -->
 ```bash
 embodichain run-env ModularEnv-v1 --num_envs 2 --max_episodes 2
 embodichain run-env --gym_config plugins/embodichain-tasks/embodichain_tasks/configs/modular_env.json
