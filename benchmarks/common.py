@@ -29,6 +29,48 @@ def seven_dof_arm_mjcf() -> str:
 CLOCKS: dict[str, Callable[[], float]] = {"wall": time.perf_counter, "cpu": time.process_time}
 
 
+def camera_scene(width: int, height: int, num_envs: int, sim_cfg: Any = None, **camera: Any) -> tuple[Any, Any]:
+    """The render benchmarks' scene (7-DoF arm, table, cube, point light) with one camera.
+
+    Args:
+        width: image width in pixels.
+        height: image height in pixels.
+        num_envs: envs (worlds) of the scene.
+        sim_cfg: the ``SimulationManagerCfg`` (default: the CPU ``mujoco_batch`` one).
+        **camera: further ``CameraCfg`` fields (``enable_depth``, ``renderer``, ...).
+
+    Returns:
+        ``(scene, camera)``, the scene built.
+    """
+    from embodichain_core.sim.cfg import LightCfg, RigidObjectCfg, RobotCfg, SimulationManagerCfg
+    from embodichain_core.sim.scene import Scene
+    from embodichain_core.sim.shapes import CubeCfg
+    from embodichain_sensors.camera import Camera
+    from embodichain_sensors.cfg import CameraCfg
+
+    scene = Scene(sim_cfg if sim_cfg is not None else SimulationManagerCfg(), num_envs=num_envs)
+    scene.add_robot(RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf()))
+    scene.add_light(LightCfg(uid="lamp", init_pos=(0.5, 0.5, 2.0)))
+    table = RigidObjectCfg(
+        uid="table", shape=CubeCfg(size=[0.6, 0.8, 0.4]), init_pos=(0.6, 0.0, 0.2), body_type="kinematic"
+    )
+    scene.add_rigid_object(table, background=True)
+    scene.add_rigid_object(RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05] * 3), init_pos=(0.5, 0.1, 0.43)))
+    f = 0.9 * width
+    cfg = CameraCfg(
+        uid="cam",
+        width=width,
+        height=height,
+        intrinsics=(f, f, width / 2 - 0.5, height / 2 - 0.5),
+        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.6, -0.9, 1.3), target=(0.4, 0.0, 0.4)),
+        **camera,
+    )
+    cam = Camera(cfg, scene)
+    scene.add_sensor(cam)
+    scene.build()
+    return scene, cam
+
+
 def time_once(fn: Callable[[], Any], clock: str = "wall") -> float:
     """Seconds of one call of ``fn`` on ``clock`` (see :data:`CLOCKS`)."""
     now = CLOCKS[clock]

@@ -38,7 +38,7 @@ from common import (
     machine_info,
     median,
     print_table,
-    seven_dof_arm_mjcf,  # noqa: E402
+    camera_scene,
     spread,
     write_json,
 )
@@ -49,38 +49,8 @@ MODES: dict[str, dict[str, Any]] = {"rgb": {}, "rgb+depth+mask": {"enable_depth"
 
 
 def build(width: int, height: int, num_envs: int, mode: str) -> tuple[Any, Any]:
-    """A scene (7-DoF arm, table, cube, point light) with one camera; returns (scene, camera)."""
-    from embodichain_core.sim.cfg import LightCfg, RigidObjectCfg, RobotCfg, SimulationManagerCfg
-    from embodichain_core.sim.scene import Scene
-    from embodichain_core.sim.shapes import CubeCfg
-    from embodichain_sensors.camera import Camera
-    from embodichain_sensors.cfg import CameraCfg
-
-    scene = Scene(SimulationManagerCfg(), num_envs=num_envs)
-    scene.add_robot(RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf()))
-    scene.add_light(LightCfg(uid="lamp", init_pos=(0.5, 0.5, 2.0)))
-    scene.add_rigid_object(
-        RigidObjectCfg(
-            uid="table", shape=CubeCfg(size=[0.6, 0.8, 0.4]), init_pos=(0.6, 0.0, 0.2), body_type="kinematic"
-        ),
-        background=True,
-    )
-    scene.add_rigid_object(
-        RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05, 0.05, 0.05]), init_pos=(0.5, 0.1, 0.43))
-    )
-    f = 0.9 * width
-    cfg = CameraCfg(
-        uid="cam",
-        width=width,
-        height=height,
-        intrinsics=(f, f, width / 2 - 0.5, height / 2 - 0.5),
-        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.6, -0.9, 1.3), target=(0.4, 0.0, 0.4)),
-        **MODES[mode],
-    )
-    camera = Camera(cfg, scene)
-    scene.add_sensor(camera)
-    scene.build()
-    return scene, camera
+    """The benchmark scene with one camera of ``mode``; returns (scene, camera)."""
+    return camera_scene(width, height, num_envs, **MODES[mode])
 
 
 def bare_renderer(scene: Any, width: int, height: int, fast: bool) -> mujoco.Renderer:

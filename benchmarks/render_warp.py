@@ -23,36 +23,13 @@ WARP_SIZES = "128x128,320x180"
 
 def build_warp(width: int, height: int, num_envs: int, renderer: str, device: str) -> tuple[Any, Any]:
     """The benchmark scene on backend warp with one RGB camera of ``renderer``."""
-    from embodichain_core.sim.cfg import LightCfg, RigidObjectCfg, RobotCfg, SimulationManagerCfg
-    from embodichain_core.sim.scene import Scene
-    from embodichain_core.sim.shapes import CubeCfg
-    from embodichain_sensors.camera import Camera
-    from embodichain_sensors.cfg import CameraCfg
+    from embodichain_core.sim.cfg import SimulationManagerCfg
 
-    from common import seven_dof_arm_mjcf
+    from common import camera_scene
 
-    sim_cfg = SimulationManagerCfg(backend="warp", sim_device=device)
-    scene = Scene(sim_cfg, num_envs=num_envs)
-    scene.add_robot(RobotCfg(uid="arm", mjcf=seven_dof_arm_mjcf()))
-    scene.add_light(LightCfg(uid="lamp", init_pos=(0.5, 0.5, 2.0)))
-    table = RigidObjectCfg(
-        uid="table", shape=CubeCfg(size=[0.6, 0.8, 0.4]), init_pos=(0.6, 0.0, 0.2), body_type="kinematic"
+    return camera_scene(
+        width, height, num_envs, SimulationManagerCfg(backend="warp", sim_device=device), renderer=renderer
     )
-    scene.add_rigid_object(table, background=True)
-    scene.add_rigid_object(RigidObjectCfg(uid="cube", shape=CubeCfg(size=[0.05] * 3), init_pos=(0.5, 0.1, 0.43)))
-    f = 0.9 * width
-    cfg = CameraCfg(
-        uid="cam",
-        width=width,
-        height=height,
-        intrinsics=(f, f, width / 2 - 0.5, height / 2 - 0.5),
-        extrinsics=CameraCfg.ExtrinsicsCfg(eye=(1.6, -0.9, 1.3), target=(0.4, 0.0, 0.4)),
-        renderer=renderer,
-    )
-    camera = Camera(cfg, scene)
-    scene.add_sensor(camera)
-    scene.build()
-    return scene, camera
 
 
 def _rate(fn: Any, n: int, min_seconds: float) -> float:
