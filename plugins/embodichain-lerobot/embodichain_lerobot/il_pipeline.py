@@ -24,6 +24,7 @@ suit the scripted demos' smooth, unimodal trajectories (no VAE needed).
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import shlex
 import subprocess
@@ -33,7 +34,17 @@ from typing import Any, Optional, Sequence
 
 __all__ = ["main", "plot_curve", "state_config"]
 
-MAIN_JOB = Path(__file__).resolve().parents[2] / "embodichain-tasks" / "embodichain_tasks" / "configs" / "main_job.json"
+
+def _main_job() -> Optional[Path]:
+    """The main job's config shipped by ``embodichain-tasks`` (``None`` when it is not installed)."""
+    spec = importlib.util.find_spec("embodichain_tasks")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(next(iter(spec.submodule_search_locations))) / "configs" / "main_job.json"
+
+
+#: The default ``--config``: PickFork-v1's main job (``embodichain-tasks``).
+MAIN_JOB = _main_job()
 #: ACT settings for a state-only policy on a CPU (lerobot-train flags).
 ACT_FLAGS = (
     "--policy.type=act",
@@ -190,7 +201,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the pipeline; 0 when it ran to the end."""
     from embodichain_lerobot.reading import go_offline
 
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.config is None:
+        parser.error("--config is required: embodichain-tasks (the default PickFork-v1 main job) is not installed")
     go_offline()  # lerobot-train and eval-policy read local folders only
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
