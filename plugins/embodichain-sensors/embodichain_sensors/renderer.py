@@ -10,6 +10,11 @@ It holds what ``mujoco.Renderer`` holds (a GL context, an ``MjrContext``, an
 * segmentation is a second render with ``mjRND_SEGMENT | mjRND_IDCOLOR``;
 * fast settings by default: no shadows, no reflections, no MSAA.
 
+Its GL objects are freed in its own GL context, by :meth:`close` or when it is
+garbage-collected: OpenGL object names are per context and every context numbers
+them from 1, so freeing them in whichever context is current would delete another
+renderer's textures, meshes and framebuffer.
+
 Example:
     >>> r = SensorRenderer(model, 640, 480)  # doctest: +SKIP
     >>> r.update_scene(env_model, env_data)
@@ -32,6 +37,7 @@ from embodichain_sensors.geometry import frustum
 _FLAGS = mujoco.mjtRndFlag
 _POINT, _SPOT = mujoco.mjtLightType.mjLIGHT_POINT, mujoco.mjtLightType.mjLIGHT_SPOT
 _OPEN: "weakref.WeakSet[SensorRenderer]" = weakref.WeakSet()
+_EXIT_HOOK: list[bool] = []  # [True] once _close_all is registered with atexit
 
 
 class SensorRenderer:
@@ -46,8 +52,16 @@ class SensorRenderer:
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast", max_geom: int = 10000):
         self.width, self.height, self.quality = int(width), int(height), quality
-        self._gl = create_gl_context(self.width, self.height)
-        self.context = self._make_context(model)
+        self._gl: Optional[Any] = create_gl_context(self.width, self.height)
+        try:
+            self.context = self._make_context(model)
+        except BaseException:
+            self._gl.free()
+            raise
+        # close() or garbage collection, whichever comes first (at exit: _close_all)
+        self._release = weakref.finalize(self, _release_gl, self._gl, self.context)
+        self._release.atexit = False
+        _track(self)
         self.scene = mujoco.MjvScene(model, maxgeom=max_geom)
         high = quality == "high"
         self.scene.flags[_FLAGS.mjRND_SHADOW] = high
@@ -61,7 +75,6 @@ class SensorRenderer:
         self._near_far = (0.01, 100.0)
         self._gl_camera: Optional[tuple] = None
         self._camera_dirty = False
-        _OPEN.add(self)
 
     def _make_context(self, model: mujoco.MjModel) -> mujoco.MjrContext:
         vis = model.vis
@@ -195,14 +208,8 @@ class SensorRenderer:
 
     def close(self) -> None:
         """Free the GL resources; idempotent."""
-        if self._gl is None:
-            return
-        try:
-            self._gl.make_current()
-            self.context.free()
-        finally:
-            self._gl.free()
-            self._gl = None
+        self._gl = None
+        self._release()
         _OPEN.discard(self)
 
     def __enter__(self) -> "SensorRenderer":
@@ -212,11 +219,30 @@ class SensorRenderer:
         self.close()
 
 
-@atexit.register
+def _release_gl(gl: Any, context: mujoco.MjrContext) -> None:
+    """Free ``context``'s GL objects inside ``gl`` (the context that made them), then ``gl``.
+
+    The context current before stays current: a renderer collected in the middle of
+    another one's frame must leave that renderer bound and its objects intact.
+    """
+    try:
+        with gl.as_current():
+            context.free()
+    finally:
+        gl.free()
+
+
+def _track(renderer: SensorRenderer) -> None:
+    """Close ``renderer`` at exit if it is still open. The hook is registered after the
+    first GL context exists, so it runs before the GL backend's own exit hook (which
+    terminates the EGL display) and every renderer is freed in its live context."""
+    if not _EXIT_HOOK:
+        atexit.register(_close_all)
+        _EXIT_HOOK.append(True)
+    _OPEN.add(renderer)
+
+
 def _close_all() -> None:
-    """Free every open renderer before the interpreter tears down the GL bindings."""
+    """Free every open renderer at interpreter exit."""
     for renderer in list(_OPEN):
-        try:
-            renderer.close()
-        except Exception:
-            pass
+        renderer.close()

@@ -3,14 +3,16 @@ that map to uids, normals/positions, mounting on links and sites, per-env lights
 
 from __future__ import annotations
 
+import gc
 import math
+import weakref
 
 import mujoco
 import numpy as np
 import pytest
 import torch
 
-from sensors_helpers import CUBE_POS, CUBE_SIZE, cube_corners, mask_bbox, project_opencv
+from sensors_helpers import CUBE_POS, CUBE_SIZE, cube_corners, make_scene, mask_bbox, project_opencv
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_sensors import geometry as geo
@@ -179,6 +181,30 @@ def test_one_renderer_per_sensor_reused(scene_factory, monkeypatch):
         cam.update()
     assert len(made) == 1
     assert cam.get_data()["color"].shape[0] == 3
+
+
+def test_a_camera_dropped_unclosed_frees_only_its_own_gl_objects(scene_factory):
+    """A camera dropped without close() is freed by the garbage collector, perhaps while
+    another renderer is bound: that renderer stays bound, its textures, meshes and
+    framebuffer intact (GL object names are per context, so freeing the dropped
+    renderer's names in the bound context would delete the bound renderer's objects)."""
+    _, (dropped,) = make_scene(down_camera())
+    dropped.update()
+    gone = weakref.ref(dropped.renderer)
+    _, (cam,) = scene_factory(down_camera())
+    cam.update()
+    before = {k: v.clone() for k, v in cam.get_data().items()}
+    rgb, _ = cam.renderer.render(color=True)
+    rgb_before = rgb.copy()
+    rgb[:] = 0  # the renderer's reused buffer: the next render must write it again
+    del dropped
+    gc.collect()
+    assert gone() is None
+    rgb, _ = cam.renderer.render(color=True)  # no make_current(): still bound
+    assert np.array_equal(rgb, rgb_before)
+    cam.update()
+    for key, value in cam.get_data().items():
+        assert torch.equal(value, before[key]), key
 
 
 def test_config_validation():

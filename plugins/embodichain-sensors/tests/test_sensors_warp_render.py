@@ -166,15 +166,8 @@ def test_a_per_env_field_only_opengl_reads_is_refused() -> None:
         cam.update()
 
 
-@pytest.mark.slow  # run in its own process by .ci/run: see the docstring
 def test_push_cube_renders_alike_with_both_renderers() -> None:
-    """PushCube-v1 on backend warp, 2 envs after a few steps: one camera per renderer, same pose.
-
-    Marked slow to run in a process of its own: after the contact, env and warp sensor tests in
-    the same process, the OpenGL renderer draws env 0 of this env with env 1's cube (two
-    ``renderer: opengl`` cameras then disagree with each other too; the Warp image matches the
-    cube's pose), an OpenGL-path defect this test found.
-    """
+    """PushCube-v1 on backend warp, 2 envs after a few steps: one camera per renderer, same pose."""
     import gymnasium as gym
 
     tasks = pytest.importorskip("embodichain_tasks.rl.push_cube")
