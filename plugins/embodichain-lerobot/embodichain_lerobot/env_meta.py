@@ -24,7 +24,6 @@ Example:
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 import platform
@@ -32,6 +31,8 @@ import warnings
 from importlib import metadata
 from pathlib import Path
 from typing import Any, Optional, Sequence
+
+from embodichain_core.plugins.entries import import_target
 
 __all__ = [
     "ENV_META",
@@ -175,14 +176,6 @@ def version_mismatches(meta: dict[str, Any]) -> list[str]:
     ]
 
 
-def _cfg_class(path: str) -> type:
-    module, _, name = path.partition(":")
-    obj: Any = importlib.import_module(module)
-    for part in name.split("."):
-        obj = getattr(obj, part)
-    return obj
-
-
 def build_env(meta: dict[str, Any], num_envs: int = 1, **fields: Any) -> Any:
     """Rebuild the env of a dataset's :data:`ENV_META` with ``gymnasium.make`` (recording off).
 
@@ -205,7 +198,7 @@ def build_env(meta: dict[str, Any], num_envs: int = 1, **fields: Any) -> Any:
     plain.setdefault("sim_cfg", {})["num_envs"] = num_envs
     plain["sim_cfg"]["headless"] = True
     plain.update(fields)
-    cls: Any = _cfg_class(meta["cfg_class"])
+    cls: Any = import_target(meta["cfg_class"])
     cfg = cls.from_dict(plain, "")
     task_id = meta["task_id"]
     if task_id not in gym.registry:
