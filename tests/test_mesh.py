@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from embodichain_core.sim import convex
+from embodichain_core.sim.scene_build import convex
 from embodichain_core.sim.scene_build.convex import collision_parts, decompose
 from embodichain_core.sim.scene_build.mesh import (
     MeshData,
@@ -256,7 +256,7 @@ def test_unknown_method_is_an_error():
 def test_importing_mesh_modules_does_not_import_trimesh_or_coacd():
     code = (
         "import sys, embodichain_core; before = set(sys.modules); "
-        "import embodichain_core.sim.mesh, embodichain_core.sim.convex; "
+        "import embodichain_core.sim.scene_build.mesh, embodichain_core.sim.scene_build.convex; "
         "print(sorted(m for m in ('trimesh', 'coacd', 'mujoco') if m in set(sys.modules) - before))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, List, Optional
+from typing import List, Optional
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.utils.configclass import MISSING, configclass
@@ -115,9 +115,3 @@ class CapsuleCfg(ShapeCfg):
     radius: float = 0.05
     height: float = 0.1
 
-
-def shape_summary(shape: Any) -> str:
-    """Short human description of a shape config (for summaries)."""
-    if isinstance(shape, MeshCfg):
-        return f"Mesh({shape.fpath})"
-    return type(shape).__name__.replace("Cfg", "")

@@ -68,10 +68,6 @@ class Entity:
         return self.scene.num_envs
 
     @property
-    def num_instances(self) -> int:
-        return self.scene.num_envs
-
-    @property
     def device(self) -> torch.device:
         return self.scene.device
 

@@ -119,13 +119,6 @@ def from_trimesh(tm: Any) -> MeshData:
     return MeshData(np.asarray(tm.vertices), np.asarray(tm.faces), uv, normals)
 
 
-def to_trimesh(mesh: MeshData) -> Any:
-    """Convert to a ``trimesh.Trimesh`` without merging or reordering anything."""
-    import trimesh
-
-    return trimesh.Trimesh(mesh.vertices.copy(), mesh.faces.copy(), process=False)
-
-
 def scale_mesh(mesh: MeshData, scale: Sequence[float]) -> MeshData:
     """Scale vertices per axis; a negative determinant flips the face winding."""
     s = np.broadcast_to(np.asarray(scale, dtype=np.float64), (3,))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from embodichain_assets import catalog
-from embodichain_core.sim import convex
+from embodichain_core.sim.scene_build import convex
 from embodichain_core.sim.cfg import RigidObjectCfg, SimulationManagerCfg
 from embodichain_core.sim.scene import Scene
 from embodichain_core.sim.shapes import MeshCfg
