@@ -115,9 +115,11 @@ class Robot(Articulation):
         out = np.zeros((len(env), len(bodies), 7))
         data = mujoco.MjData(self.scene.model)
         adr = self.qpos_adr.numpy()
+        current = self.sim.qpos[env].detach().cpu().numpy()  # the sim device may be a GPU
+        joints = qpos.detach().cpu().numpy()
         for k, e in enumerate(env.tolist()):
-            data.qpos[:] = self.sim.qpos[e].numpy()
-            data.qpos[adr] = qpos[k].detach().cpu().numpy()
+            data.qpos[:] = current[k]
+            data.qpos[adr] = joints[k]
             mujoco.mj_kinematics(self.sim.get_model(e), data)
             out[k, :, :3], out[k, :, 3:] = data.xpos[bodies], data.xquat[bodies]
         pose = torch.as_tensor(out, dtype=torch.float32)
@@ -146,7 +148,7 @@ class Robot(Articulation):
         """(n, k) float64 part joint values from ``qpos`` (None, (n, k) or (n, dof))."""
         ids = list(solver.joint_ids)
         if qpos is None:
-            return self.sim.qpos[env][:, self.qpos_adr[ids]].to(torch.float64)
+            return self.sim.qpos[env][:, self.qpos_adr[ids]].to("cpu", torch.float64)  # solvers run on the CPU
         q = torch.as_tensor(qpos).detach().to("cpu", torch.float64)
         q = q.reshape(len(env), -1) if q.dim() != 1 or len(env) == 1 else q.expand(len(env), -1)
         if q.shape[-1] == len(ids):
@@ -165,7 +167,8 @@ class Robot(Articulation):
             base = self.compute_fk(q.reshape(len(env), -1), link_names=[solver.root_link_name], env_ids=env)[:, 0]
             return base.to("cpu", torch.float64)
         body = int(self.body_ids[self.find_bodies(solver.root_link_name)[0][0]])
-        return pose_to_matrix(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), -1).to(torch.float64))
+        pose = torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), -1)
+        return pose_to_matrix(pose.to("cpu", torch.float64))
 
     def _compute_part_fk(self, qpos: Any, name: str, env_ids: Any, to_matrix: bool) -> torch.Tensor:
         solver, env = self.get_solver(name), self._ids(env_ids)
