@@ -177,8 +177,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         # 5. scene reset: whole state rows (clears a diverged env), then every entity
         if self.rollout_buffer is not None:
             self.rollout_buffer.clear(ids)
-        self.scene.reset_state(ids, keep_uids=self._detached_uids_for_reset)
-        self.scene.reset(ids, excluded_uids=self._detached_uids_for_reset)
+        self.scene.reset(ids, keep_uids=self._detached_uids_for_reset)
         # 6. reset events
         self.event_manager.apply("reset", ids)
         # 7. manager resets (interval counters, class functors)

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from embodichain_robots.kinematics.chain import SerialChain
-from embodichain_robots.kinematics.solver import DLSSolver, IKSolverCfg
+from embodichain_robots.kinematics.solver import DLSSolver, IKSolverCfg, _host
 
 _F64 = torch.float64
 
@@ -48,7 +48,7 @@ class MjDLSSolver(DLSSolver):
         return cls(cfg, chain, model, prefix, joint_ids)
 
     def get_fk(self, qpos: torch.Tensor) -> torch.Tensor:
-        return self.fk_jacobian(torch.as_tensor(qpos, dtype=_F64).reshape(-1, self.dof))[0]
+        return self.fk_jacobian(_host(qpos).reshape(-1, self.dof))[0]
 
     def fk_jacobian(self, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         m, d = self.model, self.data

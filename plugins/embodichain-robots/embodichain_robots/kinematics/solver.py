@@ -28,6 +28,13 @@ from embodichain_core.utils.configclass import configclass
 from embodichain_robots.kinematics.chain import SerialChain
 
 _F64 = torch.float64
+
+
+def _host(values: Any) -> torch.Tensor:
+    """``values`` as a float64 CPU tensor: the solvers run on the CPU whatever the sim device."""
+    return torch.as_tensor(values).to("cpu", _F64)
+
+
 _T = TypeVar("_T", bound=Callable[..., Any])
 
 
@@ -163,12 +170,12 @@ class DLSSolver:
     @_one_thread
     def get_fk(self, qpos: torch.Tensor) -> torch.Tensor:
         """(N, 4, 4) TCP pose in the root link frame at ``qpos`` (N, n)."""
-        return self.chain.fk(torch.as_tensor(qpos, dtype=_F64).reshape(-1, self.dof), self.tcp)
+        return self.chain.fk(_host(qpos).reshape(-1, self.dof), self.tcp)
 
     @_one_thread
     def get_jacobian(self, qpos: torch.Tensor) -> torch.Tensor:
         """(N, 6, n) geometric TCP Jacobian (linear rows first) in the root frame."""
-        return self.fk_jacobian(torch.as_tensor(qpos, dtype=_F64).reshape(-1, self.dof))[1]
+        return self.fk_jacobian(_host(qpos).reshape(-1, self.dof))[1]
 
     def fk_jacobian(self, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """``(TCP pose (N, 4, 4), Jacobian (N, 6, n))`` in the root frame (float64 input)."""
@@ -178,7 +185,7 @@ class DLSSolver:
     def pose_error(self, target: torch.Tensor, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(position error (N,) in m, rotation error (N,) in rad) of ``qpos`` w.r.t. ``target``."""
         pose = self.get_fk(qpos)
-        target = torch.as_tensor(target, dtype=_F64)
+        target = _host(target)
         pos = torch.linalg.norm(target[:, :3, 3] - pose[:, :3, 3], dim=-1)
         return pos, rotation_angle(target[:, :3, :3], pose[:, :3, :3])
 
@@ -198,12 +205,12 @@ class DLSSolver:
             ``(success (N,) bool, qpos (N, n) float64)``; where ``success`` is
             False, ``qpos`` is the best attempt found.
         """
-        target = torch.as_tensor(target, dtype=_F64).reshape(-1, 4, 4)
+        target = _host(target).reshape(-1, 4, 4)
         n = target.shape[0]
         if qpos_seed is None:
             seed = self._middle().expand(n, -1)
         else:
-            seed = torch.as_tensor(qpos_seed, dtype=_F64).reshape(n, self.dof)
+            seed = _host(qpos_seed).reshape(n, self.dof)
         seed = torch.minimum(torch.maximum(seed, self.chain.limits[:, 0]), self.chain.limits[:, 1])
         q, ok, err = self._solve(target, seed)
         restarts = self.cfg.num_restarts if num_restarts is None else int(num_restarts)
