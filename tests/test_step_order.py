@@ -90,7 +90,7 @@ def make_order_env(make_env: Any, make_cfg: Any) -> Any:
     env = make_env(cfg, env_cls=OrderEnv)
     env.phases = []  # construction computed a first observation
     sim, scene, rng = env.sim, env.scene, env.rng
-    step, reset_state, begin = sim.step, scene.reset_state, rng.begin_episodes
+    step, scene_reset, begin = sim.step, scene.reset, rng.begin_episodes
 
     def physics(nstep: int = 1, env_ids: Any = None) -> list[int]:
         # the command of the pre term is applied before physics runs
@@ -98,7 +98,7 @@ def make_order_env(make_env: Any, make_cfg: Any) -> Any:
         return step(nstep, env_ids)
 
     sim.step = physics
-    scene.reset_state = lambda ids, keep_uids=(): (_log(env, "scene_reset"), reset_state(ids, keep_uids=keep_uids))
+    scene.reset = lambda ids=None, keep_uids=(): (_log(env, "scene_reset"), scene_reset(ids, keep_uids=keep_uids))
     rng.begin_episodes = lambda ids, seeds=None: (_log(env, "episode_streams"), begin(ids, seeds))
     return env
 

@@ -27,13 +27,16 @@ from embodichain_core.sim.cfg import (
     SimulationManagerCfg,
 )
 from embodichain_core.sim.entities.articulation import Articulation
-from embodichain_core.sim.entities.base import Entity
+from embodichain_core.sim.entities.base import Entity, StateSlices, env_index
 from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.entities.light import Light
 from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.entities.robot import Robot
 from embodichain_core.sim.scene_defaults import DefaultRows
 from embodichain_core.utils.suggest import did_you_mean
+
+#: State fields a kept entity's columns are read from, with the ``StateSlices`` field indexing them.
+_COLUMN_FIELDS = (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"), ("mocap_quat", "mocap"))
 
 
 class Scene:
@@ -101,14 +104,11 @@ class Scene:
     def set_mesh_variant(self, uid: str, fpath: str, env_ids: Any = None) -> None:
         """After build: ``env_ids`` simulate and render ``uid`` with the mesh ``fpath``
         (reserved before build). The object's body keeps its pose."""
-        from embodichain_core.sim.entities.base import env_index
-
         ids = env_index(env_ids, self.num_envs)
         self.set_mesh_variants(uid, [str(fpath)] * len(ids), ids)
 
     def set_mesh_variants(self, uid: str, keys: list[str], env_ids: Any = None) -> None:
         """After build: env ``env_ids[i]`` uses variant ``keys[i]`` (a reserved file or scale key)."""
-        from embodichain_core.sim.entities.base import env_index
         from embodichain_core.sim.scene_build.variants import apply_variants
 
         ids = env_index(env_ids, self.num_envs)
@@ -202,69 +202,46 @@ class Scene:
     def get(self, uid: str, default: Any = None) -> Any:
         return self.entities.get(uid, default)
 
-    def state_indices(self, uids: Any) -> dict[str, list[int]]:
-        """qpos, qvel, ctrl and mocap indices owned by the entities ``uids``."""
-        out: dict[str, list[int]] = {"qpos": [], "qvel": [], "ctrl": [], "mocap": []}
-        for uid in uids:
-            ent = self[uid]
-            members = getattr(ent, "members", [ent])
-            for e in members:
-                if isinstance(e, RigidObject):
-                    if e.is_dynamic:
-                        out["qpos"] += range(e.qpos_adr, e.qpos_adr + 7)
-                        out["qvel"] += range(e.dof_adr, e.dof_adr + 6)
-                    else:
-                        out["mocap"].append(e.mocap_id)
-                elif isinstance(e, Articulation):
-                    out["qpos"] += e.qpos_adr.tolist()
-                    out["qvel"] += e.dof_adr.tolist()
-                    out["ctrl"] += [int(a) for a in torch.cat((e.pos_act, e.vel_act)) if a >= 0]
-                    if e.is_floating:
-                        out["qpos"] += range(e.root_qpos_adr, e.root_qpos_adr + 7)
-                        out["qvel"] += range(e.root_dof_adr, e.root_dof_adr + 6)
+    def state_slices(self, uids: Any) -> StateSlices:
+        """The state columns owned by the entities ``uids`` (each declares its own)."""
+        return sum((self[uid].state_slices() for uid in uids), StateSlices())
+
+    def reset(self, env_ids: Any = None, keep_uids: Any = ()) -> None:
+        """Reset envs ``env_ids`` (all when None): their whole state rows (clears anything
+        a diverged simulation left behind), then every entity's initial state, except
+        the entities ``keep_uids``, whose state columns keep their values.
+
+        Once a reset has run, the rows come from the saved default row (model defaults
+        and every entity's initial state, see :mod:`embodichain_core.sim.scene_defaults`)
+        in one write, and the entities whose reset only writes state
+        (``Entity.state_only_reset``) are not run again.
+        """
+        ids = env_index(env_ids, self.num_envs)
+        keep = set(keep_uids)
+        kept = self._read_columns(ids, self.state_slices(keep_uids)) if keep else {}
+        row = self.defaults.row()
+        self.sim.reset(ids, state=row)
+        for uid, ent in self.entities.items():
+            if uid not in keep and not (row is not None and ent.state_only_reset):
+                ent.reset(ids)
+        if row is None and not keep:  # rows at model defaults + every entity's initial state: save one
+            self.defaults.capture(ids)
+        if kept:
+            self._write_columns(ids, kept)
+
+    def _read_columns(self, ids: torch.Tensor, cols: StateSlices) -> dict[str, tuple[list[int], torch.Tensor]]:
+        """Copies of the ``cols`` of rows ``ids``, by state field."""
+        out = {}
+        for name, key in _COLUMN_FIELDS:
+            idx = getattr(cols, key)
+            if idx:
+                out[name] = (idx, getattr(self.sim, name)[ids][:, idx].clone())
         return out
 
-    def reset_state(self, env_ids: Any, keep_uids: Any = ()) -> None:
-        """Reset the whole simulation state rows of ``env_ids`` (clears anything a
-        diverged simulation left behind), keeping the state of ``keep_uids``.
-
-        Once a reset has run, the rows are restored from the saved default row
-        (model defaults and every entity's initial state, see
-        :mod:`embodichain_core.sim.scene_defaults`); :meth:`reset` with the same ids
-        then skips the entities the row covers.
-        """
-        from embodichain_core.sim.entities.base import env_index
-
-        ids = env_index(env_ids, self.num_envs)
-        sim = self.sim
-        idx = self.state_indices(keep_uids) if keep_uids else {}
-        kept = (("qpos", "qpos"), ("qvel", "qvel"), ("ctrl", "ctrl"), ("mocap_pos", "mocap"), ("mocap_quat", "mocap"))
-        saved = {name: getattr(sim, name)[ids][:, idx[key]].clone() for name, key in kept} if idx else {}
-        row = self.defaults.row()
-        if row is None:
-            sim.reset(ids)
-        else:
-            sim.reset(ids, state=row)
-        self.defaults.restored, self.defaults.slow_reset = (ids, None) if row is not None else (None, ids)
-        for name, key in kept:
-            if saved and idx[key]:
-                getattr(sim, name)[ids[:, None], torch.as_tensor(idx[key])[None, :]] = saved[name]
-        if saved:
-            sim.mark_dirty(ids)
-
-    def reset(self, env_ids: Any = None, excluded_uids: Any = ()) -> None:
-        """Restore every entity (except ``excluded_uids``) of ``env_ids`` to its initial state
-        (the entities the saved default row covers are skipped right after
-        :meth:`reset_state` restored it for the same ids)."""
-        defaults = self.defaults
-        restored = defaults.restored is not None and env_ids is defaults.restored
-        slow = not excluded_uids and defaults.slow_reset is not None and env_ids is defaults.slow_reset
-        defaults.restored = defaults.slow_reset = None
-        for uid, ent in self.entities.items():
-            if uid not in excluded_uids and not (restored and defaults.covers(ent)):
-                ent.reset(env_ids)
-        if slow:  # rows at model defaults + every entity's initial state: save one
-            defaults.capture(env_ids)
+    def _write_columns(self, ids: torch.Tensor, saved: dict[str, tuple[list[int], torch.Tensor]]) -> None:
+        for name, (idx, values) in saved.items():
+            getattr(self.sim, name)[ids[:, None], torch.as_tensor(idx)[None, :]] = values
+        self.sim.mark_dirty(ids)
 
     # -- per-env options ---------------------------------------------------------------------------
     def set_gravity(self, gravity: Any, env_ids: Any = None) -> None:

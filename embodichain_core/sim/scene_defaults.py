@@ -4,18 +4,18 @@ A reset puts an env's whole state row back to the model's defaults, then every
 entity writes its initial state into it (robot joints and their targets, object
 poses at rest, ...). The result is the same row every time, so after the first
 reset of the slow kind :class:`DefaultRows` keeps a copy and later resets restore
-it with one write (``sim.reset(ids, state=row)``), skipping the entity resets that
-only write state (rigid objects, groups, articulations and robots). Entities whose
-reset does more (lights, sensors, other kinds) still run theirs.
+it with one write (``sim.reset(ids, state=row)``), skipping the entities whose reset
+only writes state (``Entity.state_only_reset``). The others (lights, sensors, ...)
+still run theirs. :meth:`embodichain_core.sim.scene.Scene.reset` makes that choice.
 
 The row is used only while it stays right:
 
 * the backend restores rows (``restores_state_rows``) and no model field a reset
-  reads (``qpos0``, ``body_pos``, ``body_quat``, ``eq_active0``) holds per-env values;
-* those model fields and the entities' initial states (``init_pose``,
-  ``default_qpos``) are unchanged since the row was saved (compared on every use,
-  a few microseconds); anything else drops the row and the slow reset runs and
-  saves a new one.
+  reads (:data:`RESET_MODEL_FIELDS`) holds per-env values;
+* those model fields and what every state-only entity declares its reset reads
+  (``Entity.initial_state()``) are unchanged since the row was saved (compared by
+  value on every use, a few microseconds; an in-place edit counts too); anything
+  else drops the row, and the slow reset runs and saves a new one.
 """
 
 from __future__ import annotations
@@ -25,34 +25,21 @@ from typing import Any, Optional
 import numpy as np
 import torch
 
-from embodichain_core.sim.entities.articulation import Articulation
-from embodichain_core.sim.entities.group import RigidObjectGroup
-from embodichain_core.sim.entities.rigid_object import RigidObject
-
 #: Model fields ``mj_resetData`` reads into the state row.
 RESET_MODEL_FIELDS = ("qpos0", "body_pos", "body_quat", "eq_active0")
-#: Entity resets that only write state rows (a subclass overriding ``reset`` is not one).
-_STATE_ONLY_RESETS = (RigidObject.reset, Articulation.reset, RigidObjectGroup.reset)
 
 
 class DefaultRows:
     """The saved default state row of a scene (see the module doc).
 
     Args:
-        scene: the built scene (its ``sim``, ``model`` and ``entities``).
+        scene: the scene (its ``sim``, ``model`` and ``entities`` once built).
     """
 
     def __init__(self, scene: Any):
         self._scene = scene
         self._row: Optional[np.ndarray] = None
         self._fingerprint: Optional[np.ndarray] = None
-        self.restored: Optional[torch.Tensor] = None  # ids the last reset_state restored from the row
-        self.slow_reset: Optional[torch.Tensor] = None  # ids the last reset_state reset to model defaults
-
-    @staticmethod
-    def covers(entity: Any) -> bool:
-        """Whether ``entity``'s reset only writes what the saved row holds."""
-        return getattr(type(entity), "reset", None) in _STATE_ONLY_RESETS
 
     def row(self) -> Optional[np.ndarray]:
         """The saved row when it may be used now, else ``None`` (and the row is dropped)."""
@@ -80,9 +67,5 @@ class DefaultRows:
         model = self._scene.model
         parts = [model.qpos0, model.body_pos.ravel(), model.body_quat.ravel(), model.eq_active0.astype(np.float64)]
         for entity in self._scene.entities.values():
-            for member in getattr(entity, "members", (entity,)):
-                if isinstance(member, RigidObject):
-                    parts.append(member.init_pose.numpy())
-                elif isinstance(member, Articulation):
-                    parts.append(member.default_qpos.detach().cpu().numpy().astype(np.float64))
+            parts += [np.asarray(a, dtype=np.float64).ravel() for a in entity.initial_state()]
         return np.concatenate(parts)

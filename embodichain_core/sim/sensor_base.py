@@ -6,6 +6,8 @@ from typing import Any
 
 import torch
 
+from embodichain_core.sim.entities.base import StateSlices
+
 
 class BaseSensor:
     """A sensor of the scene, batched over envs.
@@ -16,6 +18,9 @@ class BaseSensor:
     :meth:`get_data` returns as ``{name: tensor (N, ...)}``; :meth:`reset` runs on
     env resets.
     """
+
+    state_only_reset = False
+    """A sensor's reset clears its own buffers: a scene reset always runs it."""
 
     def __init__(self, cfg: Any, scene: Any):
         self.cfg = cfg
@@ -33,6 +38,14 @@ class BaseSensor:
 
     def get_data(self) -> dict[str, torch.Tensor]:
         raise NotImplementedError(f"{type(self).__name__} must implement get_data()")
+
+    def state_slices(self) -> StateSlices:
+        """A sensor owns no simulation state columns."""
+        return StateSlices()
+
+    def initial_state(self) -> list[Any]:
+        """Nothing of the saved default state row derives from a sensor."""
+        return []
 
     def reset(self, env_ids: Any = None) -> None:
         """Clear per-env state of ``env_ids``."""

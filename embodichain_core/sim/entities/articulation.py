@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.sim.entities.base import Entity, as_array, as_values, find_names
+from embodichain_core.sim.entities.base import Entity, StateSlices, as_array, as_values, find_names
 from embodichain_core.sim.entities.model_fields import JointModelFields, per_env_values
 from embodichain_core.utils.math import pose_to_matrix
 
@@ -27,6 +27,7 @@ class Articulation(JointModelFields, Entity):
     """
 
     kind = "articulation"
+    state_only_reset = True
 
     def __init__(self, uid: str, cfg: Any, scene: Any, record: Any):
         super().__init__(uid, cfg, scene)
@@ -84,6 +85,9 @@ class Articulation(JointModelFields, Entity):
         self.is_floating = jnt >= 0 and model.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE
         self.root_qpos_adr = int(model.jnt_qposadr[jnt]) if self.is_floating else -1
         self.root_dof_adr = int(model.jnt_dofadr[jnt]) if self.is_floating else -1
+        adr = self.root_qpos_adr
+        #: (7,) float64 initial root pose of a floating base (xyz + wxyz; empty when fixed)
+        self.init_root_pose = torch.as_tensor(np.array(model.qpos0[adr : adr + 7] if self.is_floating else []))
 
     def _default_qpos(self, model: mujoco.MjModel, path: str) -> torch.Tensor:
         """``init_qpos`` (one value per joint, checked here: the joint count is known only
@@ -318,11 +322,24 @@ class Articulation(JointModelFields, Entity):
             self.sim.arrays["qvel"][rows, self.root_dof_adr : self.root_dof_adr + 6] = 0.0
         self.sim.mark_dirty(rows)
 
+    # -- reset ---------------------------------------------------------------------------------------
+    def state_slices(self) -> StateSlices:
+        qpos, qvel = self.qpos_adr.tolist(), self.dof_adr.tolist()
+        if self.is_floating:
+            qpos += range(self.root_qpos_adr, self.root_qpos_adr + 7)
+            qvel += range(self.root_dof_adr, self.root_dof_adr + 6)
+        ctrl = [int(a) for a in torch.cat((self.pos_act, self.vel_act)) if a >= 0]
+        return StateSlices(qpos=qpos, qvel=qvel, ctrl=ctrl)
+
+    def initial_state(self) -> list[np.ndarray]:
+        return [self.default_qpos.detach().cpu().numpy(), self.init_root_pose.numpy()]
+
     def reset(self, env_ids: Any = None) -> None:
+        """Joints (and their drive targets) to ``default_qpos``, a floating root to
+        ``init_root_pose``, at rest: zero velocities, velocity targets and applied efforts."""
         ids = self._ids(env_ids)
         if self.is_floating:
-            pose = torch.as_tensor(self.scene.model.qpos0[self.root_qpos_adr : self.root_qpos_adr + 7])
-            self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = pose
+            self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = self.init_root_pose
         self.set_qpos(self.default_qpos.expand(len(ids), self.dof), env_ids=ids, target=False)
         mask = self.vel_act >= 0
         if mask.any():

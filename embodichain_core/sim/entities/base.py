@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Sequence
 
 import mujoco
@@ -49,10 +50,42 @@ def find_names(
     return hits, [names[i] for i in hits]
 
 
+@dataclass
+class StateSlices:
+    """The state columns an entity owns: indices into ``sim.qpos``, ``sim.qvel`` and
+    ``sim.ctrl``, and its mocap body ids (rows of ``sim.mocap_pos``/``mocap_quat``)."""
+
+    qpos: list[int] = field(default_factory=list)
+    qvel: list[int] = field(default_factory=list)
+    ctrl: list[int] = field(default_factory=list)
+    mocap: list[int] = field(default_factory=list)
+
+    def __add__(self, other: "StateSlices") -> "StateSlices":
+        return StateSlices(
+            self.qpos + other.qpos, self.qvel + other.qvel, self.ctrl + other.ctrl, self.mocap + other.mocap
+        )
+
+
 class Entity:
-    """Base of every scene entity: ``uid``, ``cfg``, the scene and its batch."""
+    """Base of every scene entity: ``uid``, ``cfg``, the scene and its batch.
+
+    What a scene reset needs from an entity it declares itself: the state columns it
+    owns (:meth:`state_slices`), whether its :meth:`reset` only writes those columns
+    (:attr:`state_only_reset`) and from which values (:meth:`initial_state`).
+    """
 
     kind = "entity"
+    state_only_reset: bool = False
+    """Whether :meth:`reset` writes nothing but the entity's :meth:`state_slices` of the
+    state rows (plus zero velocities and applied forces), from :meth:`initial_state`.
+    Then a scene reset that restores the saved default row
+    (:mod:`embodichain_core.sim.scene_defaults`) skips it. A subclass that overrides
+    ``reset`` without declaring this again is not state-only."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "reset" in cls.__dict__ and "state_only_reset" not in cls.__dict__:
+            cls.state_only_reset = False  # a new reset may do more than the saved row holds
 
     def __init__(self, uid: str, cfg: Any, scene: "Scene"):
         self.uid = uid
@@ -84,18 +117,9 @@ class Entity:
         return t.to(dtype=torch.float32, device=self.device)
 
     def _host_reads(self) -> bool:
-        """Whether reads may use the simulation's numpy views (a CPU backend with host
-        arrays and CPU outputs): ~1 us per slice where the torch op costs ~3-5 us."""
-        host = self.__dict__.get("_host_reads_ok")
-        if host is None:
-            sim = self.sim
-            host = (
-                bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False))
-                and getattr(sim, "device", torch.device("cpu")).type == "cpu"
-                and self.device.type == "cpu"
-            )
-            self.__dict__["_host_reads_ok"] = host
-        return host
+        """Whether reads may use the simulation's numpy views: the backend has them
+        (``sim.capabilities.host_arrays``, decided when it was built) and outputs stay on the CPU."""
+        return self.sim.capabilities.host_arrays and self.device.type == "cpu"
 
     @staticmethod
     def _pose_out(pos: np.ndarray, quat: np.ndarray) -> torch.Tensor:
@@ -104,6 +128,16 @@ class Entity:
         out[:, :3] = pos
         out[:, 3:] = quat
         return torch.from_numpy(out)
+
+    def state_slices(self) -> StateSlices:
+        """The state columns this entity owns (kept as they are by a scene reset that
+        keeps the entity, see :meth:`~embodichain_core.sim.scene.Scene.reset`)."""
+        return StateSlices()
+
+    def initial_state(self) -> list[np.ndarray]:
+        """Every value a state-only :meth:`reset` reads besides the model (the saved
+        default row is dropped as soon as one of them changes)."""
+        return []
 
     def reset(self, env_ids: Any = None) -> None:
         """Restore the configured initial state of ``env_ids``."""

@@ -6,7 +6,9 @@ from typing import Any
 
 import torch
 
-from embodichain_core.sim.entities.base import Entity
+import numpy as np
+
+from embodichain_core.sim.entities.base import Entity, StateSlices
 from embodichain_core.sim.entities.rigid_object import RigidObject
 
 
@@ -14,6 +16,7 @@ class RigidObjectGroup(Entity):
     """Members are :class:`RigidObject` s named ``<uid>/<member>``."""
 
     kind = "rigid_object_group"
+    state_only_reset = True
 
     def __init__(self, uid: str, cfg: Any, scene: Any, record: Any, parts: dict):
         super().__init__(uid, cfg, scene)
@@ -47,6 +50,12 @@ class RigidObjectGroup(Entity):
     def clear_dynamics(self, env_ids: Any = None) -> None:
         for m in self.members:
             m.clear_dynamics(env_ids)
+
+    def state_slices(self) -> StateSlices:
+        return sum((m.state_slices() for m in self.members), StateSlices())
+
+    def initial_state(self) -> list[np.ndarray]:
+        return [a for m in self.members for a in m.initial_state()]
 
     def reset(self, env_ids: Any = None) -> None:
         for m in self.members:

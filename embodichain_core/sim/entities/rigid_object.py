@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.sim.entities.base import Entity, as_array, as_values
+from embodichain_core.sim.entities.base import Entity, StateSlices, as_array, as_values
 from embodichain_core.utils.math import (
     as_pose7,
     init_pos_from_cfg,
@@ -32,6 +32,7 @@ class RigidObject(Entity):
     """
 
     kind = "rigid_object"
+    state_only_reset = True
 
     def __init__(self, uid: str, cfg: Any, scene: Any, body: str | None = None, parts: dict | None = None):
         super().__init__(uid, cfg, scene)
@@ -176,7 +177,19 @@ class RigidObject(Entity):
         ids = self._ids(env_ids)
         self.sim.set_model_field("mat_rgba", ids, self.material_id, as_values(rgba, len(ids), 4).numpy())
 
+    # -- reset -----------------------------------------------------------------------------------
+    def state_slices(self) -> StateSlices:
+        if self.is_dynamic:
+            return StateSlices(
+                qpos=list(range(self.qpos_adr, self.qpos_adr + 7)), qvel=list(range(self.dof_adr, self.dof_adr + 6))
+            )
+        return StateSlices(mocap=[self.mocap_id])
+
+    def initial_state(self) -> list[np.ndarray]:
+        return [self.init_pose.numpy()]
+
     def reset(self, env_ids: Any = None) -> None:
+        """Back to ``init_pose`` at rest (no applied wrench)."""
         ids = self._ids(env_ids)
         self.set_local_pose(self.init_pose.expand(len(ids), 7), ids)
         self.clear_dynamics(ids)
