@@ -25,7 +25,6 @@ import pytest
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.plugins import (
     AmbiguousNameError,
-    NameClashWarning,
     get_registry,
     isolated_plugins,
     list_plugins,
@@ -35,7 +34,6 @@ from embodichain_core.plugins import (
 
 DISTS = ("alpha", "beta")
 ORDERS = [DISTS, DISTS[::-1]]
-PRIORITY_ENV = "EMBODICHAIN_PLUGIN_PRIORITY"
 
 PLUGIN_SOURCE = '''
 """Fixture plugin @NAME@ (written by tests/test_plugin_clashes.py)."""
@@ -144,8 +142,7 @@ def dist_roots(tmp_path: Path) -> dict[str, Path]:
 
 @pytest.fixture(autouse=True)
 def clean_state(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """No priority from the caller's environment; fixture modules forgotten afterwards."""
-    monkeypatch.delenv(PRIORITY_ENV, raising=False)
+    """No blocked plugins from the caller's environment; fixture modules forgotten afterwards."""
     monkeypatch.delenv("EMBODICHAIN_BLOCK_PLUGINS", raising=False)
     yield
     for name in [m for m in sys.modules if m.startswith("ecclash_")]:
@@ -185,13 +182,13 @@ def test_both_plugins_load_and_qualified_names_resolve(
             }
             alpha, beta = sys.modules["ecclash_alpha"], sys.modules["ecclash_beta"]
             functors = pm.registry("functors")
-            assert functors.get("ecclash-alpha:shared_event") is alpha.shared_event
-            assert functors.get("ecclash-beta:shared_event") is beta.shared_event
+            assert functors.get("ecclash-alpha/shared_event") is alpha.shared_event
+            assert functors.get("ecclash-beta/shared_event") is beta.shared_event
             assert functors.get("alpha_only") is alpha.alpha_only
             assert functors.get("beta_only") is beta.beta_only
-            assert get_registry("robots").get("ecclash-beta:ClashArmCfg") is beta.ArmCfg
-            assert get_registry("sensors").get("ecclash-alpha:clashcam") is alpha.CamCfg
-            assert get_registry("commands").get("ecclash-beta:hello") is beta.hello
+            assert get_registry("robots").get("ecclash-beta/ClashArmCfg") is beta.ArmCfg
+            assert get_registry("sensors").get("ecclash-alpha/clashcam") is alpha.CamCfg
+            assert get_registry("commands").get("ecclash-beta/hello") is beta.hello
             assert gym.make("ecclash-alpha/ClashTask-v0").unwrapped.who == "alpha"
             assert type(gym.make("ecclash-beta/ClashTask-v0").unwrapped) is beta.ClashEnv
             assert gym.make("betaOnly-v0").unwrapped.who == "beta"  # a unique bare id
@@ -210,19 +207,18 @@ def test_ambiguous_bare_names_raise_one_error_naming_both(
             pm.registry("functors").get("shared_event")
         assert str(info.value) == (
             "functor 'shared_event' is ambiguous: it is provided by 'ecclash-alpha' and 'ecclash-beta'. "
-            "Use a qualified name: 'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event'; or prefer "
-            "one provider with EMBODICHAIN_PLUGIN_PRIORITY=ecclash-alpha,ecclash-beta (first listed wins)."
+            "Use a qualified name: 'ecclash-alpha/shared_event' or 'ecclash-beta/shared_event'."
         )
         with pytest.raises(
             ConfigError,
             match=r"env\.events\.e\.func.*'shared_event' is ambiguous.*"
-            r"'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event'",
+            r"'ecclash-alpha/shared_event' or 'ecclash-beta/shared_event'",
         ):
             resolve_func("shared_event", "event", "env.events.e")
         with pytest.raises(AmbiguousNameError, match="'ecclash-alpha/ClashTask-v0' or 'ecclash-beta/ClashTask-v0'"):
             gym.make("ClashTask-v0")
         with pytest.raises(
-            ConfigError, match=r"robot\.class_type.*'ecclash-alpha:ClashArm' or 'ecclash-beta:ClashArm'"
+            ConfigError, match=r"robot\.class_type.*'ecclash-alpha/ClashArm' or 'ecclash-beta/ClashArm'"
         ):
             RobotCfg.from_dict({"class_type": "ClashArm"}, "robot")
         with pytest.raises(ConfigError, match=r"sensor\.sensor_type.*ClashCam' is ambiguous"):
@@ -241,22 +237,27 @@ def test_configs_resolve_qualified_names(
     install(monkeypatch, dist_roots, order)
     with isolated_plugins(load_entry_points=True):
         beta = sys.modules["ecclash_beta"]
-        assert resolve_func("ecclash-beta:shared_event", "event", "env.events.e") is beta.shared_event
-        assert resolve_func("json:dumps", "event", "env.events.e") is json.dumps  # still an import path
+        assert resolve_func("ecclash-beta/shared_event", "event", "env.events.e") is beta.shared_event
+        assert resolve_func("json:dumps", "event", "env.events.e") is json.dumps  # ':' is always an import path
         with pytest.raises(
             ConfigError,
-            match="'ecclash-beta' provides no functor 'shared_evnt'. Did you mean 'ecclash-beta:shared_event'",
+            match="'ecclash-beta' provides no functor 'shared_evnt'. Did you mean 'ecclash-beta/shared_event'",
         ):
-            resolve_func("ecclash-beta:shared_evnt", "event", "env.events.e")
+            resolve_func("ecclash-beta/shared_evnt", "event", "env.events.e")
         with pytest.raises(ConfigError, match="Did you mean 'ecclash-beta'"):
-            resolve_func("ecclash-betta:shared_event", "event", "env.events.e")
-        assert type(RobotCfg.from_dict({"class_type": "ecclash-beta:ClashArm"}, "robot")) is beta.ArmCfg
-        cam = SensorCfg.from_dict({"sensor_type": "ecclash-beta:ClashCam", "uid": "cam"}, "sensor")
+            resolve_func("ecclash-betta/shared_event", "event", "env.events.e")
+        # the old spelling of a qualified name says what to write instead
+        with pytest.raises(ConfigError, match="'ecclash-beta' is a plugin: .* written 'ecclash-beta/shared_event'"):
+            resolve_func("ecclash-beta:shared_event", "event", "env.events.e")
+        with pytest.raises(ConfigError, match=r"robot\.class_type.*use 'ecclash-beta/ClashArm'"):
+            RobotCfg.from_dict({"class_type": "ecclash-beta:ClashArm"}, "robot")
+        assert type(RobotCfg.from_dict({"class_type": "ecclash-beta/ClashArm"}, "robot")) is beta.ArmCfg
+        cam = SensorCfg.from_dict({"sensor_type": "ecclash-beta/ClashCam", "uid": "cam"}, "sensor")
         assert type(cam) is beta.CamCfg
         assert Path(get_data_path("ecclash-beta:shared.txt")).read_text() == "ecclash_beta"
         assert Path(get_data_path("ecclash-alpha:shared.txt")).read_text() == "ecclash_alpha"
-        assert set(asset_roots()) == {"ecclash-alpha:data", "ecclash-beta:data"}
-        assert get_asset_root("ecclash-beta:data") == Path(beta.DATA)
+        assert set(asset_roots()) == {"ecclash-alpha/data", "ecclash-beta/data"}
+        assert get_asset_root("ecclash-beta/data") == Path(beta.DATA)
         with pytest.raises(AmbiguousNameError, match="asset root 'data' is ambiguous"):
             get_asset_root("data")
 
@@ -284,8 +285,8 @@ def _outcome() -> dict[str, Any]:
 def test_outcome_is_the_same_in_both_orders(
     monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path], priority: str | None
 ) -> None:
-    if priority:
-        monkeypatch.setenv(PRIORITY_ENV, priority)
+    if priority:  # the variable of earlier versions changes nothing: a config means one thing
+        monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", priority)
     outcomes = []
     for order in ORDERS:
         with monkeypatch.context() as mp:
@@ -293,7 +294,7 @@ def test_outcome_is_the_same_in_both_orders(
             with isolated_plugins(load_entry_points=True):
                 outcomes.append(_outcome())
     assert outcomes[0] == outcomes[1]
-    assert "is ambiguous" in outcomes[0]["functors:shared_event"] or priority
+    assert "is ambiguous" in outcomes[0]["functors:shared_event"]
     assert outcomes[0]["gym"] == [
         "ClashTask-v0",
         "alphaOnly-v0",
@@ -306,7 +307,7 @@ def test_outcome_is_the_same_in_both_orders(
 
 
 @pytest.mark.parametrize("order", ORDERS, ids=["alpha-first", "beta-first"])
-def test_priority_env_var_picks_the_first_listed_provider(
+def test_qualified_names_pick_the_provider_everywhere(
     monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path], order: tuple[str, ...]
 ) -> None:
     from embodichain_core.cli.main import main
@@ -314,18 +315,17 @@ def test_priority_env_var_picks_the_first_listed_provider(
     from embodichain_core.sim.cfg import RobotCfg
 
     install(monkeypatch, dist_roots, order)
-    monkeypatch.setenv(PRIORITY_ENV, "not-installed, ecclash-beta, ecclash-alpha")
     with isolated_plugins(load_entry_points=True):
         beta = sys.modules["ecclash_beta"]
-        assert resolve_func("shared_event", "event", "env.events.e") is beta.shared_event
-        assert type(RobotCfg.from_dict({"class_type": "ClashArm"}, "robot")) is beta.ArmCfg
-        assert gym.make("ClashTask-v0").unwrapped.who == "beta"
-        vec = gym.make_vec("ClashTask-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        assert resolve_func("ecclash-beta/shared_event", "event", "env.events.e") is beta.shared_event
+        assert type(RobotCfg.from_dict({"class_type": "ecclash-beta/ClashArm"}, "robot")) is beta.ArmCfg
+        assert gym.make("ecclash-beta/ClashTask-v0").unwrapped.who == "beta"
+        vec = gym.make_vec("ecclash-beta/ClashTask-v0", num_envs=2, vectorization_mode="vector_entry_point")
         assert (vec.who, vec.kwargs) == ("beta", {"num_envs": 2})
-        assert gym.make("ecclash-alpha/ClashTask-v0").unwrapped.who == "alpha"  # qualified still wins
-        monkeypatch.setenv(PRIORITY_ENV, "ecclash-alpha")
-        assert gym.make("ClashTask-v0").unwrapped.who == "alpha"  # read when the env is made
-        assert main(["hello", "x"]) == 0
+        assert gym.make("ecclash-alpha/ClashTask-v0").unwrapped.who == "alpha"
+        with pytest.raises(AmbiguousNameError):
+            gym.make_vec("ClashTask-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        assert main(["ecclash-beta/hello", "x"]) == 0
 
 
 def test_unregistering_one_provider_makes_the_bare_name_unique(
@@ -372,14 +372,14 @@ def test_command_clash(
         assert main(["hello"]) == 2
         err = capsys.readouterr().err
         assert "command 'hello' is ambiguous" in err
-        assert "'ecclash-alpha:hello' or 'ecclash-beta:hello'" in err
-        assert main(["ecclash-alpha:hello", "y"]) == 0
+        assert "'ecclash-alpha/hello' or 'ecclash-beta/hello'" in err
+        assert main(["ecclash-alpha/hello", "y"]) == 0
         assert "hello from alpha ['y']" in capsys.readouterr().out
-        assert main(["ecclash-alpha:helo"]) == 2
-        assert "Did you mean 'ecclash-alpha:hello'" in capsys.readouterr().err
+        assert main(["ecclash-alpha/helo"]) == 2
+        assert "Did you mean 'ecclash-alpha/hello'" in capsys.readouterr().err
         assert main(["--help"]) == 0
         help_text = capsys.readouterr().out
-        assert "ecclash-beta:hello" in help_text
+        assert "ecclash-beta/hello" in help_text
         assert "ambiguous: provided by ecclash-alpha, ecclash-beta" in help_text
 
 
@@ -397,15 +397,13 @@ def test_entry_point_name_declared_by_two_distributions(
     install(monkeypatch, dist_roots, DISTS)
     names = [ep.name for ep in manager._iter_entry_points()]
     assert names.count("ecclash-alpha") == 2  # pluggy would have kept only one of them
-    with pytest.warns(
-        NameClashWarning,
-        match="entry point 'ecclash-alpha' is declared by 2 distributions: 'ecclash-alpha' and 'ecclash-squatter'",
-    ):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # installing a third plugin breaks nothing: no failure, no warning
         with isolated_plugins(load_entry_points=True) as pm:
             infos = {i.name: i for i in list_plugins()}
             assert infos["ecclash-squatter"].status == infos["ecclash-alpha"].status == "loaded"
             assert infos["ecclash-squatter"].entry_point == "ecclash-alpha"
-            assert pm.entry_point_clashes == {"ecclash-alpha": ["ecclash-alpha", "ecclash-squatter"]}
+            assert pm.registry("functors").get("alpha_only").__module__ == "ecclash_alpha"
             assert pm.registry("functors").get("squatter_only").__module__ == "ecclash_squatter"
             assert pm.registry("functors").providers_of("shared_event") == [
                 "ecclash-alpha",
@@ -426,7 +424,7 @@ def test_list_shows_clashes_and_providers(
         assert "name clashes (both plugins stay loaded; use the qualified names):" in out
         assert (
             "  functor 'shared_event' is provided by 'ecclash-alpha' and 'ecclash-beta' "
-            "(use 'ecclash-alpha:shared_event' or 'ecclash-beta:shared_event')"
+            "(use 'ecclash-alpha/shared_event' or 'ecclash-beta/shared_event')"
         ) in out
         assert (
             "task 'ClashTask-v0' is provided by 'ecclash-alpha' and 'ecclash-beta' "
@@ -440,7 +438,7 @@ def test_list_shows_clashes_and_providers(
             "kind": "robots",
             "name": "ClashArm",
             "providers": ["ecclash-alpha", "ecclash-beta"],
-            "qualified": ["ecclash-alpha:ClashArm", "ecclash-beta:ClashArm"],
+            "qualified": ["ecclash-alpha/ClashArm", "ecclash-beta/ClashArm"],
         } in plugins["ecclash-beta"]["clashes"]
         assert plugins["embodichain-core"]["clashes"] == []
         assert main(["list", "functors"]) == 0
@@ -450,7 +448,7 @@ def test_list_shows_clashes_and_providers(
         assert [r[:2] for r in rows] == [["shared_event", "*"]] * 2
         assert [r[4] for r in rows] == ["ecclash-alpha", "ecclash-beta"]
         assert next(line for line in lines if line.startswith("beta_only")).split()[3] == "ecclash-beta"
-        assert "  ecclash-beta:shared_event  (ecclash-beta)" in lines
+        assert "  ecclash-beta/shared_event  (ecclash-beta)" in lines
         assert main(["list", "tasks", "--json"]) == 0
         tasks = {(r["name"], r["provider"]): r for r in json.loads(capsys.readouterr().out)}
         assert tasks[("ClashTask-v0", "ecclash-beta")]["qualified_name"] == "ecclash-beta/ClashTask-v0"
@@ -482,7 +480,7 @@ def test_check_name_clashes_reports_installed_plugins(
 
     clashes = check_name_clashes(Unique(), name="my-plugin", raise_on_clash=False)
     assert [(c.name, c.providers, c.qualified) for c in clashes] == [
-        ("alpha_only", ("ecclash-alpha", "my-plugin"), ("ecclash-alpha:alpha_only", "my-plugin:alpha_only"))
+        ("alpha_only", ("ecclash-alpha", "my-plugin"), ("ecclash-alpha/alpha_only", "my-plugin/alpha_only"))
     ]
     assert check_name_clashes(Unique(), name="my-plugin", ignore=["alpha_only"]) == []
-    assert "my-plugin:alpha_only" not in get_registry("functors")  # the global state is untouched
+    assert "my-plugin/alpha_only" not in get_registry("functors")  # the global state is untouched

@@ -14,6 +14,7 @@ from embodichain_core.plugins.hookspecs import (
     FunctorRegister,
     RobotRegister,
     SensorRegister,
+    new_registries,
 )
 from embodichain_core.plugins.registry import (
     AmbiguousNameError,
@@ -21,7 +22,6 @@ from embodichain_core.plugins.registry import (
     Registry,
     TargetImportError,
     UnknownNameError,
-    new_registries,
 )
 
 
@@ -53,34 +53,28 @@ def test_add_get_and_queries() -> None:
 
 
 def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.delenv("EMBODICHAIN_PLUGIN_PRIORITY", raising=False)
+    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "plugin-b")  # no longer read: a config means one thing
     reg = Registry("functors")
     reg.add("randomize_light", "json:dumps", provider="plugin-b")
     reg.add("randomize_light", "json:loads", provider="plugin-a")
     reg.add("joint_pos", "json:JSONDecoder", provider="plugin-b")
-    assert reg.get("plugin-a:randomize_light") is json.loads
-    assert reg.get("plugin-b:randomize_light") is json.dumps
+    assert reg.get("plugin-a/randomize_light") is json.loads
+    assert reg.get("plugin-b/randomize_light") is json.dumps
     assert reg.get("joint_pos") is json.JSONDecoder  # unique bare names still resolve
     assert reg.names() == ["joint_pos", "randomize_light"]
     assert len(reg) == 3
     assert reg.clashes() == {"randomize_light": ["plugin-a", "plugin-b"]}
     assert "randomize_light" in reg
-    assert "plugin-a:randomize_light" in reg
-    assert "plugin-a:joint_pos" not in reg
+    assert "plugin-a/randomize_light" in reg
+    assert "plugin-a/joint_pos" not in reg
     with pytest.raises(AmbiguousNameError) as info:
         reg.get("randomize_light")
     assert str(info.value) == (
         "functor 'randomize_light' is ambiguous: it is provided by 'plugin-a' and 'plugin-b'. Use a "
-        "qualified name: 'plugin-a:randomize_light' or 'plugin-b:randomize_light'; or prefer one provider "
-        "with EMBODICHAIN_PLUGIN_PRIORITY=plugin-a,plugin-b (first listed wins)."
+        "qualified name: 'plugin-a/randomize_light' or 'plugin-b/randomize_light'."
     )
     assert info.value.providers == ["plugin-a", "plugin-b"]
     assert not isinstance(info.value, KeyError)
-    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated, plugin-b,plugin-a")
-    assert reg.get("randomize_light") is json.dumps
-    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "unrelated")  # lists neither: still ambiguous
-    with pytest.raises(AmbiguousNameError):
-        reg.find("randomize_light")
     assert reg.remove("randomize_light", provider="plugin-b").target == "json:dumps"
     assert reg.get("randomize_light") is json.loads  # one provider left: the bare name resolves
 
@@ -99,16 +93,26 @@ def test_qualified_lookups_of_unknown_names_suggest() -> None:
     reg.add("randomize_light", "json:dumps", provider="plugin-a")
     with pytest.raises(
         UnknownNameError,
-        match="'plugin-a' provides no functor 'randomize_ligth'. Did you mean 'plugin-a:randomize_light'",
+        match="'plugin-a' provides no functor 'randomize_ligth'. Did you mean 'plugin-a/randomize_light'",
     ):
-        reg.get("plugin-a:randomize_ligth")
+        reg.get("plugin-a/randomize_ligth")
     with pytest.raises(UnknownNameError, match="no plugin named 'plugin-b' provides functors. Did you mean 'plugin-a'"):
-        reg.get("plugin-b:randomize_light")
+        reg.get("plugin-b/randomize_light")
 
 
-def test_names_cannot_contain_the_separator() -> None:
-    with pytest.raises(ValueError, match="cannot contain ':'"):
-        Registry("functors").add("a:b", "json:dumps", provider="p")
+def test_a_qualified_name_spelled_with_a_colon_says_what_to_write() -> None:
+    reg = Registry("functors")
+    reg.add("randomize_light", "json:dumps", provider="plugin-a")
+    with pytest.raises(AmbiguousNameError, match="import path.*use 'plugin-a/randomize_light'") as info:
+        reg.get("plugin-a:randomize_light")
+    assert info.value.choices == ["plugin-a/randomize_light"]
+    assert reg.find("json:dumps") is None  # no plugin 'json': nothing to say about it here
+
+
+@pytest.mark.parametrize("name", ["a:b", "a/b", ""])
+def test_names_cannot_contain_the_separators(name: str) -> None:
+    with pytest.raises(ValueError, match="without '/' or ':'"):
+        Registry("functors").add(name, "json:dumps", provider="p")
 
 
 def test_identical_reregistration_is_a_noop() -> None:
@@ -200,9 +204,9 @@ def test_robot_lookup_ignores_case_and_cfg_suffix(registries: dict[str, Registry
         assert robots.get(name) is DexforceW1Cfg
     assert robots.names() == ["DexforceW1"]
     RobotRegister(robots, "other")("dexforcew1cfg", "json:dumps")
-    assert robots.get("other:DexforceW1") is json.dumps
-    assert robots.get("robots:dexforcew1Cfg") is DexforceW1Cfg
-    with pytest.raises(AmbiguousNameError, match="'other:dexforcew1cfg' or 'robots:DexforceW1'"):
+    assert robots.get("other/DexforceW1") is json.dumps
+    assert robots.get("robots/dexforcew1Cfg") is DexforceW1Cfg
+    with pytest.raises(AmbiguousNameError, match="'other/dexforcew1cfg' or 'robots/DexforceW1'"):
         robots.get("DexforceW1Cfg")
 
 

@@ -93,7 +93,7 @@ def robot_of(tmp_path: Path, solver_cfg: Any, num_envs: int = 2) -> Any:
 
 def test_names_resolve_bare_qualified_and_ignoring_case(solvers) -> None:
     assert get_solver_class("FixtureSolver") is FixtureSolver
-    assert get_solver_class("fixture-solvers:FixtureSolver") is FixtureSolver
+    assert get_solver_class("fixture-solvers/FixtureSolver") is FixtureSolver
     assert get_solver_class("fixturesolver") is FixtureSolver
     assert solver_registry().names() == ["FixtureSolver"]
 
@@ -152,6 +152,6 @@ def test_part_and_class_type_are_checked_when_the_config_loads(solvers, tmp_path
     with pytest.raises(ConfigError) as err:
         check_solver_cfg(RobotCfg.from_dict(section), "robot")
     assert err.value.path == "robot.solver_cfg.hand"
-    section["solver_cfg"] = {"arm": {"class_type": "embodichain-robots:FixtureSolver"}}
+    section["solver_cfg"] = {"arm": {"class_type": "embodichain-robots/FixtureSolver"}}
     with pytest.raises(ConfigError, match="no plugin named 'embodichain-robots' provides solvers"):
         check_solver_cfg(RobotCfg.from_dict(section), "robot")

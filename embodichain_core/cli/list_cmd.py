@@ -7,8 +7,7 @@ from docstrings.
 
 Names several plugins register (clashes) are kept once per provider; their rows are
 marked with ``*`` and a footer lists the qualified names to use. ``list plugins`` ends
-with every clash: registered names and entry point names declared by several
-distributions. JSON rows carry ``qualified_name`` and ``ambiguous``.
+with every clash. JSON rows carry ``qualified_name`` and ``ambiguous``.
 
 Example:
     $ embodichain list functors --provider embodichain-functors
@@ -65,7 +64,7 @@ EPILOG = """\
 **Output.** One row per registered entry, with the plugin that provides it (`PROVIDER`).
 Two plugins may register the same name; both stay loaded, and the bare name is then
 ambiguous: its rows are marked `*`, and a footer lists the qualified names that always
-resolve (`<plugin>:<name>`; for tasks the gymnasium id `<plugin>/<id>`):
+resolve (`<plugin>/<name>`; for tasks that is the gymnasium id):
 
 ```text
 NAME            KIND   CATEGORY  PROVIDER              DESCRIPTION
@@ -73,13 +72,13 @@ shared_event *  event  -         embodichain-functors  ...
 shared_event *  event  -         my-plugin             ...
 
 * provided by several plugins: the bare name is ambiguous; use the qualified name:
-  embodichain-functors:shared_event  (embodichain-functors)
-  my-plugin:shared_event  (my-plugin)
+  embodichain-functors/shared_event  (embodichain-functors)
+  my-plugin/shared_event  (my-plugin)
 ```
 
 `list plugins` shows each plugin's version, status, what it registered and its number of
-clashes, then the failed plugins, every name clash (names, providers, qualified names) and
-the entry point names declared by several distributions. With `--json`, entry rows carry
+clashes, then the failed plugins and every name clash (names, providers, qualified
+names). With `--json`, entry rows carry
 `qualified_name` and `ambiguous`; plugin rows carry `entry_point` and `clashes`.
 """
 
@@ -135,20 +134,13 @@ def _print_row_clashes(rows: list[dict[str, Any]]) -> None:
 
 
 def _print_plugin_clashes(provider: str | None) -> None:
-    from embodichain_core.plugins import PRIORITY_ENV, load_plugins, name_clashes, plugin_priority
+    from embodichain_core.plugins import name_clashes
 
     clashes = name_clashes(provider)
     if clashes:
         print("\nname clashes (both plugins stay loaded; use the qualified names):")
         for clash in clashes:
             print(f"  {clash}")
-    eps = load_plugins().entry_point_clashes
-    if eps:
-        print("\nentry point names declared by several distributions (each loads under its own name):")
-        for ep_name, plugins in eps.items():
-            print(f"  {ep_name}: {', '.join(plugins)}")
-    if clashes and plugin_priority():
-        print(f"\n{PRIORITY_ENV}={','.join(plugin_priority())} picks the provider of ambiguous bare names")
 
 
 def collect(what: str, *, provider: str | None = None, resolve: bool = False) -> list[dict[str, Any]]:

@@ -7,9 +7,8 @@ Subcommands are ``"module:function"`` targets from the ``commands`` registry
 ``embodichain <command> --help`` reaches the command's own parser.
 
 A command is named by its bare name (``dataset``) or its qualified name
-(``embodichain-lerobot:dataset``). A bare name that several plugins register is an
-error naming every provider and the qualified forms, unless
-``EMBODICHAIN_PLUGIN_PRIORITY`` prefers one of them.
+(``embodichain-lerobot/dataset``). A bare name that several plugins register is an
+error naming every provider and the qualified forms.
 
 Example:
     $ embodichain list tasks
@@ -83,7 +82,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _unknown(commands: Registry, name: str) -> str:
     """``unknown command 'x'. Did you mean ...?`` (qualified names get the registry's message)."""
-    if ":" in name:
+    if "/" in name:
         return str(commands.unknown(name))
     return f"unknown command {name!r}.{did_you_mean(name, commands.names())}"
 

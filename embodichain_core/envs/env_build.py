@@ -31,15 +31,19 @@ from embodichain_core.managers.reward_manager import RewardManager
 from embodichain_core.utils.suggest import did_you_mean
 
 
-def resolve_cfg(cfg_cls: Any, cfg: Any, overrides: dict) -> Any:
-    """The env's own copy of ``cfg`` (``None``: ``cfg_cls()``; a dict: ``from_dict``) with
-    the keyword ``overrides`` set; a limit given to ``register_env`` replaces
-    ``max_episode_steps`` when the config leaves it at its class default.
+def resolve_cfg(env_cls: Any, cfg: Any, overrides: dict) -> Any:
+    """The env's own copy of ``cfg`` (``None``: ``env_cls.cfg_cls()``; a dict: ``from_dict``)
+    with the keyword ``overrides`` set; the episode limit registered with the task of
+    ``env_cls`` (the tasks hook, or ``register_env``) replaces ``max_episode_steps`` when the
+    config leaves it at its class default.
 
     Raises:
         ConfigError: an override names no config field.
     """
-    registered_limit = overrides.pop("_registered_max_episode_steps", None)
+    from embodichain_core.plugins import task_episode_limit
+
+    cfg_cls = env_cls.cfg_cls
+    registered_limit = task_episode_limit(env_cls)
     if cfg is None:
         cfg = cfg_cls()
     elif isinstance(cfg, dict):

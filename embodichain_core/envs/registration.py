@@ -1,10 +1,10 @@
-"""``register_env``: register a task class with gymnasium (``gym.make`` and ``gym.make_vec``).
+"""``register_env``: register an env class as a task from a script, through the tasks hook.
 
-The episode limit stays inside the env: ``max_episode_steps`` is never given to
-gymnasium (its ``TimeLimit`` would collapse batched truncation); it becomes the
-env's limit unless the config sets another. The spec is a
-:class:`~embodichain_core.gym_vector.BatchedEnvSpec`: ``gym.make_vec`` gives ``(N,)``
-rewards in every vectorization mode.
+A task is registered one way: the ``embodichain_register_tasks`` hook (see
+docs/plugins.md). ``register_env`` is a decorator for scripts and notebooks that runs that
+hook for you: the module defining the class becomes a runtime plugin (named after the
+module) registering the task, so ``gym.make``, ``gym.make_vec``, ``embodichain list
+tasks`` and the episode limit behave as for an installed plugin's task.
 
 Example:
     >>> @register_env("MyTask-v0", max_episode_steps=200)
@@ -15,67 +15,39 @@ Example:
 
 from __future__ import annotations
 
-import functools
 import json
 import warnings
-from dataclasses import dataclass, field
 from typing import Any, Callable, Optional
 
-import gymnasium as gym
+from embodichain_core.plugins.hookspecs import hookimpl
 
-from embodichain_core.gym_vector import batched_spec, make_vec_env
-
-REGISTERED_ENVS: dict[str, "EnvSpec"] = {}
-
-
-@dataclass
-class EnvSpec:
-    """What ``register_env`` recorded for a task id."""
-
-    uid: str
-    cls: type
-    max_episode_steps: Optional[int] = None
-    default_kwargs: dict = field(default_factory=dict)
-
-    def make(self, **kwargs: Any) -> Any:
-        return self.cls(**{**self.default_kwargs, **kwargs})
+#: Task id -> the class ``register_env`` registered under it.
+REGISTERED_ENVS: dict[str, type] = {}
 
 
-def _entry(cls: type) -> str:
-    return f"{cls.__module__}:{cls.__qualname__}"
+class _ModuleTasks:
+    """The runtime plugin of one module's ``register_env`` calls."""
 
+    def __init__(self) -> None:
+        self.tasks: dict[str, tuple[str, Optional[int], dict[str, Any]]] = {}
 
-def _provided_by_plugins(uid: str, cls: type, kwargs: dict, max_episode_steps: Optional[int]) -> bool:
-    """True when plugins manage ``uid`` in gymnasium: their spec stays (a warning when
-    ``cls`` is none of theirs)."""
-    from embodichain_core.plugins.gym_tasks import managed_entry_points
-
-    providers = managed_entry_points(uid)
-    if providers is None:
-        return False
-    if _entry(cls) in providers:
-        REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
-    else:
-        warnings.warn(
-            f"env id {uid!r} is provided by installed plugins ({', '.join(providers)}); "
-            f"register_env keeps theirs and ignores {_entry(cls)}",
-            stacklevel=3,
-        )
-    return True
+    @hookimpl
+    def embodichain_register_tasks(self, register: Any) -> None:
+        for uid, (target, limit, kwargs) in self.tasks.items():
+            register(uid, target, max_episode_steps=limit, kwargs=kwargs)
 
 
 def register_env(
     uid: str, max_episode_steps: Optional[int] = None, override: bool = False, **kwargs: Any
 ) -> Callable[[type], type]:
-    """Class decorator registering ``uid`` with gymnasium.
+    """Class decorator registering the env class as the task ``uid``.
 
-    Re-registering the same class (its module being imported again by gymnasium)
-    is a no-op; another class under a taken id warns and keeps the first unless
-    ``override=True``. An id that installed plugins provide (see
-    :mod:`embodichain_core.plugins.gym_tasks`) is never replaced, even with
-    ``override=True``: its bare id may be shared by several plugins, and their
-    namespaced ids (``<plugin>/<id>``) are what picks one. ``kwargs`` must be
-    JSON-serialisable default constructor args.
+    An id that an installed plugin (or another module) provides is never replaced, even
+    with ``override=True``: a warning names the provider and the class is left out (the
+    same class registered again is a silent no-op). The module's own earlier class under
+    ``uid`` is replaced with ``override=True`` (a warning and no change otherwise); so is an
+    id gymnasium has from outside the plugins. ``kwargs`` are JSON-serialisable default
+    constructor arguments.
     """
     try:
         json.dumps(kwargs)
@@ -83,40 +55,48 @@ def register_env(
         raise RuntimeError(f"register_env({uid!r}): kwargs must be JSON-serialisable: {err}") from err
 
     def wrap(cls: type) -> type:
-        from embodichain_core.envs.embodied_env import EmbodiedEnv
+        from embodichain_core.envs.base_env import BaseEnv
 
-        if not (isinstance(cls, type) and issubclass(cls, EmbodiedEnv)):
-            raise TypeError(f"register_env({uid!r}) decorates EmbodiedEnv subclasses, got {cls!r}")
-        if _provided_by_plugins(uid, cls, kwargs, max_episode_steps):
-            return cls
-        existing = gym.envs.registry.get(uid)
-        if existing is not None and existing.entry_point == _entry(cls) and not override:
-            # gymnasium imported the module of a plugin-registered task: same class
-            REGISTERED_ENVS.setdefault(uid, EnvSpec(uid, cls, max_episode_steps, dict(kwargs)))
-            if existing.vector_entry_point is None:
-                existing.vector_entry_point = functools.partial(make_vec_env, _entry(cls))
-            return cls
-        if existing is not None and not override:
-            warnings.warn(
-                f"env id {uid!r} is already registered by {existing.entry_point}; keeping it "
-                f"(pass override=True to replace it)",
-                stacklevel=2,
-            )
-            return cls
-        gym.envs.registry.pop(uid, None)
-        defaults = dict(kwargs)
-        if max_episode_steps is not None:
-            defaults["_registered_max_episode_steps"] = int(max_episode_steps)
-        gym.register(
-            uid,
-            entry_point=_entry(cls),
-            disable_env_checker=True,
-            order_enforce=False,
-            vector_entry_point=functools.partial(make_vec_env, _entry(cls)),
-            kwargs=defaults,
-        )
-        gym.envs.registry[uid] = batched_spec(gym.envs.registry[uid])  # unbatched sync/async sub-envs
-        REGISTERED_ENVS[uid] = EnvSpec(uid, cls, max_episode_steps, dict(kwargs))
+        if not (isinstance(cls, type) and issubclass(cls, BaseEnv)):
+            raise TypeError(f"register_env({uid!r}) decorates BaseEnv or EmbodiedEnv subclasses, got {cls!r}")
+        _register(uid, cls, max_episode_steps, dict(kwargs), override)
         return cls
 
     return wrap
+
+
+def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any], override: bool) -> None:
+    import gymnasium
+
+    from embodichain_core.plugins import load_plugins, register_plugin, unregister_plugin
+
+    pm = load_plugins()
+    name, target = cls.__module__, f"{cls.__module__}:{cls.__qualname__}"
+    others = [e for e in pm.registry("tasks").ordered_entries() if e.name == uid and e.provider != name]
+    if others:
+        if all(e.target != target for e in others):
+            providers = ", ".join(sorted({e.provider for e in others}))
+            warnings.warn(
+                f"env id {uid!r} is provided by installed plugins ({providers}); register_env keeps theirs and "
+                f"ignores {target}",
+                stacklevel=3,
+            )
+        return
+    if pm.get_plugin(name) is not None and not isinstance(pm.get_plugin(name), _ModuleTasks):
+        name += ".register_env"  # the module is a plugin of its own
+    plugin = pm.get_plugin(name) or _ModuleTasks()
+    old = plugin.tasks.get(uid)
+    if old is not None and old[0] != target and not override:
+        warnings.warn(
+            f"env id {uid!r} is already registered by {old[0]}; keeping it (pass override=True to replace it)",
+            stacklevel=3,
+        )
+        return
+    foreign = gymnasium.registry.get(uid)
+    if foreign is not None and not getattr(foreign, "embodichain_task", False) and override:
+        del gymnasium.registry[uid]
+    plugin.tasks[uid] = (target, limit, kwargs)
+    if pm.get_plugin(name) is not None:
+        unregister_plugin(name)
+    register_plugin(plugin, name=name)
+    REGISTERED_ENVS[uid] = cls

@@ -108,11 +108,11 @@ def iter_section(section: Any, cfg_type: type[FunctorCfg], path: str) -> Iterato
 def resolve_func(func: Any, kind: str, path: str) -> Any:
     """A functor from a callable, a registered name or a ``"module:attr"`` import path.
 
-    A string is read by one rule: ``"<plugin>:<name>"`` whose prefix names a known plugin
-    (``"embodichain-functors:randomize_light"``) is a qualified registered name; any
-    other string with a ``:`` is a ``"module:attr"`` import path; a string without
-    ``:`` is a bare registered name (an error naming every provider when several
-    plugins register it, unless ``EMBODICHAIN_PLUGIN_PRIORITY`` prefers one).
+    A string is read by one rule, whatever is installed: a string with a ``:`` is a
+    ``"module:attr"`` import path; ``"<plugin>/<name>"``
+    (``"embodichain-functors/randomize_light"``) is a qualified registered name; any other
+    string is a bare registered name (an error naming every provider when several plugins
+    register it).
     """
     if func is None or isinstance(func, type(MISSING)):  # a deep-copied cfg holds a copy of MISSING
         raise ConfigError(f"{path}.func", "no 'func' given")
@@ -120,9 +120,9 @@ def resolve_func(func: Any, kind: str, path: str) -> Any:
         if not callable(func):
             raise ConfigError(f"{path}.func", f"{func!r} is not callable")
         return func
-    from embodichain_core.plugins.manager import is_qualified_name, known_providers
+    from embodichain_core.plugins.manager import known_providers
 
-    if ":" not in func or is_qualified_name(func):
+    if ":" not in func:
         return _from_registry(func, kind, path)
     module, _, attr = func.partition(":")
     try:
@@ -131,13 +131,13 @@ def resolve_func(func: Any, kind: str, path: str) -> Any:
             obj = getattr(obj, part)
         return obj
     except (ImportError, AttributeError) as err:
-        hint = did_you_mean(module, sorted(known_providers()))
-        hint = f" (not a known plugin either.{hint})" if hint else ""
+        hint = f" ({module!r} is a plugin: its functor {attr!r} is written {module + '/' + attr!r})"
+        hint = hint if module in known_providers() else ""
         raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}{hint}") from err
 
 
 def _from_registry(name: str, kind: str, path: str) -> Any:
-    """The functor registered as ``name`` (bare or ``"<plugin>:<name>"``); errors name
+    """The functor registered as ``name`` (bare or ``"<plugin>/<name>"``); errors name
     the config path, and suggest functors of the same ``kind``."""
     from embodichain_core.plugins import AmbiguousNameError, get_registry
 
@@ -148,7 +148,7 @@ def _from_registry(name: str, kind: str, path: str) -> Any:
         raise ConfigError(f"{path}.func", str(err)) from None
     if entry is not None:
         return entry.resolve()
-    if ":" in name:
+    if "/" in name:
         raise ConfigError(f"{path}.func", str(registry.unknown(name)))
     same_kind = [e.name for e in registry.entries() if e.meta.get("kind") == kind] or registry.names()
     hint = did_you_mean(name, same_kind) or " No functor plugin registers it (is the plugin installed?)."

@@ -1,16 +1,15 @@
 """The embodichain plugin host: hooks, registries and the plugin manager.
 
-Plugin authors need :data:`hookimpl` (and the register objects' types for
-annotations); the env and CLI use the registry accessors below, which load the
-installed plugins on first use. Every accessor takes a bare name (``"randomize_light"``)
-or a qualified one (``"embodichain-functors:randomize_light"``); a bare name that
-several plugins register raises :class:`AmbiguousNameError` (see
-:mod:`embodichain_core.plugins.names`).
+Plugin authors need :data:`hookimpl` (and the register objects' types for annotations);
+the env and CLI use the registry accessors below, which load the installed plugins on
+first use. Every accessor takes a bare name (``"randomize_light"``) or a qualified one
+(``"embodichain-functors/randomize_light"``); a bare name several plugins register
+raises :class:`AmbiguousNameError`, naming the qualified names to use.
 
 Example:
     >>> from embodichain_core.plugins import functor_registry
     >>> fn = functor_registry().get("randomize_light")  # doctest: +SKIP
-    >>> fn = functor_registry().get("embodichain-functors:randomize_light")  # doctest: +SKIP
+    >>> fn = functor_registry().get("embodichain-functors/randomize_light")  # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -18,77 +17,41 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from embodichain_core.plugins import manager
 from embodichain_core.plugins.hookspecs import (
-    FUNCTOR_KINDS,
     VISUAL_RANDOMIZATION,
-    AssetRegister,
-    CommandRegister,
     FunctorRegister,
     RobotRegister,
     SensorRegister,
-    SolverRegister,
     TaskRegister,
     hookimpl,
-    hookspec,
 )
-from embodichain_core.plugins.clashes import NameClash
 from embodichain_core.plugins.manager import (
     CORE_PLUGIN_NAME,
-    EmbodichainPluginManager,
-    PluginInfo,
+    NameClashWarning,
     PluginLoadWarning,
     failed_plugins,
     get_plugin_manager,
     get_registry,
     isolated_plugins,
-    known_providers,
     list_plugins,
     load_plugins,
     register_plugin,
     unregister_plugin,
 )
-from embodichain_core.plugins.names import PRIORITY_ENV, NameClashWarning, plugin_priority
-from embodichain_core.plugins.registry import (
-    KINDS,
-    AmbiguousNameError,
-    DuplicateRegistrationError,
-    Entry,
-    Registry,
-    RegistryError,
-    TargetImportError,
-    UnknownNameError,
-)
+from embodichain_core.plugins.registry import AmbiguousNameError, NameClash, Registry
 
 __all__ = [
     "hookimpl",
-    "hookspec",
-    "FUNCTOR_KINDS",
-    "VISUAL_RANDOMIZATION",
-    "KINDS",
     "FunctorRegister",
     "RobotRegister",
-    "SolverRegister",
     "SensorRegister",
-    "AssetRegister",
     "TaskRegister",
-    "CommandRegister",
-    "Entry",
-    "Registry",
-    "RegistryError",
-    "DuplicateRegistrationError",
-    "UnknownNameError",
-    "TargetImportError",
     "AmbiguousNameError",
-    "NameClash",
     "NameClashWarning",
-    "PRIORITY_ENV",
-    "plugin_priority",
-    "known_providers",
-    "name_clashes",
-    "EmbodichainPluginManager",
-    "PluginInfo",
     "PluginLoadWarning",
     "CORE_PLUGIN_NAME",
+    "manager",
     "get_plugin_manager",
     "load_plugins",
     "register_plugin",
@@ -96,21 +59,23 @@ __all__ = [
     "isolated_plugins",
     "list_plugins",
     "failed_plugins",
+    "name_clashes",
     "get_registry",
     "functor_registry",
     "robot_registry",
+    "solver_registry",
     "sensor_registry",
     "asset_registry",
     "task_registry",
     "command_registry",
     "get_functor",
     "get_robot_cfg_class",
-    "solver_registry",
     "get_solver_class",
     "get_sensor_classes",
     "get_asset_root",
     "asset_roots",
     "is_visual_randomization",
+    "task_episode_limit",
 ]
 
 
@@ -180,21 +145,18 @@ def get_asset_root(name: str) -> Path:
 
 
 def asset_roots() -> dict[str, Path]:
-    """Every registered data root by name (in name order); a name several plugins
-    register appears once per plugin, under its qualified name ``<plugin>:<name>``."""
+    """Every registered data root by name; a name several plugins register appears once
+    per plugin, under its qualified name ``<plugin>/<name>``."""
     registry = asset_registry()
     clashing = registry.clashes()
-    return {(registry.qualified_name(e) if e.name in clashing else e.name): _root(e) for e in registry.entries()}
-
-
-def _root(entry: Entry) -> Path:
-    return get_asset_root(asset_registry().qualified_name(entry))
+    names = [registry.qualified_name(e) if e.name in clashing else e.name for e in registry.entries()]
+    return {name: get_asset_root(name) for name in names}
 
 
 def is_visual_randomization(name: str) -> bool:
-    """True for functors ``filter_visual_rand`` removes: ``randomize_*`` names whose
-    category is ``"randomization.visual"``. Unknown and ambiguous names are not visual
-    (an ambiguous name fails when the functor is resolved)."""
+    """True for functors ``filter_visual_rand`` removes: ``randomize_*`` names whose category
+    is ``"randomization.visual"``. Unknown and ambiguous names are not visual (an ambiguous
+    name fails when the functor is resolved)."""
     try:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
@@ -207,3 +169,12 @@ def is_visual_randomization(name: str) -> bool:
 def name_clashes(provider: str | None = None) -> list[NameClash]:
     """Bare names several installed plugins register (only ``provider``'s when given)."""
     return load_plugins().name_clashes(provider)
+
+
+def task_episode_limit(env_cls: type) -> int | None:
+    """The ``max_episode_steps`` registered with the tasks whose entry point is ``env_cls``
+    (``None`` when none gives one, or when they disagree)."""
+    target = f"{env_cls.__module__}:{env_cls.__qualname__}"
+    limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target == target}
+    limits.discard(None)
+    return limits.pop() if len(limits) == 1 else None

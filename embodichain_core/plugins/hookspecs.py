@@ -1,9 +1,9 @@
-"""Hook specifications of the embodichain plugin host.
+"""Hook specifications of the embodichain plugin host, and the typed register objects.
 
-Every hook receives a typed ``register`` object and returns nothing (the style of
-tox 4 and ``llm``): the register object records *who* registered *what*: every
-entry is owned by its plugin and keeps the qualified name ``<plugin>:<name>``, so two
-plugins may use the same name without disabling each other. Implement hooks with :data:`hookimpl`:
+Every hook receives a ``register`` object and returns nothing (the style of tox 4 and
+``llm``); the register object records who registered what, so every entry keeps its
+qualified name ``<plugin>/<name>``. Targets given as ``"module:attr"`` strings are
+imported on first use, which keeps ``import embodichain_core`` and plugin loading cheap.
 
 Example:
     >>> from embodichain_core.plugins import hookimpl
@@ -12,35 +12,24 @@ Example:
     ...     register("randomize_light", "my_pkg.events:randomize_light",
     ...              kind="event", category="randomization.visual")
 
-Targets given as ``"module:attr"`` strings are imported on first use, which keeps
-``import embodichain_core`` (and plugin loading) cheap.
-
-This module also defines the register objects the hooks receive
-(:class:`FunctorRegister`, :class:`RobotRegister`, :class:`SolverRegister`,
-:class:`SensorRegister`, :class:`AssetRegister`, :class:`TaskRegister`, :class:`CommandRegister`).
+:data:`KINDS` is the one table of registry kinds: hook, register object, message noun
+and lookup key of each, in the order the hooks are called.
 """
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import pluggy
 
-from embodichain_core.plugins.registry import (
-    Entry,
-    Registry,
-    check_target_string,
-    is_lazy_target,
-)
+from embodichain_core.plugins.registry import Entry, Registry, check_target_string, is_lazy_target
 from embodichain_core.utils.suggest import did_you_mean
 
 PROJECT_NAME = "embodichain"
-
 hookspec = pluggy.HookspecMarker(PROJECT_NAME)
 hookimpl = pluggy.HookimplMarker(PROJECT_NAME)
-
-
-# --- typed register objects handed to the hooks ---------------------------------------
 
 FUNCTOR_KINDS = ("event", "observation", "reward", "action", "dataset")
 #: Functor category removed by ``filter_visual_rand`` (with names ``randomize_*``).
@@ -48,26 +37,13 @@ VISUAL_RANDOMIZATION = "randomization.visual"
 
 
 class BaseRegister:
-    """Registers into ``registry`` on behalf of the plugin ``provider``.
+    """Registers into ``registry`` on behalf of the plugin ``provider``."""
 
-    Args:
-        registry: the registry to fill.
-        provider: plugin name recorded on every entry.
-        on_add: called with each new entry (the plugin manager records them, so a
-            failing plugin's registrations can be rolled back).
-    """
-
-    def __init__(self, registry: Registry, provider: str, on_add: Callable[[Entry], None] | None = None):
-        self.registry = registry
-        self.provider = provider
-        self._on_add = on_add
+    def __init__(self, registry: Registry, provider: str):
+        self.registry, self.provider = registry, provider
 
     def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None) -> Entry:
-        before = self.registry.find_own(self.provider, name)
-        entry = self.registry.add(name, target, self.provider, meta, lazy=lazy)
-        if entry is not before and self._on_add is not None:
-            self._on_add(entry)
-        return entry
+        return self.registry.add(name, target, self.provider, meta, lazy=lazy)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.registry.kind} for {self.provider!r}>"
@@ -77,21 +53,14 @@ class FunctorRegister(BaseRegister):
     """``register(name, target, *, kind, category="", description="")``."""
 
     def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
-        """Register a functor.
-
-        Args:
-            name: the name configs use (``func: "randomize_light"``).
-            target: callable/class or ``"module:attr"``.
-            kind: one of ``event``, ``observation``, ``reward``, ``action``, ``dataset``.
-            category: free text such as ``"randomization.visual"``.
-            description: one line; defaults to the target's first docstring line.
-        """
+        """Register a functor: ``target`` is a callable/class or ``"module:attr"``; ``kind`` one
+        of :data:`FUNCTOR_KINDS`; ``category`` free text; ``description`` defaults to the
+        target's first docstring line."""
         if kind not in FUNCTOR_KINDS:
             raise ValueError(
-                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}." + did_you_mean(kind, FUNCTOR_KINDS)
+                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
             )
-        meta = {"kind": kind, "category": category, "description": description}
-        return self._add(name, target, meta)
+        return self._add(name, target, {"kind": kind, "category": category, "description": description})
 
 
 class RobotRegister(BaseRegister):
@@ -103,11 +72,7 @@ class RobotRegister(BaseRegister):
 
 
 class SolverRegister(BaseRegister):
-    """``register(name, solver_class, description="")``: kinematics solvers for ``solver_cfg``.
-
-    Lookups ignore case and a trailing ``Cfg``. The solver class must offer
-    ``from_config(cfg, robot, part) -> solver`` (see :func:`embodichain_register_solvers`).
-    """
+    """``register(name, solver_class, description="")``: lookups ignore case and a trailing ``Cfg``."""
 
     def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
         """Register a solver class (or ``"module:Class"``) as ``name`` (a ``class_type``)."""
@@ -115,25 +80,20 @@ class SolverRegister(BaseRegister):
 
 
 class SensorRegister(BaseRegister):
-    """``register(sensor_type, cfg_class, sensor_class)``."""
+    """``register(sensor_type, cfg_class, sensor_class)``; ``entry.resolve_meta("sensor_class")``."""
 
     def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> Entry:
-        """Register a sensor; the entry's target is the config class.
-
-        ``entry.resolve_meta("sensor_class")`` gives the sensor class.
-        """
+        """Register a sensor; the entry's target is the config class."""
         if is_lazy_target(sensor_class):
             check_target_string(sensor_class, f"sensor {sensor_type!r} from {self.provider!r}")
         return self._add(sensor_type, cfg_class, {"sensor_class": sensor_class})
 
 
 class AssetRegister(BaseRegister):
-    """``register(name, root)``: a data root directory or a zero-arg callable."""
+    """``register(name, root)``: a data root directory or a zero-argument callable."""
 
     def __call__(self, name: str, root: Any) -> Entry:
         """Register a data root (``str``/``os.PathLike``, or a callable returning one)."""
-        import os
-
         if not (isinstance(root, (str, os.PathLike)) or callable(root)):
             raise TypeError(
                 f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
@@ -142,7 +102,7 @@ class AssetRegister(BaseRegister):
 
 
 class TaskRegister(BaseRegister):
-    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, ...)``."""
+    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``."""
 
     def __call__(
         self,
@@ -154,30 +114,13 @@ class TaskRegister(BaseRegister):
         config: Any = None,
         description: str = "",
     ) -> Entry:
-        """Register a task and its gymnasium id.
-
-        Args:
-            task_id: gym id such as ``"PushCube-v1"``.
-            entry_point: ``"module:Class"``; imported by ``gymnasium.make``.
-            max_episode_steps: episode limit, passed to the env as a kwarg.
-            kwargs: default constructor kwargs.
-            config: default config (path or mapping), kept in ``entry.meta``.
-            description: one line shown by ``embodichain list tasks``.
-        """
+        """Register a task (see :func:`embodichain_register_tasks`)."""
         if not is_lazy_target(entry_point):
             raise ValueError(
-                f"task {task_id!r} from {self.provider!r}: entry_point must be a "
-                f"'module:Class' string, got {entry_point!r}"
+                f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string, got {entry_point!r}"
             )
-        gym_kwargs = dict(kwargs or {})
-        if max_episode_steps is not None:
-            gym_kwargs["_registered_max_episode_steps"] = max_episode_steps
-        meta = {
-            "max_episode_steps": max_episode_steps,
-            "kwargs": gym_kwargs,
-            "config": config,
-            "description": description,
-        }
+        limit = None if max_episode_steps is None else int(max_episode_steps)
+        meta = {"max_episode_steps": limit, "kwargs": dict(kwargs or {}), "config": config, "description": description}
         return self._add(task_id, entry_point, meta)
 
 
@@ -189,18 +132,37 @@ class CommandRegister(BaseRegister):
         return self._add(name, target, {"help": help})
 
 
-REGISTER_CLASSES: dict[str, type[BaseRegister]] = {
-    "functors": FunctorRegister,
-    "robots": RobotRegister,
-    "solvers": SolverRegister,
-    "sensors": SensorRegister,
-    "assets": AssetRegister,
-    "tasks": TaskRegister,
-    "commands": CommandRegister,
+def class_name_key(name: str) -> str:
+    """Case-insensitive key that also accepts a trailing ``Cfg`` (``DexforceW1Cfg``)."""
+    key = name.lower()
+    return key[:-3] if key.endswith("cfg") and len(key) > 3 else key
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One registry kind: its hook, register object, message noun and lookup key."""
+
+    hook: str
+    register: type[BaseRegister]
+    noun: str
+    key: Callable[[str], str] | None = None
+
+
+#: Every registry kind, in the order the hooks are called.
+KINDS: dict[str, Kind] = {
+    "commands": Kind("embodichain_register_commands", CommandRegister, "command"),
+    "assets": Kind("embodichain_register_assets", AssetRegister, "asset root"),
+    "robots": Kind("embodichain_register_robots", RobotRegister, "robot", class_name_key),
+    "solvers": Kind("embodichain_register_solvers", SolverRegister, "solver", class_name_key),
+    "sensors": Kind("embodichain_register_sensors", SensorRegister, "sensor", class_name_key),
+    "functors": Kind("embodichain_register_functors", FunctorRegister, "functor"),
+    "tasks": Kind("embodichain_register_tasks", TaskRegister, "task"),
 }
 
 
-# --- hook specifications ----------------------------------------------------------------
+def new_registries() -> dict[str, Registry]:
+    """A fresh, empty registry of every kind."""
+    return {kind: Registry(kind, noun=k.noun, key=k.key) for kind, k in KINDS.items()}
 
 
 @hookspec
@@ -209,18 +171,16 @@ def embodichain_register_functors(register: FunctorRegister) -> None:
 
     Args:
         register: ``register(name, target, *, kind, category="", description="")``.
-            ``target`` is a callable/class or a lazy ``"module:attr"`` string;
-            ``kind`` is one of ``event``, ``observation``, ``reward``, ``action``,
-            ``dataset``; ``category`` is free text such as
-            ``"randomization.visual"`` (``filter_visual_rand`` drops functors of
-            that category whose name starts with ``randomize_``).
+            ``target`` is a callable/class or a lazy ``"module:attr"`` string; ``kind`` is
+            one of ``event``, ``observation``, ``reward``, ``action``, ``dataset``;
+            ``filter_visual_rand`` drops functors of the category ``"randomization.visual"``
+            whose name starts with ``randomize_``.
 
     Example:
         >>> @hookimpl
         ... def embodichain_register_functors(register):
         ...     register("randomize_light", "my_pkg.events:randomize_light",
         ...              kind="event", category="randomization.visual")
-        ...     register("joint_pos", "my_pkg.obs:joint_pos", kind="observation")
     """
 
 
@@ -229,9 +189,8 @@ def embodichain_register_robots(register: RobotRegister) -> None:
     """Register robot config classes, looked up by ``class_type``/``robot_type``.
 
     Args:
-        register: ``register(name, cfg_class)``; ``cfg_class`` is a class or a
-            lazy ``"module:Class"`` string. Lookups ignore case and accept the
-            name with a trailing ``Cfg``.
+        register: ``register(name, cfg_class)``; ``cfg_class`` is a class or a lazy
+            ``"module:Class"`` string. Lookups ignore case and a trailing ``Cfg``.
 
     Example:
         >>> @hookimpl
@@ -244,20 +203,15 @@ def embodichain_register_robots(register: RobotRegister) -> None:
 def embodichain_register_solvers(register: SolverRegister) -> None:
     """Register kinematics solver classes, named by ``solver_cfg.<part>.class_type``.
 
-    A robot section's ``"solver_cfg": {part: {"class_type": name, ...}}`` builds one
-    solver per control part through the class registered as ``name``; the core holds
-    no solver code. The class must provide
-    ``from_config(cfg: dict, robot: Robot, part: str) -> solver``: ``cfg`` is the part's
-    mapping (``class_type`` included), ``robot`` the built robot; a bad value raises
-    ``ConfigError`` with its key relative to the part (``"end_link_name"``), which the
-    core reports as ``robot.solver_cfg.<part>.end_link_name``. The solver it returns
-    has ``joint_ids``, ``root_link_name``, ``get_fk`` and ``get_ik`` (see
-    :mod:`embodichain_core.sim.entities.robot`).
+    The class provides ``from_config(cfg: dict, robot: Robot, part: str) -> solver``:
+    ``cfg`` is the part's mapping (``class_type`` included), ``robot`` the built robot; a
+    bad value raises ``ConfigError`` with its key relative to the part, which the core
+    reports as ``robot.solver_cfg.<part>.<key>``. The solver has ``joint_ids``,
+    ``root_link_name``, ``get_fk`` and ``get_ik`` (see :mod:`embodichain_core.sim.entities.robot`).
 
     Args:
-        register: ``register(name, solver_class, description="")``; ``solver_class`` is
-            a class or a lazy ``"module:Class"`` string. Lookups ignore case and a
-            trailing ``Cfg``; ``<plugin>:<name>`` picks one plugin's solver.
+        register: ``register(name, solver_class, description="")``; ``solver_class`` is a
+            class or a lazy ``"module:Class"`` string.
 
     Example:
         >>> @hookimpl
@@ -271,14 +225,13 @@ def embodichain_register_sensors(register: SensorRegister) -> None:
     """Register sensors by their ``sensor_type``.
 
     Args:
-        register: ``register(sensor_type, cfg_class, sensor_class)``; both classes
-            may be lazy ``"module:Class"`` strings.
+        register: ``register(sensor_type, cfg_class, sensor_class)``; both classes may be
+            lazy ``"module:Class"`` strings.
 
     Example:
         >>> @hookimpl
         ... def embodichain_register_sensors(register):
-        ...     register("StereoCamera", "my_pkg.stereo:StereoCameraCfg",
-        ...              "my_pkg.stereo:StereoCamera")
+        ...     register("StereoCamera", "my_pkg.stereo:StereoCameraCfg", "my_pkg.stereo:StereoCamera")
     """
 
 
@@ -287,9 +240,8 @@ def embodichain_register_assets(register: AssetRegister) -> None:
     """Register data roots searched by ``get_data_path``.
 
     Args:
-        register: ``register(name, root)``; ``root`` is a directory path or a
-            zero-argument callable returning one (called on first use, e.g. to
-            download or locate data lazily).
+        register: ``register(name, root)``; ``root`` is a directory or a zero-argument
+            callable returning one (called on first use).
 
     Example:
         >>> @hookimpl
@@ -300,20 +252,21 @@ def embodichain_register_assets(register: AssetRegister) -> None:
 
 @hookspec
 def embodichain_register_tasks(register: TaskRegister) -> None:
-    """Register gym tasks; each is also registered with gymnasium.
+    """Register gym tasks; each is registered with gymnasium too.
 
     Args:
-        register: ``register(task_id, entry_point, *, max_episode_steps=None,
-            kwargs=None, config=None, description="")``. ``entry_point`` is a
-            ``"module:Class"`` string, imported only by ``gymnasium.make``. The
-            episode limit lives inside the env: it is passed as the
-            ``max_episode_steps`` kwarg, never as gymnasium's ``TimeLimit``.
+        register: ``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None,
+            config=None, description="")``. ``entry_point`` is a ``"module:Class"`` string,
+            imported only by ``gymnasium.make``. ``max_episode_steps`` is the task's episode
+            limit: the env uses it when its config leaves ``max_episode_steps`` at the class
+            default (never gymnasium's ``TimeLimit``). ``config`` is the task's default gym
+            config (used by ``embodichain run-env <id>``).
 
     Example:
         >>> @hookimpl
         ... def embodichain_register_tasks(register):
-        ...     register("PushCube-v1", "my_pkg.push:PushCubeEnv",
-        ...              max_episode_steps=200, description="Push a cube")
+        ...     register("PushCube-v1", "my_pkg.push:PushCubeEnv", max_episode_steps=200,
+        ...              description="Push a cube")
     """
 
 
@@ -322,25 +275,12 @@ def embodichain_register_commands(register: CommandRegister) -> None:
     """Register ``embodichain`` CLI subcommands.
 
     Args:
-        register: ``register(name, target, help="")``; ``target`` is a
-            ``"module:function"`` string (or a function) taking
-            ``argv: list[str]`` and returning an exit code. It is imported only
-            when the command runs, so ``embodichain --help`` stays fast.
+        register: ``register(name, target, help="")``; ``target`` is a ``"module:function"``
+            string (or a function) taking ``argv: list[str]`` and returning an exit code,
+            imported only when the command runs.
 
     Example:
         >>> @hookimpl
         ... def embodichain_register_commands(register):
         ...     register("dataset", "my_pkg.cli:main", help="Inspect datasets")
     """
-
-
-#: Hook name of every registry kind, in the order the hooks are called.
-REGISTER_HOOKS: dict[str, str] = {
-    "commands": "embodichain_register_commands",
-    "assets": "embodichain_register_assets",
-    "robots": "embodichain_register_robots",
-    "solvers": "embodichain_register_solvers",
-    "sensors": "embodichain_register_sensors",
-    "functors": "embodichain_register_functors",
-    "tasks": "embodichain_register_tasks",
-}

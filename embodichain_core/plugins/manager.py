@@ -1,23 +1,19 @@
-"""The plugin host: builds the pluggy manager, loads plugins, fills the registries.
+"""The plugin host: loads plugins, fills the registries, mirrors tasks into gymnasium.
 
-``load_plugins()`` is lazy and idempotent. It registers the core's own defaults
-(:mod:`embodichain_core.plugins.builtin`), loads the setuptools entry points of the
-group ``"embodichain"`` sorted by plugin name (so the outcome never depends on the
-install or discovery order), checks every plugin for misspelled hooks, and calls each
-plugin's register hooks. A plugin is named after its distribution (see
-:mod:`embodichain_core.plugins.clashes`). A plugin that fails (import error, unknown
-hook, bad hook signature, a hook raising, registering one name twice with different
-targets) is reported by name and error in one line as a :class:`PluginLoadWarning` (the
-traceback is kept for ``failed_plugins()`` and ``embodichain list plugins -v``),
-contributes nothing (its registrations are rolled back) and does not take the others
-down. A name another plugin registered too is *not* a failure: both entries stay,
-under their qualified names ``<plugin>:<name>`` (see :mod:`embodichain_core.plugins.names`).
+``load_plugins()`` is lazy and idempotent. It registers the core's own commands
+(:mod:`embodichain_core.plugins.builtin`), then the setuptools entry points of the group
+``"embodichain"`` sorted by plugin name, so the outcome never depends on the install or
+discovery order. A plugin is named after its distribution (PEP 503-normalized), so two
+distributions declaring one entry point name both load. Each plugin's hooks write into a
+staging copy of the registries, merged only when all of them succeed: a plugin that fails
+(import error, unknown or misspelled hook, bad hook signature, a hook raising) contributes
+nothing, is reported in one line as a :class:`PluginLoadWarning` (the traceback is kept for
+``failed_plugins()`` and ``embodichain list plugins -v``), and does not take the others down.
+A name another plugin registers too is no failure: both stay, under their qualified names.
 
 Environment variables:
     ``EMBODICHAIN_BLOCK_PLUGINS``: comma-separated plugin (distribution) or entry point
         names to skip (``*`` skips all entry points).
-    ``EMBODICHAIN_PLUGIN_PRIORITY``: comma-separated plugin names; the first listed
-        provider of an ambiguous bare name wins.
     ``EMBODICHAIN_TRACE_PLUGINS=1``: trace hook calls to stderr.
 """
 
@@ -26,6 +22,7 @@ from __future__ import annotations
 import functools
 import inspect
 import os
+import re
 import sys
 import threading
 import traceback
@@ -33,19 +30,14 @@ import types
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterable, Iterator
+from typing import Any, Iterable, Iterator
 
 import pluggy
 
 from embodichain_core.plugins import hookspecs
-from embodichain_core.plugins.clashes import NameClash, entry_point_clashes, name_clashes, name_entry_points
-from embodichain_core.plugins.hookspecs import PROJECT_NAME, REGISTER_CLASSES, REGISTER_HOOKS
-from embodichain_core.plugins.names import NameClashWarning, join_names
-from embodichain_core.plugins.registry import KINDS, Entry, Registry, new_registries
+from embodichain_core.plugins.hookspecs import KINDS, PROJECT_NAME, new_registries
+from embodichain_core.plugins.registry import Entry, NameClash, Registry, describe_target
 from embodichain_core.utils.suggest import did_you_mean
-
-if TYPE_CHECKING:
-    from importlib.metadata import EntryPoint
 
 ENTRY_POINT_GROUP = "embodichain"
 BLOCK_ENV = "EMBODICHAIN_BLOCK_PLUGINS"
@@ -58,13 +50,17 @@ class PluginLoadWarning(UserWarning):
     """A plugin failed to load and was skipped."""
 
 
+class NameClashWarning(UserWarning):
+    """A plugin task id that gymnasium already knows from outside the plugins (left as it is)."""
+
+
 @dataclass
 class PluginInfo:
     """What ``list_plugins()`` reports about one plugin.
 
     Attributes:
-        name: plugin name: the distribution name (PEP 503-normalized) for an entry
-            point, the given name for a runtime plugin. Qualified names use it.
+        name: the distribution name (PEP 503-normalized) for an entry point, the given
+            name for a runtime plugin; qualified names start with it.
         version: the distribution's version, ``""`` when unknown.
         status: ``"loaded"``, ``"failed"`` or ``"blocked"``.
         module: the entry point value or the plugin object's module.
@@ -84,15 +80,15 @@ class PluginInfo:
     @property
     def error_summary(self) -> str:
         """The last non-empty line of the traceback (``"ImportError: ..."``)."""
-        lines = [line for line in self.error.strip().splitlines() if line.strip()]
-        return lines[-1].strip() if lines else ""
+        lines = [line.strip() for line in self.error.splitlines() if line.strip()]
+        return lines[-1] if lines else ""
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
-    """pluggy manager owning the registries filled by its plugins.
+    """pluggy manager owning the registries its plugins fill.
 
-    Functions named ``embodichain_register_*`` are hook implementations even
-    without ``@hookimpl``, so a misspelled hook name is caught as an unknown hook.
+    Functions named ``embodichain_register*`` are hook implementations even without
+    ``@hookimpl``, so a misspelled hook name is caught as an unknown hook.
     """
 
     def __init__(self) -> None:
@@ -100,39 +96,35 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         self.add_hookspecs(hookspecs)
         self.registries: dict[str, Registry] = new_registries()
         self.infos: dict[str, PluginInfo] = {}
-        #: entry point names declared by several distributions -> their plugin names.
-        self.entry_point_clashes: dict[str, list[str]] = {}
         self.loaded = False
         self.lock = threading.RLock()
-        if os.environ.get(TRACE_ENV, "").strip() not in ("", "0"):
-            self.trace.root.setwriter(sys.stderr.write)
-            self.enable_tracing()
+        self.tracing = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
+        #: gym id -> the spec it had before this manager wrote it (None: absent).
+        self.gym_saved: dict[str, Any] = {}
+        self.gym_foreign: set[str] = set()  # ids gymnasium has from elsewhere, each reported once
 
     def parse_hookimpl_opts(self, plugin: Any, name: str) -> Any:
         opts = super().parse_hookimpl_opts(plugin, name)
-        if opts is None and name.startswith("embodichain_register") and _is_function(plugin, name):
-            return {}
+        if opts is None and name.startswith("embodichain_register"):
+            static = inspect.getattr_static(plugin, name, None)
+            if inspect.isfunction(static) or isinstance(static, (staticmethod, classmethod, types.MethodType)):
+                return {}
         return opts
 
     def registry(self, kind: str) -> Registry:
         """The registry of ``kind`` (``"functors"``, ``"robots"``, ...)."""
-        try:
-            return self.registries[kind]
-        except KeyError:
-            raise ValueError(f"unknown registry kind {kind!r}.{did_you_mean(kind, KINDS)}") from None
+        if kind not in self.registries:
+            raise ValueError(f"unknown registry kind {kind!r}.{did_you_mean(kind, list(KINDS))}")
+        return self.registries[kind]
 
     def failed(self) -> list[tuple[str, str]]:
         """``(name, traceback)`` of every plugin that failed to load."""
         return [(i.name, i.error) for i in self.infos.values() if i.status == "failed"]
 
     def name_clashes(self, provider: str | None = None) -> list[NameClash]:
-        """Bare names registered by several plugins (only ``provider``'s when given)."""
-        return name_clashes(self.registries, provider)
-
-
-def _is_function(plugin: Any, name: str) -> bool:
-    static = inspect.getattr_static(plugin, name, None)
-    return inspect.isfunction(static) or isinstance(static, (staticmethod, classmethod, types.MethodType))
+        """Bare names several plugins register, by kind then name (only ``provider``'s when given)."""
+        found = [c for registry in self.registries.values() for c in registry.name_clashes()]
+        return [c for c in found if provider is None or provider in c.providers]
 
 
 _PM: EmbodichainPluginManager | None = None
@@ -153,10 +145,7 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
 
     Args:
         entry_points: also load the ``"embodichain"`` entry points (the default).
-        exclude: plugin names not to load (``isolated_plugins`` uses it).
-
-    Returns:
-        The plugin manager, with its registries filled.
+        exclude: plugin names not to load.
     """
     pm = get_plugin_manager()
     with pm.lock:
@@ -169,37 +158,48 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
         pm.register(builtin, name=CORE_PLUGIN_NAME)
         pm.infos[CORE_PLUGIN_NAME] = PluginInfo(CORE_PLUGIN_NAME, __version__, module=builtin.__name__)
         if entry_points:
-            _load_entry_points(pm, exclude)
+            _register_entry_points(pm, exclude)
         for info in list(pm.infos.values()):
             if info.status == "loaded":
-                _activate(pm, info)
+                try:
+                    info.registered = _activate(pm, info.name)
+                except Exception:
+                    _fail(pm, info)
         pm.check_pending()
+        sync_gym(pm)
     return pm
 
 
-def _iter_entry_points() -> list[EntryPoint]:
+def _iter_entry_points() -> list[Any]:
     """Every ``"embodichain"`` entry point, duplicates of a name included (test seam)."""
     import importlib.metadata
 
     return list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
 
 
-def blocked_plugins() -> set[str]:
-    """Plugin or entry point names listed in ``EMBODICHAIN_BLOCK_PLUGINS``."""
-    return {n.strip() for n in os.environ.get(BLOCK_ENV, "").split(",") if n.strip()}
+def named_entry_points() -> list[tuple[str, Any]]:
+    """``(plugin name, entry point)`` sorted by plugin name: the load order.
+
+    A plugin is named after its distribution (PEP 503-normalized; an entry point without
+    one keeps its own name); a distribution's further entry points are ``<dist>.<name>``.
+    """
+    eps = _iter_entry_points()
+    norm = {id(ep): re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps}
+    named = []
+    for ep in eps:
+        dist, own = norm[id(ep)], re.sub(r"[-_.]+", "-", ep.name).lower()
+        alone = sum(norm[id(e)] == dist for e in eps) == 1 or own == dist
+        named.append((ep.name if not dist else dist if alone else f"{dist}.{own}", ep))
+    return sorted(named, key=lambda p: (p[0], p[1].name, str(getattr(p[1], "value", ""))))
 
 
-def _load_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str] = frozenset()) -> None:
-    blocked = blocked_plugins()
-    named = [(n, ep) for n, ep in name_entry_points(_iter_entry_points()) if n not in exclude]
-    _report_entry_point_clashes(pm, entry_point_clashes(named))
-    for name, ep in named:
-        if name in pm.infos:
+def _register_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str]) -> None:
+    blocked = {n.strip() for n in os.environ.get(BLOCK_ENV, "").split(",") if n.strip()}
+    for name, ep in named_entry_points():
+        if name in pm.infos or name in exclude:
             continue
-        dist = getattr(ep, "dist", None)
-        info = pm.infos[name] = PluginInfo(
-            name, getattr(dist, "version", "") or "", module=ep.value, entry_point=ep.name
-        )
+        version = getattr(getattr(ep, "dist", None), "version", "") or ""
+        info = pm.infos[name] = PluginInfo(name, version, module=ep.value, entry_point=ep.name)
         if blocked & {name, ep.name, "*"}:
             info.status = "blocked"
             pm.set_blocked(name)
@@ -213,110 +213,75 @@ def _load_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str] = f
             _fail(pm, info)
 
 
-def _report_entry_point_clashes(pm: EmbodichainPluginManager, clashes: dict[str, list[str]]) -> None:
-    """Warn about entry point names several distributions declare (all of them still load)."""
-    pm.entry_point_clashes = clashes
-    for ep_name, plugins in clashes.items():
-        warnings.warn(
-            f"the embodichain entry point {ep_name!r} is declared by {len(plugins)} distributions: "
-            f"{join_names([repr(p) for p in plugins])}. All of them are loaded, each under its "
-            f"distribution name; name the entry point after its distribution to silence this.",
-            NameClashWarning,
-            stacklevel=4,
-        )
-
-
-def _activate(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
-    """Validate one registered plugin and run its hooks; report a failure."""
-    try:
-        _check_hooks(pm, info.name)
-        info.registered = _run_register_hooks(pm, info.name)
-    except Exception:
-        _fail(pm, info)
-
-
 def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
+    """Mark ``info`` failed and warn in one line (the traceback is one request away)."""
     info.status, info.error, info.registered = "failed", traceback.format_exc(), {}
     if pm.get_plugin(info.name) is not None:
         pm.unregister(name=info.name)
     exc = sys.exc_info()[1]
-    lines = str(exc).strip().splitlines()
-    summary = f"{type(exc).__name__}: {lines[0] if lines else ''}" if exc is not None else info.error_summary
-    # One line: the warning shows on every command; the traceback is one request away.
+    first = (str(exc).strip().splitlines() or [""])[0]
     warnings.warn(
-        f"embodichain plugin {info.name!r} failed to load and was skipped: {summary} "
+        f"embodichain plugin {info.name!r} failed to load and was skipped: {type(exc).__name__}: {first} "
         "(the traceback: `embodichain list plugins -v`, or embodichain_core.plugins.failed_plugins())",
         PluginLoadWarning,
         stacklevel=3,
     )
 
 
-def _check_hooks(pm: EmbodichainPluginManager, name: str) -> None:
-    """Raise ``PluginValidationError`` when plugin ``name`` implements an unknown hook."""
+def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
+    """Check plugin ``name``'s hooks, run them into staging registries, merge on success.
+
+    Raises:
+        pluggy.PluginValidationError: the plugin implements an unknown hook.
+        Exception: whatever a hook raised; nothing of the plugin is registered then.
+    """
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
-        if caller.has_spec():
-            continue
-        known = [h for h in vars(pm.hook) if not h.startswith("_") and getattr(pm.hook, h).has_spec()]
-        raise pluggy.PluginValidationError(
-            plugin, f"plugin {name!r} implements unknown hook {caller.name!r}.{did_you_mean(caller.name, known)}"
-        )
-
-
-def _run_register_hooks(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
-    """Call plugin ``name``'s register hooks; all-or-nothing (only its own entries are
-    rolled back when it raises). Returns names per kind."""
-    plugin = pm.get_plugin(name)
-    added: list[tuple[Registry, Entry]] = []
-    try:
-        for kind in KINDS:
-            hook_name = REGISTER_HOOKS[kind]
-            if not any(impl.plugin is plugin for impl in getattr(pm.hook, hook_name).get_hookimpls()):
-                continue
-            registry = pm.registries[kind]
-            register = REGISTER_CLASSES[kind](registry, name, functools.partial(_record, added, registry))
-            others = [p for p in pm.get_plugins() if p is not plugin]
-            pm.subset_hook_caller(hook_name, others)(register=register)
-    except BaseException:
-        for registry, entry in reversed(added):
-            registry.remove(entry.name, provider=entry.provider)
-        raise
-    registered: dict[str, list[str]] = {}
-    for registry, entry in added:
-        registered.setdefault(registry.kind, []).append(entry.name)
-    return registered
-
-
-def _record(added: list[tuple[Registry, Entry]], registry: Registry, entry: Entry) -> None:
-    added.append((registry, entry))
+        if not caller.has_spec():
+            known = [k.hook for k in KINDS.values()]
+            message = f"plugin {name!r} implements unknown hook {caller.name!r}.{did_you_mean(caller.name, known)}"
+            raise pluggy.PluginValidationError(plugin, message)
+    staged = new_registries()
+    for kind, spec in KINDS.items():
+        for impl in getattr(pm.hook, spec.hook).get_hookimpls():
+            if impl.plugin is plugin:
+                if pm.tracing:
+                    sys.stderr.write(f"embodichain plugins: {name}: {spec.hook}\n")
+                register = spec.register(staged[kind], name)
+                impl.function(*[register for _ in impl.argnames])
+    for kind, registry in staged.items():
+        for entry in registry.ordered_entries():
+            pm.registries[kind].merge(entry)
+    return {kind: [e.name for e in r.ordered_entries()] for kind, r in staged.items() if len(r)}
 
 
 def register_plugin(obj: Any, name: str | None = None) -> str:
     """Register a plugin object or module at runtime and run its register hooks.
 
-    Unlike entry points, a failure raises (and leaves nothing registered).
+    Unlike an entry point, a failure raises (and leaves nothing registered).
 
     Args:
-        obj: a module, class or instance with ``@hookimpl`` functions.
-        name: plugin/provider name; defaults to the module or class name.
+        obj: a module, class or instance with ``embodichain_register_*`` functions.
+        name: plugin name; defaults to the module or class name.
 
     Returns:
         The plugin name.
     """
     pm = load_plugins()
     with pm.lock:
-        name = name or _default_name(obj)
+        if name is None:
+            cls = obj if inspect.isclass(obj) else type(obj)
+            name = obj.__name__ if isinstance(obj, types.ModuleType) else f"{cls.__module__}.{cls.__qualname__}"
         if pm.register(obj, name=name) is None:
             raise ValueError(f"plugin {name!r} is blocked")
-        module = getattr(obj, "__module__", None) or getattr(obj, "__name__", "")
-        info = PluginInfo(name, module=str(module))
         try:
-            _check_hooks(pm, name)
-            info.registered = _run_register_hooks(pm, name)
+            registered = _activate(pm, name)
         except BaseException:
             pm.unregister(name=name)
             raise
-        pm.infos[name] = info
+        module = getattr(obj, "__module__", None) or getattr(obj, "__name__", "")
+        pm.infos[name] = PluginInfo(name, module=str(module), registered=registered)
+        sync_gym(pm)
     return name
 
 
@@ -330,24 +295,16 @@ def unregister_plugin(name: str) -> None:
         if pm.get_plugin(name) is not None:
             pm.unregister(name=name)
         pm.infos.pop(name, None)
-
-
-def _default_name(obj: Any) -> str:
-    if isinstance(obj, types.ModuleType):
-        return obj.__name__
-    cls = obj if inspect.isclass(obj) else type(obj)
-    return f"{cls.__module__}.{cls.__qualname__}"
+        sync_gym(pm)
 
 
 @contextmanager
 def isolated_plugins(
     *, load_entry_points: bool = False, exclude: Iterable[str] = ()
 ) -> Iterator[EmbodichainPluginManager]:
-    """Swap in a fresh manager and empty registries; restore everything on exit.
-
-    Only the built-ins are loaded (entry points too when ``load_entry_points``, except
-    the plugins named in ``exclude``). gymnasium ids the block's plugins registered are
-    removed on exit; an id of the outer manager they replaced meanwhile is restored.
+    """Swap in a fresh manager with only the built-ins (and, with ``load_entry_points``, the
+    installed plugins but ``exclude``); on exit, restore the previous manager and every
+    gymnasium id the block's plugins wrote.
 
     Example:
         >>> with isolated_plugins() as pm:  # doctest: +SKIP
@@ -362,8 +319,86 @@ def isolated_plugins(
     finally:
         with _GLOBAL_LOCK:
             pm, _PM = _PM, saved
-        if pm is not None:
-            pm.registries["tasks"].release_gym()  # type: ignore[attr-defined]
+        if pm is not None and pm.gym_saved:
+            import gymnasium
+
+            for gym_id, spec in pm.gym_saved.items():
+                if spec is None:
+                    gymnasium.registry.pop(gym_id, None)
+                else:
+                    gymnasium.registry[gym_id] = spec
+
+
+def _ambiguous_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
+    """gymnasium entry point of a bare id several plugins provide: raises the ambiguity error."""
+    registry.entry(task_id)
+    raise LookupError(f"task {task_id!r} is no longer ambiguous; make it again")
+
+
+def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) -> Any:
+    from embodichain_core.gym_vector import BatchedEnvSpec, make_vec_env
+
+    if len(entries) == 1:
+        target, kwargs = entries[0].target, dict(entries[0].meta["kwargs"])
+        vector: Any = functools.partial(make_vec_env, target)
+    else:
+        target, kwargs = functools.partial(_ambiguous_task, pm.registries["tasks"], gym_id), {}
+        vector = target
+    spec = BatchedEnvSpec(
+        gym_id,
+        entry_point=target,
+        disable_env_checker=True,
+        order_enforce=False,
+        kwargs=kwargs,
+        vector_entry_point=vector,
+    )
+    spec.embodichain_task = True  # type: ignore[attr-defined]
+    return spec
+
+
+def sync_gym(pm: EmbodichainPluginManager) -> None:
+    """Make gymnasium's registry show ``pm``'s tasks: every ``<plugin>/<id>`` and every bare
+    id (an ambiguous one raises when made). An id gymnasium has from outside the plugins is
+    left as it is (a :class:`NameClashWarning` unless it has the same entry point)."""
+    tasks = pm.registries["tasks"]
+    wanted: dict[str, list[Entry]] = {}
+    for entry in tasks.ordered_entries():
+        wanted[tasks.qualified_name(entry)] = [entry]
+        wanted.setdefault(entry.name, []).append(entry)
+    if not wanted and not pm.gym_saved:
+        return  # gymnasium is not imported by a manager without tasks
+    import gymnasium
+
+    for gym_id, old in pm.gym_saved.items():
+        if gym_id not in wanted and gymnasium.registry.get(gym_id) is not old:
+            if old is None:
+                gymnasium.registry.pop(gym_id, None)
+            else:
+                gymnasium.registry[gym_id] = old
+    for gym_id, entries in wanted.items():
+        current = gymnasium.registry.get(gym_id)
+        if gym_id not in pm.gym_saved:
+            if current is not None and not getattr(current, "embodichain_task", False):
+                key = f"{gym_id}={[e.target for e in entries]}"
+                if key not in pm.gym_foreign:
+                    pm.gym_foreign.add(key)
+                    _report_foreign(tasks, gym_id, current, entries)
+                continue
+            pm.gym_saved[gym_id] = current
+        gymnasium.registry[gym_id] = _task_spec(pm, gym_id, entries)
+
+
+def _report_foreign(tasks: Registry, gym_id: str, existing: Any, entries: list[Entry]) -> None:
+    theirs = describe_target(existing.entry_point)
+    if len(entries) == 1 and theirs == entries[0].target_repr:
+        return  # the same class, registered by its own module: keep gymnasium's spec
+    ids = ", ".join(repr(tasks.qualified_name(e)) for e in entries)
+    warnings.warn(
+        f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins (entry point "
+        f"{theirs!r}); it is left as it is. Use {ids} for the plugin task{'s' if len(entries) > 1 else ''}.",
+        NameClashWarning,
+        stacklevel=3,
+    )
 
 
 def list_plugins() -> list[PluginInfo]:
@@ -377,24 +412,20 @@ def failed_plugins() -> list[tuple[str, str]]:
 
 
 def known_providers() -> set[str]:
-    """Names of every known plugin (loaded, failed or blocked): the prefixes of qualified names."""
+    """Names of every known plugin (loaded, failed or blocked)."""
     return set(load_plugins().infos)
 
 
 def get_registry(kind: str) -> Registry:
-    """The registry of ``kind`` (loads plugins first).
-
-    Kinds: ``functors``, ``robots``, ``solvers``, ``sensors``, ``assets``, ``tasks``, ``commands``.
-    """
+    """The registry of ``kind`` (loads plugins first): one of :data:`~embodichain_core.plugins.hookspecs.KINDS`."""
     return load_plugins().registry(kind)
 
 
 def is_qualified_name(name: Any) -> bool:
-    """True for ``"<plugin>:<name>"`` whose prefix is a known plugin's name.
-
-    This is how a qualified name is told from a ``"module:attr"`` import path (which
-    also has a colon): a prefix naming a known plugin wins; anything else is a path.
-    """
-    if not isinstance(name, str) or ":" not in name:
+    """True for ``"<plugin>/<name>"`` whose prefix is a known plugin's (qualified) name."""
+    if not isinstance(name, str) or "/" not in name:
         return False
-    return name.partition(":")[0] in known_providers()
+    from embodichain_core.plugins.registry import namespace
+
+    prefix = name.partition("/")[0]
+    return any(prefix in (p, namespace(p)) for p in known_providers())

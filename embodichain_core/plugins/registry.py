@@ -1,83 +1,214 @@
-"""Named registries filled by plugins: functors, robots, solvers, sensors, assets, tasks, commands.
+"""Registries of named things that plugins provide, their entries and errors.
 
-A :class:`Registry` maps names to :class:`Entry` objects. An entry's target is an
-object or a lazy ``"module:attr"`` string imported on first :meth:`Registry.get`.
-Names are owned by their providers: two plugins may register the same name, and each
-entry keeps its qualified name ``"<provider>:<name>"`` (see
-:mod:`embodichain_core.plugins.names`). A bare name provided by several plugins is
-ambiguous (:class:`AmbiguousNameError`, naming every provider and the qualified
-forms); an unknown name raises :class:`UnknownNameError` listing the closest matches.
+A :class:`Registry` maps names to :class:`Entry` objects, each owned by the plugin that
+registered it (its *provider*). Two plugins may register one name: both entries stay,
+each reachable by its qualified name ``<plugin>/<name>`` (for tasks, that is also the
+gymnasium id); the bare name is then ambiguous and looking it up raises
+:class:`AmbiguousNameError`, naming every provider and the qualified names. ``:`` only
+ever separates a Python import path (``"module:attr"``): a target given that way is
+imported on first :meth:`Registry.get`.
 
 Example:
-    >>> reg = Registry("functors", noun="functor")
+    >>> reg = Registry("functors")
     >>> _ = reg.add("randomize_light", "my_pkg.events:randomize_light", provider="my-plugin")
     >>> reg.get("randomise_light")
     Traceback (most recent call last):
     ...
-    embodichain_core.plugins.entries.UnknownNameError: unknown functor 'randomise_light'. Did you mean 'randomize_light'?
-
-The typed register objects handed to the hooks wrap these registries; they live
-with the hook specifications in :mod:`embodichain_core.plugins.hookspecs`; the task
-registry, which mirrors tasks into gymnasium, lives in
-:mod:`embodichain_core.plugins.gym_tasks`.
+    embodichain_core.plugins.registry.UnknownNameError: unknown functor 'randomise_light'. Did you mean 'randomize_light'?
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator
+import importlib
+import inspect
+import re
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator, Sequence
 
-from embodichain_core.plugins.entries import (
-    AmbiguousNameError,
-    DuplicateRegistrationError,
-    Entry,
-    RegistryError,
-    TargetImportError,
-    UnknownNameError,
-    check_target_string,
-    describe_target,
-    first_doc_line,
-    import_target,
-    is_lazy_target,
-)
-from embodichain_core.plugins.names import SEPARATOR, pick_by_priority, qualified, split_qualified
 from embodichain_core.utils.suggest import closest, did_you_mean
 
-__all__ = [
-    "Entry",
-    "Registry",
-    "RegistryError",
-    "AmbiguousNameError",
-    "DuplicateRegistrationError",
-    "UnknownNameError",
-    "TargetImportError",
-    "import_target",
-    "describe_target",
-    "is_lazy_target",
-    "check_target_string",
-    "class_name_key",
-    "first_doc_line",
-    "KINDS",
-    "new_registries",
-]
+#: Separates the plugin from the name in a qualified name (``embodichain-functors/randomize_light``).
+SEPARATOR = "/"
 
 
-def _identity(name: str) -> str:
-    return name
+class RegistryError(Exception):
+    """Base class of registry errors."""
+
+    def __str__(self) -> str:  # KeyError would repr() the message
+        return str(self.args[0]) if self.args else ""
 
 
-def class_name_key(name: str) -> str:
-    """Case-insensitive key that also accepts a trailing ``Cfg`` (``DexforceW1Cfg``)."""
-    key = name.lower()
-    return key[:-3] if key.endswith("cfg") and len(key) > 3 else key
+class DuplicateRegistrationError(RegistryError, ValueError):
+    """One provider registered a name twice with different targets."""
+
+
+class AmbiguousNameError(RegistryError, LookupError, ValueError):
+    """A name that does not say which plugin's entry it means.
+
+    Attributes:
+        name: the name asked for.
+        providers: the plugins it may mean, sorted.
+        choices: the qualified names to write instead, one per provider.
+    """
+
+    def __init__(self, message: str, name: str, providers: Sequence[str], choices: Sequence[str]):
+        super().__init__(message)
+        self.name, self.providers, self.choices = name, list(providers), list(choices)
+
+
+class UnknownNameError(RegistryError, KeyError, ValueError):
+    """An unknown name was looked up; ``matches`` holds the closest known names."""
+
+    def __init__(self, message: str, name: str = "", matches: Sequence[str] = ()):
+        super().__init__(message)
+        self.name, self.matches = name, list(matches)
+
+
+class TargetImportError(RegistryError, ImportError):
+    """A lazy ``"module:attr"`` target could not be imported."""
+
+
+def join_names(items: Sequence[str], word: str = "and") -> str:
+    """``"a"``, ``"a and b"``, ``"a, b and c"`` (``word`` replaces ``and``)."""
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} {word} {items[-1]}"
+
+
+def namespace(provider: str) -> str:
+    """The prefix of ``provider``'s qualified names (a gymnasium namespace: ``[\\w-]``)."""
+    return re.sub(r"[^\w-]+", "-", provider).strip("-") or "plugin"
+
+
+def is_lazy_target(value: Any) -> bool:
+    """True for ``"module:attr"`` strings."""
+    return isinstance(value, str) and ":" in value
+
+
+def check_target_string(spec: str, what: str) -> None:
+    """Raise ``ValueError`` unless ``spec`` looks like ``"package.module:attr.sub"``."""
+    module, sep, attr = spec.partition(":")
+    if not sep or not all(p.isidentifier() for p in module.split(".") + attr.split(".")):
+        raise ValueError(f"{what}: expected a 'module:attr' string, got {spec!r}")
+
+
+def import_target(spec: str) -> Any:
+    """Import ``"module:attr.sub"`` and return the attribute."""
+    module_name, _, attr = spec.partition(":")
+    obj: Any = importlib.import_module(module_name)
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def describe_target(target: Any) -> str:
+    """``"module:qualname"`` for objects, the string itself for lazy targets."""
+    if isinstance(target, str):
+        return target
+    module, qualname = getattr(target, "__module__", None), getattr(target, "__qualname__", None)
+    return f"{module}:{qualname}" if module and qualname else repr(target)
+
+
+def first_doc_line(obj: Any) -> str:
+    """The first non-empty docstring line of ``obj``, or ``""``."""
+    lines = [line.strip() for line in (inspect.getdoc(obj) or "").splitlines() if line.strip()]
+    return lines[0] if lines else ""
+
+
+_UNSET: Any = object()
+
+
+class Entry:
+    """One registration: ``name`` -> ``target`` provided by ``provider``.
+
+    Attributes:
+        name: the registered name (as spelled by the provider).
+        target: the object, or a lazy ``"module:attr"`` string.
+        provider: the plugin name (for entry points: the distribution name).
+        meta: extra data of the kind (``kind``/``category``/``description`` for functors...).
+        lazy: whether ``target`` is imported on first :meth:`resolve`.
+    """
+
+    def __init__(self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None):
+        self.name, self.target, self.provider = name, target, provider
+        self.meta: dict[str, Any] = dict(meta or {})
+        self.lazy = is_lazy_target(target) if lazy is None else lazy
+        self.noun = "entry"
+        self._value = _UNSET if self.lazy else target
+
+    @property
+    def resolved(self) -> bool:
+        """Whether the target has been imported (always True for eager targets)."""
+        return self._value is not _UNSET
+
+    def resolve(self) -> Any:
+        """The target object, importing a lazy target on first call.
+
+        Raises:
+            TargetImportError: naming the entry and its provider.
+        """
+        if self._value is _UNSET:
+            self._value = self._import(self.target)
+            if "description" in self.meta and not self.meta["description"]:
+                self.meta["description"] = first_doc_line(self._value)
+        return self._value
+
+    def resolve_meta(self, key: str) -> Any:
+        """A meta value, importing it when it is a ``"module:attr"`` string."""
+        if is_lazy_target(self.meta[key]):
+            self.meta[key] = self._import(self.meta[key])
+        return self.meta[key]
+
+    def _import(self, spec: str) -> Any:
+        try:
+            return import_target(spec)
+        except Exception as err:
+            raise TargetImportError(
+                f"cannot load {self.noun} {self.name!r} provided by {self.provider!r}: "
+                f"importing {spec!r} failed with {type(err).__name__}: {err}"
+            ) from err
+
+    @property
+    def target_repr(self) -> str:
+        """The target as ``"module:attr"`` text."""
+        return describe_target(self.target)
+
+    @property
+    def description(self) -> str:
+        """``meta["description"]``, else the resolved target's first docstring line."""
+        text = self.meta.get("description") or ""
+        if not text and self.resolved and callable(self._value):
+            text = first_doc_line(self._value)
+        return str(text)
+
+    def same_as(self, other: Entry) -> bool:
+        """Same provider, target and meta (a harmless re-registration)."""
+        return (self.provider, self.target_repr, repr(self.meta)) == (
+            other.provider,
+            other.target_repr,
+            repr(other.meta),
+        )
+
+    def __repr__(self) -> str:
+        return f"Entry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
+
+
+@dataclass(frozen=True)
+class NameClash:
+    """One bare name registered by several plugins: ``providers`` and, in their order,
+    the ``qualified`` names that reach each one."""
+
+    kind: str
+    name: str
+    providers: tuple[str, ...]
+    qualified: tuple[str, ...]
+
+    def __str__(self) -> str:
+        noun = self.kind.removesuffix("s")
+        forms = join_names([repr(q) for q in self.qualified], "or")
+        return f"{noun} {self.name!r} is provided by {join_names([repr(p) for p in self.providers])} (use {forms})"
 
 
 class Registry:
-    """Names -> :class:`Entry` of one kind, owned by their providers.
-
-    Two providers may register the same name: both entries are kept, each under its
-    qualified name ``"<provider>:<name>"``. A bare name resolves when one provider
-    registered it, or when ``EMBODICHAIN_PLUGIN_PRIORITY`` lists one of its providers;
-    otherwise it is ambiguous (:class:`AmbiguousNameError`).
+    """Names -> :class:`Entry` of one kind, owned by their providers (see the module doc).
 
     Args:
         kind: registry kind (``"functors"``, ``"robots"`` ...).
@@ -87,67 +218,51 @@ class Registry:
 
     def __init__(self, kind: str, *, noun: str | None = None, key: Callable[[str], str] | None = None):
         self.kind = kind
-        self.noun = noun or (kind[:-1] if kind.endswith("s") else kind)
-        self._key = key or _identity
+        self.noun = noun or kind.removesuffix("s")
+        self._key: Callable[[str], str] = key or str
         #: (provider, key) -> entry, in registration order.
         self._entries: dict[tuple[str, str], Entry] = {}
 
     def add(
-        self, name: str, target: Any, provider: str, meta: dict[str, Any] | None = None, *, lazy: bool | None = None
+        self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None
     ) -> Entry:
         """Add an entry; re-adding an identical entry is a no-op.
 
         Raises:
-            DuplicateRegistrationError: ``provider`` already registered ``name`` with
-                another target (another provider's entry of that name is no conflict).
-            ValueError: empty name, a name with ``":"``, or a malformed lazy target.
+            DuplicateRegistrationError: ``provider`` already registered ``name`` with another target.
+            ValueError: an empty name, a name with ``/`` or ``:``, or a malformed lazy target.
         """
-        self._check_name(name, provider)
-        entry = Entry(name, target, provider, meta, lazy=lazy, noun=self.noun)
+        if not isinstance(name, str) or not name or SEPARATOR in name or ":" in name:
+            raise ValueError(
+                f"{self.noun} {name!r} from {provider!r}: names are non-empty strings without '/' or ':' "
+                f"('/' separates the plugin in qualified names, ':' an import path)"
+            )
+        entry = Entry(name, target, provider, meta, lazy=lazy)
+        entry.noun = self.noun
         if entry.lazy:
             check_target_string(target, f"{self.noun} {name!r} from {provider!r}")
-        old = self._entries.get((provider, self._key(name)))
-        if old is not None:
-            if old.same_as(entry):
-                return old
+        return self.merge(entry)
+
+    def merge(self, entry: Entry) -> Entry:
+        """Store a checked entry (see :meth:`add`); returns the stored one."""
+        old = self._entries.get((entry.provider, self._key(entry.name)))
+        if old is not None and not old.same_as(entry):
             raise DuplicateRegistrationError(
-                self.noun, name, old.provider, provider, "one provider cannot register a name twice"
+                f"{self.noun} {entry.name!r} is registered twice by {entry.provider!r} "
+                f"(with {old.target_repr!r} and {entry.target_repr!r}); one provider cannot register a name twice"
             )
-        self._store(entry)
-        return entry
-
-    def _check_name(self, name: Any, provider: str) -> None:
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"{self.noun} names must be non-empty strings, got {name!r} from {provider!r}")
-        if SEPARATOR in name:
-            raise ValueError(
-                f"{self.noun} {name!r} from {provider!r}: names cannot contain {SEPARATOR!r} "
-                f"(it separates the provider in qualified names)"
-            )
-
-    def _store(self, entry: Entry) -> None:
-        self._entries[(entry.provider, self._key(entry.name))] = entry
-
-    def _unstore(self, entry: Entry) -> None:
-        del self._entries[(entry.provider, self._key(entry.name))]
+        return self._entries.setdefault((entry.provider, self._key(entry.name)), entry)
 
     def remove(self, name: str, provider: str | None = None) -> Entry | None:
-        """Remove and return an entry (``None`` when absent).
-
-        ``name`` may be qualified; a bare name provided by several plugins needs
-        ``provider`` (else :class:`AmbiguousNameError`).
-        """
-        split = self._split(name)
-        if split is not None:
-            provider, name = split
-        found = self.find(name, use_priority=False) if provider is None else self.find_own(provider, name)
+        """Remove and return an entry (``None`` when absent); ``name`` may be qualified."""
+        found = self.find(name) if provider is None else self.find_own(provider, name)
         if found is not None:
-            self._unstore(found)
+            del self._entries[(found.provider, self._key(found.name))]
         return found
 
     def find_own(self, provider: str, name: str) -> Entry | None:
         """``provider``'s entry named ``name`` (bare), or ``None``; never ambiguous."""
-        return self._entries.get((provider, self._key(name))) if isinstance(name, str) else None
+        return self._entries.get((provider, self._key(name)))
 
     def providers(self) -> list[str]:
         """Every provider with at least one entry, sorted."""
@@ -161,40 +276,52 @@ class Registry:
         key = self._key(name)
         return [e for (_, k), e in self._entries.items() if k == key]
 
-    def _split(self, name: str) -> tuple[str, str] | None:
-        """``(provider, bare)`` for a qualified ``name`` of a provider of this registry."""
-        return split_qualified(name, self.providers())
+    def _split(self, name: str, sep: str = SEPARATOR) -> tuple[str, str] | None:
+        """``(provider, bare)`` for ``"<plugin><sep><bare>"`` naming a provider of this registry."""
+        prefix, found, bare = name.partition(sep)
+        providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
+        return (providers[prefix], bare) if found and bare and prefix in providers else None
 
-    def find(self, name: str, *, use_priority: bool = True) -> Entry | None:
+    def find(self, name: str) -> Entry | None:
         """The entry for ``name`` (bare or qualified), or ``None``.
 
         Raises:
-            AmbiguousNameError: a bare name provided by several plugins, none of
-                them preferred by ``EMBODICHAIN_PLUGIN_PRIORITY``.
+            AmbiguousNameError: a bare name several plugins provide, or a qualified name
+                spelled with ``:`` (the separator of import paths), naming what to write.
         """
         if not isinstance(name, str):
             return None
         split = self._split(name)
         if split is not None:
             return self.find_own(*split)
+        old = self._split(name, ":")
+        if old is not None:
+            choice = f"{namespace(old[0])}{SEPARATOR}{old[1]}"
+            raise AmbiguousNameError(
+                f"{self.noun} {name!r}: ':' separates an import path ('module:attr'); the qualified name of "
+                f"{old[0]!r}'s {self.noun} {old[1]!r} is written with '/': use {choice!r}",
+                name,
+                [old[0]],
+                [choice],
+            )
         candidates = self._candidates(name)
-        if len(candidates) <= 1:
-            return candidates[0] if candidates else None
-        chosen = pick_by_priority([e.provider for e in candidates]) if use_priority else None
-        if chosen is None:
+        if len(candidates) > 1:
             raise self.ambiguous(name, candidates)
-        return next(e for e in candidates if e.provider == chosen)
+        return candidates[0] if candidates else None
 
-    def ambiguous(self, name: str, candidates: list[Entry] | None = None) -> AmbiguousNameError:
+    def ambiguous(self, name: str, candidates: list[Entry]) -> AmbiguousNameError:
         """The error for a bare ``name`` provided by several plugins."""
-        entries = sorted(candidates or self._candidates(name), key=lambda e: e.provider)
-        return AmbiguousNameError(
-            self.noun, name, [e.provider for e in entries], [self.qualified_name(e) for e in entries]
+        entries = sorted(candidates, key=lambda e: e.provider)
+        providers, choices = [e.provider for e in entries], [self.qualified_name(e) for e in entries]
+        message = (
+            f"{self.noun} {name!r} is ambiguous: it is provided by {join_names([repr(p) for p in providers])}. "
+            f"Use a qualified name: {join_names([repr(c) for c in choices], 'or')}."
         )
+        return AmbiguousNameError(message, name, providers, choices)
 
     def qualified_name(self, entry: Entry) -> str:
-        """The name that always resolves to ``entry`` (``"<provider>:<name>"``)."""
-        return qualified(entry.provider, entry.name)
+        """The name that always resolves to ``entry`` (``"<plugin>/<name>"``)."""
+        return f"{namespace(entry.provider)}{SEPARATOR}{entry.name}"
 
     def entry(self, name: str) -> Entry:
         """The entry for ``name``; raises :class:`UnknownNameError` with suggestions."""
@@ -209,30 +336,26 @@ class Registry:
 
     def unknown(self, name: str) -> UnknownNameError:
         """The error for an unknown ``name``, with the closest registered names."""
-        names = self.names()
-        if not names:
-            msg = (
+        if not self._entries:
+            return UnknownNameError(
                 f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin "
-                f"providing them (see `embodichain list plugins`)"
+                f"providing them (see `embodichain list plugins`)",
+                name,
             )
-            return UnknownNameError(msg, name, [])
-        split = self._split(name) if isinstance(name, str) else None
+        split = self._split(name)
         if split is not None:
             own = [self.qualified_name(e) for e in self.by_provider(split[0])]
             hint = did_you_mean(name, own) or f" See `embodichain list {self.kind} --provider {split[0]}`."
             return UnknownNameError(
                 f"{split[0]!r} provides no {self.noun} {split[1]!r}.{hint}", name, closest(name, own)
             )
-        provider, sep, _ = str(name).partition(SEPARATOR)
-        if sep and provider:
-            hint = did_you_mean(provider, self.providers()) or f" Providers: {', '.join(self.providers())}."
-            return UnknownNameError(
-                f"unknown {self.noun} {name!r}: no plugin named {provider!r} provides {self.kind}.{hint}",
-                name,
-                closest(provider, self.providers()),
-            )
-        hint = did_you_mean(name, names) or f" See `embodichain list {self.kind}`."
-        return UnknownNameError(f"unknown {self.noun} {name!r}.{hint}", name, closest(name, names))
+        prefix, sep, _ = name.partition(SEPARATOR)
+        if sep:
+            hint = did_you_mean(prefix, self.providers()) or f" Providers: {', '.join(self.providers())}."
+            message = f"unknown {self.noun} {name!r}: no plugin named {prefix!r} provides {self.kind}.{hint}"
+            return UnknownNameError(message, name, closest(prefix, self.providers()))
+        hint = did_you_mean(name, self.names()) or f" See `embodichain list {self.kind}`."
+        return UnknownNameError(f"unknown {self.noun} {name!r}.{hint}", name, closest(name, self.names()))
 
     def names(self) -> list[str]:
         """Registered bare names, sorted, each once (however many providers)."""
@@ -259,22 +382,26 @@ class Registry:
 
     def clashes(self) -> dict[str, list[str]]:
         """Bare names provided by several plugins -> their providers (sorted)."""
-        providers: dict[str, list[Entry]] = {}
+        return {c.name: list(c.providers) for c in self.name_clashes()}
+
+    def name_clashes(self) -> list[NameClash]:
+        """Every bare name several plugins provide, by name."""
+        groups: dict[str, list[Entry]] = {}
         for (_, key), entry in self._entries.items():
-            providers.setdefault(key, []).append(entry)
-        return {
-            group[0].name: sorted(e.provider for e in group)
-            for group in sorted(providers.values(), key=lambda g: g[0].name)
-            if len(group) > 1
-        }
+            groups.setdefault(key, []).append(entry)
+        found = []
+        for group in sorted(groups.values(), key=lambda g: g[0].name):
+            if len(group) > 1:
+                group = sorted(group, key=lambda e: e.provider)
+                providers = tuple(e.provider for e in group)
+                found.append(NameClash(self.kind, group[0].name, providers, tuple(map(self.qualified_name, group))))
+        return found
 
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):
             return False
         split = self._split(name)
-        if split is not None:
-            return (split[0], self._key(split[1])) in self._entries
-        return bool(self._candidates(name))
+        return self.find_own(*split) is not None if split is not None else bool(self._candidates(name))
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names())
@@ -284,22 +411,3 @@ class Registry:
 
     def __repr__(self) -> str:
         return f"<Registry {self.kind}: {len(self)} entries>"
-
-
-#: Registry kinds, in the order their hooks are called.
-KINDS = ("commands", "assets", "robots", "solvers", "sensors", "functors", "tasks")
-
-
-def new_registries() -> dict[str, Registry]:
-    """A fresh, empty registry of every kind."""
-    from embodichain_core.plugins.gym_tasks import TaskRegistry
-
-    return {
-        "functors": Registry("functors"),
-        "robots": Registry("robots", key=class_name_key),
-        "solvers": Registry("solvers", key=class_name_key),
-        "sensors": Registry("sensors", key=class_name_key),
-        "assets": Registry("assets", noun="asset root"),
-        "tasks": TaskRegistry("tasks", noun="task"),
-        "commands": Registry("commands"),
-    }

@@ -5,9 +5,8 @@ Search order of :func:`get_data_path`:
 1. an absolute path (``~`` expanded) is returned unchanged when it exists;
 2. ``$EMBODICHAIN_DATA_ROOT/<name>`` (default root ``~/.cache/embodichain_data``);
 3. roots added at runtime with :func:`register_data_root`, newest last;
-4. data roots that plugins registered in the ``assets`` registry: the plugins listed in
-   ``EMBODICHAIN_PLUGIN_PRIORITY`` first, then in load order (plugins load sorted by name,
-   so the order never depends on how they were installed).
+4. data roots that plugins registered in the ``assets`` registry, in load order (plugins
+   load sorted by name, so the order never depends on how they were installed).
 
 A name qualified by a plugin, ``"<plugin>:<relative path>"`` (``"embodichain-assets:
 CircleTableSimple/circle_table_simple.ply"``), is searched only in the roots that plugin
@@ -168,15 +167,11 @@ def _split_provider(name: str) -> tuple[str | None, str]:
 
 
 def _plugin_roots(provider: str | None = None) -> list[str]:
-    """Data roots registered by plugins (only ``provider``'s when given), priority plugins first."""
+    """Data roots registered by plugins (only ``provider``'s when given), in load order."""
     registry = _asset_registry()
     if registry is None:
         return []
-    from embodichain_core.plugins.names import plugin_priority
-
-    rank = {name: i for i, name in enumerate(plugin_priority())}
     entries = [e for e in _registry_entries(registry) if provider in (None, e.provider)]
-    entries.sort(key=lambda e: rank.get(e.provider, len(rank)))  # stable: load order otherwise
     roots = [_entry_root(entry) for entry in entries]
     return [os.path.abspath(os.path.expanduser(os.fspath(r))) for r in roots if r]
 

@@ -20,7 +20,7 @@ import types
 import warnings
 from typing import Any, Iterable
 
-from embodichain_core.plugins.clashes import NameClash, name_entry_points
+from embodichain_core.plugins.registry import NameClash
 
 __all__ = ["NameClashError", "check_name_clashes"]
 
@@ -62,15 +62,9 @@ def check_name_clashes(
             clashing name, its providers and the qualified names.
         pluggy.PluginValidationError: ``plugin`` implements an unknown hook.
     """
-    from embodichain_core.plugins.manager import (
-        PluginLoadWarning,
-        _default_name,
-        isolated_plugins,
-        register_plugin,
-    )
-    from embodichain_core.plugins.names import NameClashWarning
+    from embodichain_core.plugins.manager import NameClashWarning, PluginLoadWarning, isolated_plugins, register_plugin
 
-    name = name or _installed_name(plugin) or _default_name(plugin)
+    name = name or _installed_name(plugin) or _module_name(plugin)
     with warnings.catch_warnings():  # a broken unrelated plugin must not fail this check
         warnings.simplefilter("ignore", PluginLoadWarning)
         warnings.simplefilter("ignore", NameClashWarning)
@@ -89,7 +83,14 @@ def _installed_name(plugin: Any) -> str | None:
     from embodichain_core.plugins import manager
 
     module = plugin.__name__ if isinstance(plugin, types.ModuleType) else getattr(plugin, "__module__", None)
-    for plugin_name, ep in name_entry_points(manager._iter_entry_points()):
+    for plugin_name, ep in manager.named_entry_points():
         if module and ep.value.split(":")[0] == module:
             return plugin_name
     return None
+
+
+def _module_name(plugin: Any) -> str:
+    if isinstance(plugin, types.ModuleType):
+        return plugin.__name__
+    cls = plugin if isinstance(plugin, type) else type(plugin)
+    return f"{cls.__module__}.{cls.__qualname__}"

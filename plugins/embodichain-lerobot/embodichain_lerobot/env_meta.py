@@ -32,7 +32,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from embodichain_core.plugins.entries import import_target
+from embodichain_core.plugins.registry import import_target
 
 __all__ = [
     "ENV_META",

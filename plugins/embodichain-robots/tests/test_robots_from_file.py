@@ -242,7 +242,7 @@ def eef_term_reaches(env: EmbodiedEnv, target: torch.Tensor) -> bool:
 
 def test_mjdls_solver_from_json_agrees_with_dls(tmp_path: Path, urdf_env) -> None:
     write_urdf_arm(tmp_path)
-    solver = {**SOLVER, "class_type": "embodichain-robots:MjDLSSolver"}
+    solver = {**SOLVER, "class_type": "embodichain-robots/MjDLSSolver"}
     env = make_env(gym_config(tmp_path, urdf_robot_section(Path("test_arm/urdf/arm.urdf"), solver_cfg={"arm": solver})))
     try:
         assert type(env.robot.get_solver("arm")).__name__ == "MjDLSSolver"

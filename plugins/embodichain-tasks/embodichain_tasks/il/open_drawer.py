@@ -31,7 +31,6 @@ from typing import Any, List
 import torch
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
-from embodichain_core.envs.registration import register_env
 from embodichain_core.managers.cfg import EventCfg, ObservationCfg
 from embodichain_core.sim.cfg import ArticulationCfg, RigidObjectCfg, RobotCfg, SensorCfg, SimulationManagerCfg
 from embodichain_core.utils.configclass import configclass
@@ -118,7 +117,6 @@ def drawer_opening(env: Any, obs: Any = None) -> torch.Tensor:
     return env.scene["drawer"].get_qpos()[:, :1].float()
 
 
-@register_env(TASK_ID, max_episode_steps=MAX_EPISODE_STEPS)
 class OpenDrawerEnv(EmbodiedEnv):
     """Pull the drawer open by its handle (see the module docstring)."""
 

@@ -28,7 +28,6 @@ from typing import Any, List
 import torch
 
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
-from embodichain_core.envs.registration import register_env
 from embodichain_core.managers.cfg import EventCfg, ObservationCfg
 from embodichain_core.sim.cfg import RigidBodyAttributesCfg, RigidObjectCfg, RobotCfg, SensorCfg, SimulationManagerCfg
 from embodichain_core.sim.shapes import MeshCfg
@@ -108,7 +107,6 @@ class PickForkCfg(EmbodiedEnvCfg):
     max_episode_steps: int = MAX_EPISODE_STEPS
 
 
-@register_env(TASK_ID, max_episode_steps=MAX_EPISODE_STEPS)
 class PickForkEnv(EmbodiedEnv):
     """Pick the fork up from the table (see the module docstring)."""
 

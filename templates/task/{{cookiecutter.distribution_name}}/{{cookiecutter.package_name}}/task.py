@@ -2,7 +2,8 @@
 
 The robot is a 3-joint arm written inline in MJCF, so the task needs no other plugin.
 The episode succeeds when the arm's ``ee`` link is within ``success_threshold`` of the
-cube. This module is imported when the task is made, not when plugins load.
+cube. This module is imported when the task is made, not when plugins load; the task is
+registered by ``plugin.py`` (the tasks hook).
 """
 
 from __future__ import annotations
@@ -11,14 +12,14 @@ from typing import Any, List
 
 import torch
 
-from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg, register_env
+from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
 from embodichain_core.managers import EventCfg, ObservationCfg, RewardCfg, SceneEntityCfg
 from embodichain_core.sim.cfg import LightCfg, RigidObjectCfg, RobotCfg
 from embodichain_core.sim.shapes import CubeCfg
 from embodichain_core.utils.configclass import configclass
 
 from {{ cookiecutter.package_name }}.functors import object_position, reach_distance, shift_object
-from {{ cookiecutter.package_name }}.plugin import MAX_EPISODE_STEPS, TASK_ID
+from {{ cookiecutter.package_name }}.plugin import MAX_EPISODE_STEPS
 
 ARM_MJCF = """
 <mujoco model="{{ cookiecutter.package_name }}_arm">
@@ -82,7 +83,6 @@ class {{ cookiecutter.class_name }}Cfg(EmbodiedEnvCfg):
     max_episode_steps = MAX_EPISODE_STEPS
 
 
-@register_env(TASK_ID, max_episode_steps=MAX_EPISODE_STEPS)
 class {{ cookiecutter.class_name }}Env(EmbodiedEnv):
     """{{ cookiecutter.description }}: success when ``ee`` is within ``success_threshold`` of the cube."""
 

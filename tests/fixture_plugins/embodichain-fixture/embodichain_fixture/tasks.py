@@ -2,7 +2,7 @@
 
 import torch
 
-from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg, register_env
+from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
 from embodichain_core.managers import EventCfg, ObservationCfg, SceneEntityCfg
 from embodichain_core.sim.cfg import LightCfg, RigidObjectCfg, RobotCfg
 from embodichain_core.sim.shapes import CubeCfg
@@ -58,7 +58,6 @@ class FixtureReachCfg(EmbodiedEnvCfg):
     extensions = {"success_threshold": 0.05}
 
 
-@register_env("FixtureReach-v0", max_episode_steps=15)
 class FixtureReachEnv(EmbodiedEnv):
     """Success when the end effector is within ``success_threshold`` of the cube."""
 
