@@ -109,20 +109,24 @@ def test_the_common_case_is_passed_through_untouched() -> None:
     assert check(torch.zeros(3, dtype=torch.float64)).dtype == torch.float32
 
 
-def test_host_array_is_the_view_of_the_last_action_passed_as_it_was() -> None:
-    check = ActionChecker(2, [7], torch.device("cpu"), None)
-    action = torch.rand(2, 7)
-    assert check(action) is action
-    view = check.host_array(action)
-    assert view is not None
-    assert np.shares_memory(view, action.numpy())
-    assert check.host_array(action.clone()) is None  # another tensor: no view
-    converted = check(action.double())  # converted: a new tensor, and no view of anything
-    assert check.host_array(converted) is None
-    assert check.host_array(action) is None
-    with pytest.raises(ValueError, match="NaN"):
-        check(torch.full((2, 7), float("nan")))
-    assert check.host_array(action) is None
+def test_one_check_finds_nan_inf_and_out_of_space_values_in_every_form() -> None:
+    unbounded = ActionChecker(2, [3], torch.device("cpu"), None)
+    for bad in (float("nan"), float("inf"), float("-inf")):
+        action = torch.zeros(2, 3)
+        action[1, 2] = bad
+        with pytest.raises(ValueError, match=r"NaN or infinite values in env\(s\) \[1\]"):
+            unbounded(action)  # passed through as it is: checked all the same
+        with pytest.raises(ValueError, match=r"NaN or infinite values in env\(s\) \[1\]"):
+            unbounded(action.double())  # converted
+    assert unbounded(torch.full((2, 3), 1e30, requires_grad=True)).requires_grad  # finite: fine, untouched
+    bounded = ActionChecker(2, [3, 5], torch.device("cpu"), _box([-1, -1, -1], [1, 1, 1]), {"qf": [3]})
+    with pytest.raises(ValueError, match=r"NaN or infinite values in env\(s\) \[0\]"):
+        bounded(torch.tensor([[float("inf"), 0.0, 0.0], [0.0, 0.0, 0.0]]))
+    bounded(torch.full((2, 5), 9.0))  # another width: the space's bounds do not apply
+    bounded({"qf": torch.full((2, 3), 9.0)})  # nor to a dict's values
+    assert bounded.out_of_space == 0
+    bounded(torch.full((2, 3), 9.0))
+    assert bounded.out_of_space == 2
 
 
 def test_a_sparse_tensor_action_gets_a_clear_error(make_env) -> None:

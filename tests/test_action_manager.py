@@ -108,8 +108,8 @@ def test_without_terms_the_action_is_qpos(make_env) -> None:
 def test_single_pre_term(make_env) -> None:
     env = make_env(actions={"arm": ActionTermCfg(func=ScaledQpos, params={"scale": 0.5})})
     assert env.single_action_space == gym.spaces.Box(-1.0, 1.0, (ARM_ACTIVE,), np.float32)
-    assert env.action_manager.total_action_dim == ARM_ACTIVE
-    assert list(env.action_manager.get_terms_by_mode("pre")) == ["arm"]
+    assert env.action_manager.action_dim() == ARM_ACTIVE
+    assert list(env.action_manager.terms("pre")) == ["arm"]
     env.reset()
     action = torch.full((2, ARM_ACTIVE), 0.8)
     env.step(action)
@@ -200,8 +200,8 @@ def test_post_terms_run_after_the_step(make_env) -> None:
         }
     )
     assert env.single_action_space.shape == (ARM_ACTIVE,)  # post terms add no action dims
-    assert env.action_manager.get_action_dim_by_mode("post") == ARM_ACTIVE
-    post = env.action_manager.get_term("post")
+    assert env.action_manager.action_dim("post") == ARM_ACTIVE
+    post = env.action_manager.get_functor("post")
     env.reset()
     env.step(torch.full((2, ARM_ACTIVE), 0.1))
     assert len(post.seen) == 1
@@ -223,7 +223,7 @@ def test_class_action_terms_are_reset(make_env) -> None:
 
     env = make_env(actions={"arm": ActionTermCfg(func=Stateful)})
     env.reset(options={"reset_ids": [1]})
-    assert env.action_manager.get_term("arm").resets == [[1]]
+    assert env.action_manager.get_functor("arm").resets == [[1]]
 
 
 def test_action_term_errors(make_env) -> None:

@@ -19,15 +19,15 @@ The rule (docs/embodied_env.md, "Actions"):
   the action terms and drives, which clip them (``DeltaQposTerm`` clips its targets to the
   joint limits, the drives their forces); :attr:`ActionChecker.out_of_space` counts the
   env-steps that had one. With ``strict`` such an action is a ``ValueError`` naming the
-  envs, the value and the bounds. The bounds are checked for array actions of the action
-  space's width on the CPU (a GPU action only with ``strict``).
+  envs, the value and the bounds. The bounds apply to array actions of the action space's
+  width, on every device.
 
 The result is a float32 tensor ``(num_envs, width)`` (a dict of them for dict actions).
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
 import torch
@@ -80,10 +80,9 @@ class ActionChecker:
         self.space = f"{type(space).__name__}(shape={shape}, dtype={dtype})" if shape is not None else str(space)
         self.dict_widths = {k: [int(w) for w in v] for k, v in (dict_widths or {}).items()}
         self._shapes = frozenset((self.num_envs, w) for w in self.widths)  # taken as they are
-        self._on_cpu = self.device.type == "cpu"
-        self._last: tuple[Any, Any] = (None, None)  # (the last CPU action passed as is, its numpy view)
         self.strict, self.out_of_space = bool(strict), 0
-        self._bounds = _box_bounds(space, self.widths[0])
+        self._box = _box_bounds(space, self.widths[0])
+        self._limits: dict[tuple[int, bool, torch.device], tuple[torch.Tensor, torch.Tensor]] = {}
 
     def __call__(self, action: Any) -> torch.Tensor | dict[str, torch.Tensor]:
         if (
@@ -91,29 +90,13 @@ class ActionChecker:
             and action.dtype is torch.float32
             and action.shape in self._shapes
             and action.layout is torch.strided
-        ):
-            # the common case: no conversion at all; on the CPU one numpy check
-            if self._on_cpu and action.is_cpu and not action.requires_grad:
-                array = action.numpy()
-                if np.count_nonzero(np.isfinite(array)) == array.size:  # ~0.5 us; .all() takes ~1 us
-                    self._check_bounds(array)
-                    self._last = (action, array)
-                    return action
-            self._last = (None, None)
+        ):  # the common case: checked, not converted
             self._check_device(action, "action")
-            self._check_finite(action, "action")
-            self._check_bounds_tensor(action)
+            self._check_values(action.detach(), "action")
             return action
-        self._last = (None, None)
         if isinstance(action, Mapping):
             return self._check_dict(action)
         return self._check_array(action, self.widths, "action")
-
-    def host_array(self, tensor: Any) -> np.ndarray | None:
-        """The numpy view of ``tensor`` if it is the CPU action the last call returned as it
-        was (the command write then needs no second ``Tensor.numpy()``), else ``None``."""
-        last, array = self._last
-        return array if tensor is last else None
 
     def _check_dict(self, action: Mapping) -> dict[str, torch.Tensor]:
         if not self.dict_widths:
@@ -134,40 +117,47 @@ class ActionChecker:
         tensor = self._as_tensor(value, widths, what)
         self._check_device(tensor, what)
         tensor = self._shaped(tensor, widths, what).to(torch.float32)
-        self._check_finite(tensor, what)
-        if what == "action":
-            self._check_bounds_tensor(tensor)
+        self._check_values(tensor.detach(), what)
         return tensor
 
-    def _check_bounds_tensor(self, tensor: torch.Tensor) -> None:
-        if tensor.device.type == "cpu":
-            self._check_bounds(tensor.detach().numpy())
-        elif self.strict and self._bounds is not None and tensor.shape[-1] == self._bounds[0].shape[0]:
-            self._check_bounds(tensor.detach().cpu().numpy())
-
-    def _check_bounds(self, array: np.ndarray) -> None:
-        """Count (or with ``strict`` raise for) the envs whose action leaves the space."""
-        if self._bounds is None:
+    def _check_values(self, tensor: torch.Tensor, what: str) -> None:
+        """NaN and infinite values raise; values outside the action space are counted (or
+        raise with ``strict``). The common case is decided by one clamp: to the bounds, or
+        to the largest finite float where there are none, so that only an action with a
+        value outside, NaN or infinite differs from its clamped copy."""
+        low, high = self._bounds_of(tensor, what)
+        if torch.equal(tensor.clamp(low, high), tensor):
             return
-        low, high, uniform = self._bounds
-        if array.shape[-1] != low.shape[0]:
-            return
-        if uniform and low[0] <= array.min() and array.max() <= high[0]:  # the common case: two reductions
-            return
-        outside = ((array < low) | (array > high)).reshape(-1, low.shape[0])
-        rows = outside.any(axis=-1)
-        count = int(np.count_nonzero(rows))
-        if not count:
-            return
+        finite = torch.isfinite(tensor).all(dim=-1)
+        if not bool(finite.all()):
+            bad = torch.nonzero(~finite).flatten().tolist()
+            raise ValueError(f"{what} has NaN or infinite values in env(s) {bad[:8]}")
+        outside = (tensor < low) | (tensor > high)
+        rows = outside.any(dim=-1)
         if self.strict:
-            env, dim = (int(i) for i in np.argwhere(outside)[0])
-            value = float(array.reshape(-1, low.shape[0])[env, dim])
+            env, dim = (int(i) for i in torch.nonzero(outside)[0])
             raise ValueError(
-                f"action outside the action space in env(s) {np.flatnonzero(rows)[:8].tolist()}: value {value:g} "
-                f"at index {dim} is not in [{low[dim]:g}, {high[dim]:g}] (action space {self.space}; strict "
-                "action check: without it the value would be clipped)"
+                f"action outside the action space in env(s) {torch.nonzero(rows).flatten()[:8].tolist()}: value "
+                f"{float(tensor[env, dim]):g} at index {dim} is not in [{float(low[dim]):g}, {float(high[dim]):g}] "
+                f"(action space {self.space}; strict action check: without it the value would be clipped)"
             )
-        self.out_of_space += count
+        self.out_of_space += int(rows.sum())
+
+    def _bounds_of(self, tensor: torch.Tensor, what: str) -> tuple[torch.Tensor, torch.Tensor]:
+        """``(low, high)`` of one env's values on the tensor's device: the action space's
+        bounds for an action of its width, else none; the largest finite float32 stands
+        for an infinite bound."""
+        width = int(tensor.shape[-1])
+        bounded = what == "action" and self._box is not None and width == self.widths[0]
+        key = (width, bounded, tensor.device)
+        limits = self._limits.get(key)
+        if limits is None:
+            big = np.finfo(np.float32).max
+            low, high = self._box if bounded and self._box is not None else (np.full(width, -big), np.full(width, big))
+            low, high = (np.clip(x, -big, big).astype(np.float32) for x in (low, high))
+            limits = (torch.as_tensor(low, device=tensor.device), torch.as_tensor(high, device=tensor.device))
+            self._limits[key] = limits
+        return limits
 
     def _as_tensor(self, value: Any, widths: Sequence[int], what: str) -> torch.Tensor:
         expected = f"expected {self._expected(widths)} (action space {self.space})"
@@ -210,24 +200,14 @@ class ActionChecker:
                 f"(move it with .to({str(self.device)!r}))"
             )
 
-    @staticmethod
-    def _check_finite(tensor: torch.Tensor, what: str) -> None:
-        if tensor.device.type == "cpu" and tensor.dtype is torch.float32:
-            if np.isfinite(tensor.detach().numpy()).all():  # numpy: ~1 us where torch takes ~6 us
-                return
-        finite = torch.isfinite(tensor).all(dim=-1)
-        if not bool(finite.all()):
-            bad = torch.nonzero(~finite).flatten().tolist()
-            raise ValueError(f"{what} has NaN or infinite values in env(s) {bad[:8]}")
-
     def _expected(self, widths: Sequence[int]) -> str:
         alt = f" or {widths[1:]} values per env" if len(widths) > 1 else ""
         return f"shape ({self.num_envs}, {widths[0]}){alt}"
 
 
-def _box_bounds(space: Any, width: int) -> tuple[np.ndarray, np.ndarray, bool] | None:
-    """``(low, high, uniform)`` of one env's action (a Box of ``width`` values, batched or
-    not), ``None`` when the space has no such bounds or is unbounded everywhere."""
+def _box_bounds(space: Any, width: int) -> Optional[tuple[np.ndarray, np.ndarray]]:
+    """``(low, high)`` of one env's action (a Box of ``width`` values, batched or not),
+    ``None`` when the space has no such bounds or is unbounded everywhere."""
     low, high = getattr(space, "low", None), getattr(space, "high", None)
     if low is None or high is None:
         return None
@@ -236,5 +216,4 @@ def _box_bounds(space: Any, width: int) -> tuple[np.ndarray, np.ndarray, bool] |
         low, high = low[0], high[0]
     if low.shape != (width,) or high.shape != (width,) or not (np.isfinite(low).any() or np.isfinite(high).any()):
         return None
-    uniform = bool((low == low[0]).all() and (high == high[0]).all())
-    return low, high, uniform
+    return low, high

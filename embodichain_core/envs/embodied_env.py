@@ -214,8 +214,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
                 if key in command:
                     self._apply_joint_command(key, command[key])
             return
-        # the action itself (no action terms): the check has its numpy view already
-        self._robot_io.write("qpos", command, self._check_action.host_array(command))
+        self._robot_io.write("qpos", command)  # the action itself (no action terms)
 
     def _apply_joint_command(self, key: str, value: Any) -> None:
         self._robot_io.write(key, value)  # addresses and drive targets resolved at build
@@ -251,34 +250,19 @@ class EmbodiedEnv(TaskApi, gym.Env):
         """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
         ``truncated = check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
         success, fail = info["success"], info["fail"]
-        # numpy, then one from_numpy per tensor: a torch op costs ~1 us, and several times
-        # that right after the physics call, whose data has pushed this code out of the caches
-        flags = np.zeros((3, self.num_envs), dtype=bool)  # terminated; time limit or diverged; diverged
-        host = _host_flags(success, fail, self.num_envs)
-        if self.cfg.ignore_terminations:
-            terminated = torch.from_numpy(flags[0]) if host else torch.zeros_like(success)
-        elif host:
-            terminated = torch.from_numpy(np.logical_or(host[0], host[1], out=flags[0]))
-        else:
-            terminated = success | fail
-        np.greater_equal(self._elapsed_np, self.max_episode_steps, out=flags[1])
+        terminated = torch.zeros_like(success) if self.cfg.ignore_terminations else success | fail
+        truncated = self._elapsed_steps >= self.max_episode_steps
+        info["diverged"] = torch.zeros(self.num_envs, dtype=torch.bool)
         if diverged:
-            flags[1:, diverged] = True
+            truncated[diverged] = info["diverged"][diverged] = True
             warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
-        truncated = torch.from_numpy(flags[1])
-        info["diverged"] = torch.from_numpy(flags[2])
         if self._task_truncates:
             truncated = self.check_truncated(obs, info) | truncated
-        elif host:  # count_nonzero: ~0.1 us, ndarray.any() ~0.7
-            if not np.count_nonzero(flags[:2]):
-                return terminated, truncated, None
-            done = np.logical_or(flags[0], flags[1])
-            self._episode_success.numpy()[done] = host[0][done]
-            return terminated, truncated, torch.from_numpy(done)
-        if not _any(truncated) and not _any(terminated):
-            return terminated, truncated, None
         dones = terminated | truncated
-        self._episode_success[dones] = success[dones].to(self._episode_success.device)
+        if not bool(dones.any()):
+            return terminated, truncated, None
+        episode_success = self._episode_success
+        torch.where(dones, success.to(episode_success.device, torch.bool), episode_success, out=episode_success)
         return terminated, truncated, dones
 
     def _auto_reset(self, obs: Any, dones: torch.Tensor, info: dict) -> Any:
@@ -342,25 +326,3 @@ class EmbodiedEnv(TaskApi, gym.Env):
         if errors:
             raise errors[0]
 
-
-def _host_flags(success: Any, fail: Any, num_envs: int) -> Optional[tuple[np.ndarray, np.ndarray]]:
-    """The numpy views of the task's ``success``/``fail`` when both are ``(num_envs,)``
-    CPU bool tensors (the fast path of phase 10), else ``None``."""
-    if (
-        type(success) is torch.Tensor
-        and type(fail) is torch.Tensor
-        and success.dtype is torch.bool
-        and fail.dtype is torch.bool
-        and success.is_cpu
-        and fail.is_cpu
-        and success.shape == fail.shape == (num_envs,)
-    ):
-        return success.numpy(), fail.numpy()
-    return None
-
-
-def _any(flags: torch.Tensor) -> bool:
-    """Whether any of the ``flags`` is set (numpy on the CPU: a torch reduction costs ~1 us)."""
-    if flags.is_cpu and flags.dtype is torch.bool:
-        return np.count_nonzero(flags.numpy()) > 0
-    return bool(flags.any())

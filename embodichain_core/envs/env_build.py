@@ -132,7 +132,7 @@ def action_checker(env: Any) -> ActionChecker:
     ``qpos``/``qvel``/``qf``).
     """
     manager = env.action_manager
-    terms = manager.get_terms_by_mode("pre") if manager is not None else {}
+    terms = manager.terms("pre") if manager is not None else {}
     if terms:
         keys: dict[str, list[int]] = {}
         for name, term in terms.items():

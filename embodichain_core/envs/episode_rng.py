@@ -10,8 +10,8 @@ of workers never changes another env's draws. A caller that owns episode identit
 each episode's seed, so any episode can be replayed alone on any env slot.
 
 Why a counter-based stream written here: numpy's generators are one object per stream,
-and seeding one costs ~10 µs (``SeedSequence``), so 64 env resets would cost more than
-the whole randomized reset. Here a draw for any set of envs is a handful of vectorized
+and seeding one (``SeedSequence``) for each of 64 env resets would cost more than the
+whole randomized reset. Here a draw for any set of envs is a handful of vectorized
 uint64 operations: element ``p`` of a stream with key ``k`` is ``mix64(k + (p + 1) * γ)``,
 SplitMix64's output function (Steele, Lea & Flood, "Fast splittable pseudorandom
 number generators", OOPSLA 2014), the same construction as numpy's own ``SeedSequence``

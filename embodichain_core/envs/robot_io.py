@@ -1,15 +1,15 @@
-"""The env's own reads and writes of the robot's active joints, resolved once at build.
+"""The env's one bridge between the simulation's state and torch for the robot's joints.
 
 :class:`RobotIO` serves phase 2 of ``step`` (joint commands into ``ctrl`` /
 ``qfrc_applied``) and the default ``robot`` observation of phase 6. Everything that
 does not depend on the state (addresses, which action columns drive which
 actuators, whether the addresses are one run with one stride, so that a slice is a
-view) is worked out here once. On a backend with host arrays
-(``sim.capabilities.host_arrays`` on the CPU) reads and writes go through numpy views
-of the simulation's memory: a slice or fancy index there costs ~1 us where the same
-torch op costs 3-5 us, and a float32 ``(num_envs, n_active)`` action is written into
-a view kept from step to step (remade when the backend rebinds ``sim.arrays``). Other
-backends get the same values through the torch views.
+view) is worked out here once, and so is the route the data takes: on a backend
+whose state lives in host memory (``sim.capabilities.host_arrays``) commands are
+written into, and observations read from, numpy views of that memory (cheaper per
+call than the same torch indexing on the small batches of the CPU backend); any
+other backend gets the same values through its torch views. Callers see torch
+tensors either way; nothing else in the env chooses between numpy and torch.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 _Sel = Union[slice, np.ndarray]
+_FLOATS = (torch.float32, torch.float64)
 
 
 def _selector(adr: np.ndarray) -> _Sel:
@@ -43,55 +44,69 @@ class RobotIO:
         robot: the env's robot entity.
         active_joint_ids: the robot's joint ids the env acts on.
         num_envs: the batch size.
+        host: move data through the backend's numpy views (default: where the backend
+            has them, ``sim.capabilities.host_arrays``); ``False`` uses its torch views.
+
+    Attributes:
+        host: the route chosen at build (see ``host``).
+        drive_targets: per command kind (``qpos``, ``qvel``): the action columns that drive
+            an actuator, and those actuators' ids.
     """
 
-    def __init__(self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int):
+    def __init__(
+        self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int, host: Optional[bool] = None
+    ):
         aid = torch.as_tensor(active_joint_ids, dtype=torch.long)
         self.sim, self.num_envs = sim, int(num_envs)
         self.active_joint_ids = list(active_joint_ids)
         self.n_active, self.dof = len(aid), int(robot.dof)
         self.qpos_adr, self.dof_adr = robot.qpos_adr[aid], robot.dof_adr[aid]
-        self.host = (
-            bool(getattr(getattr(sim, "capabilities", None), "host_arrays", False))
-            and getattr(sim, "device", torch.device("cpu")).type == "cpu"
-        )
-        self._qpos_sel, self._dof_sel = _selector(self.qpos_adr.numpy()), _selector(self.dof_adr.numpy())
-        # per command kind: (driven columns of the action, their actuator ids)
+        self.host = bool(sim.capabilities.host_arrays) if host is None else bool(host)
         self.drive_targets = {
             key: ((acts >= 0), acts[acts >= 0])
             for key, acts in (("qpos", robot.pos_act[aid]), ("qvel", robot.vel_act[aid]))
         }
+        self._shape = (self.num_envs, self.n_active)  # a command of this shape is written as it is
+        if self.host:
+            self._bind_host_views()
+            self._write, self._observe = self._write_host, self._observe_host
+        else:
+            self._write, self._observe = self._write_tensor, self._observe_tensor
+
+    def _bind_host_views(self) -> None:
+        """The numpy views of the host route, made once (the backend's views are persistent):
+        where a command's columns map to one strided run of ``ctrl`` / ``qfrc_applied``, the
+        view it is written into as a whole."""
+        arrays = self.sim.arrays
+        self._qpos_sel, self._dof_sel = _selector(self.qpos_adr.numpy()), _selector(self.dof_adr.numpy())
         self._drive_np = {
             key: (None if bool(cols.all()) else cols.numpy(), _selector(acts.numpy()))
             for key, (cols, acts) in self.drive_targets.items()
         }
-        self._shape = (self.num_envs, self.n_active)  # the command shape of the fast path
-        self._targets: dict[str, np.ndarray] = {}  # command key -> numpy view it is written into
-        self._arrays_of_targets: Any = None  # the ``sim.arrays`` mapping those views come from
-        self._qfrc: tuple[Any, Any] = (None, None)  # (the qfrc_actuator view, its numpy array)
+        self._targets: dict[str, np.ndarray] = {}
+        if isinstance(self._dof_sel, slice):
+            self._targets["qf"] = arrays["qfrc_applied"][:, self._dof_sel]
+        for key, (columns, actuators) in self._drive_np.items():
+            if columns is None and isinstance(actuators, slice):
+                self._targets[key] = arrays["ctrl"][:, actuators]
+        self._qfrc_actuator = self.sim.view("qfrc_actuator").numpy()
 
     # -- phase 2: commands ------------------------------------------------------------------------
-    def write(self, key: str, value: Any, host_array: Optional[np.ndarray] = None) -> None:
+    def write(self, key: str, value: Any) -> None:
         """Write joint command ``key`` (``qpos``/``qvel`` targets, ``qf`` efforts) of every env.
 
         ``value`` is ``(num_envs, n)`` or ``(n,)`` with ``n`` the active joints' or all
-        joints' count. ``host_array``: the numpy view of a CPU ``value``, when the caller
-        has it already.
+        joints' count.
 
         Raises:
             ValueError: ``n`` is neither.
         """
-        if (
-            type(value) is torch.Tensor
-            and value.shape == self._shape
-            and value.dtype is torch.float32
-            and self.host
-            and value.is_cpu
-            and not value.requires_grad
-        ):
-            # the common case: one action row per env
-            self._write_host(key, value.numpy() if host_array is None else host_array)
-            return
+        if not (type(value) is torch.Tensor and value.shape == self._shape and value.dtype in _FLOATS):
+            value = self._shaped(key, value)
+        self._write(key, value.detach() if value.requires_grad else value)
+
+    def _shaped(self, key: str, value: Any) -> torch.Tensor:
+        """``value`` as a float ``(num_envs, n_active)`` tensor."""
         value = torch.as_tensor(value)
         if value.dim() == 1:
             value = value.unsqueeze(0).expand(self.num_envs, -1)
@@ -102,58 +117,49 @@ class RobotIO:
                 f"{key} command has {value.shape[-1]} values per env; expected {self.n_active} "
                 f"(active joints) or {self.dof} (all joints)"
             )
-        if self.host and value.device.type == "cpu" and value.dtype in (torch.float32, torch.float64):
-            self._write_host(key, value.detach().numpy())
-            return
-        value = value.to(torch.float64)
+        return value if value.dtype in _FLOATS else value.to(torch.float64)
+
+    def _write_tensor(self, key: str, value: torch.Tensor) -> None:
+        sim = self.sim
+        value = value.to(device=sim.device, dtype=sim.dtype)
         if key == "qf":
-            self.sim.qfrc_applied[:, self.dof_adr] = value
+            sim.qfrc_applied[:, self.dof_adr] = value
             return
         columns, actuators = self.drive_targets[key]
-        self.sim.ctrl[:, actuators] = value[:, columns]
+        sim.ctrl[:, actuators] = value[:, columns]
 
-    def _write_host(self, key: str, value: np.ndarray) -> None:
-        if self.sim.arrays is not self._arrays_of_targets:
-            self._bind_targets()
+    def _write_host(self, key: str, value: torch.Tensor) -> None:
+        array = value.numpy()
         target = self._targets.get(key)
         if target is not None:
-            target[...] = value  # a view: every column driven, actuators one strided run
+            target[...] = array
             return
+        arrays = self.sim.arrays
         if key == "qf":
-            self.sim.arrays["qfrc_applied"][:, self._dof_sel] = value
+            arrays["qfrc_applied"][:, self._dof_sel] = array
             return
         columns, actuators = self._drive_np[key]
-        self.sim.arrays["ctrl"][:, actuators] = value if columns is None else value[:, columns]
-
-    def _bind_targets(self) -> None:
-        """The numpy views commands are written into (a backend that rebuilds its arrays,
-        e.g. on switching to per-env models, gets new ones)."""
-        arrays = self.sim.arrays
-        self._targets = {}
-        if isinstance(self._dof_sel, slice):
-            self._targets["qf"] = arrays["qfrc_applied"][:, self._dof_sel]
-        for key, (columns, actuators) in self._drive_np.items():
-            if columns is None and isinstance(actuators, slice):
-                self._targets[key] = arrays["ctrl"][:, actuators]
-        self._arrays_of_targets = arrays
+        arrays["ctrl"][:, actuators] = array if columns is None else array[:, columns]
 
     # -- phase 6: the default observation ------------------------------------------------------------
     def observe(self) -> dict[str, torch.Tensor]:
         """``{"qpos", "qvel", "qf"}`` of the active joints, float32 ``(num_envs, n_active)``,
         ``qf`` = actuator + applied joint forces; fresh tensors every call."""
+        return self._observe()
+
+    def _observe_host(self) -> dict[str, torch.Tensor]:
         sim = self.sim
-        if self.host:
-            view = sim.view("qfrc_actuator")  # the read runs the lazy forward first
-            if view is not self._qfrc[0]:
-                self._qfrc = (view, view.numpy())
-            arrays, dof = sim.arrays, self._dof_sel
-            qf = self._qfrc[1][:, dof] + arrays["qfrc_applied"][:, dof]
-            return {
-                "qpos": torch.from_numpy(arrays["qpos"][:, self._qpos_sel].astype(np.float32)),
-                "qvel": torch.from_numpy(arrays["qvel"][:, dof].astype(np.float32)),
-                "qf": torch.from_numpy(qf.astype(np.float32)),
-            }
-        dof = self.dof_adr
+        sim.view("qfrc_actuator")  # the read of a derived field runs the lazy forward first
+        arrays, dof = sim.arrays, self._dof_sel
+        qf = self._qfrc_actuator[:, dof] + arrays["qfrc_applied"][:, dof]
+        return {
+            "qpos": torch.from_numpy(arrays["qpos"][:, self._qpos_sel].astype(np.float32)),
+            "qvel": torch.from_numpy(arrays["qvel"][:, dof].astype(np.float32)),
+            "qf": torch.from_numpy(qf.astype(np.float32)),
+        }
+
+    def _observe_tensor(self) -> dict[str, torch.Tensor]:
+        sim, dof = self.sim, self.dof_adr
         return {
             "qpos": sim.qpos[:, self.qpos_adr].float(),
             "qvel": sim.qvel[:, dof].float(),

@@ -23,7 +23,6 @@ class TaskApi:
     step_dt: float
     physics_dt: float
     _elapsed_steps: torch.Tensor
-    _elapsed_np: np.ndarray  # numpy view of ``_elapsed_steps`` (same memory)
     rng: Any
     scene: Any
     sensors: dict[str, Any]
@@ -69,22 +68,21 @@ class TaskApi:
     # -- task override points ----------------------------------------------------------------------
     def compute_task_state(self, **kwargs: Any) -> tuple[torch.Tensor, torch.Tensor, dict]:
         """``(success, fail, metrics)``, (N,) bool each (none by default)."""
-        flags = np.zeros((2, self.num_envs), dtype=bool)  # fresh per call; numpy + from_numpy: the cheap way
-        return torch.from_numpy(flags[0]), torch.from_numpy(flags[1]), {}
+        return torch.zeros(self.num_envs, dtype=torch.bool), torch.zeros(self.num_envs, dtype=torch.bool), {}
 
     def get_info(self, **kwargs: Any) -> dict:
         """``success``, ``fail``, ``elapsed_steps`` (a copy of the counters) and ``metrics``."""
         success, fail, metrics = self.compute_task_state(**kwargs)
-        elapsed = torch.from_numpy(self._elapsed_np.copy())  # a copy: the counters move on
+        elapsed = self._elapsed_steps.clone()  # a copy: the counters move on
         return {"success": success, "fail": fail, "elapsed_steps": elapsed, "metrics": metrics}
 
     def get_reward(self, obs: Any, action: Any, info: dict) -> torch.Tensor:
         """Task reward before reward functors (zeros by default)."""
-        return torch.from_numpy(np.zeros(self.num_envs, dtype=np.float32))
+        return torch.zeros(self.num_envs)
 
     def check_truncated(self, obs: Any, info: dict) -> torch.Tensor:
         """Task-specific truncation (none by default)."""
-        return torch.from_numpy(np.zeros(self.num_envs, dtype=bool))
+        return torch.zeros(self.num_envs, dtype=torch.bool)
 
     def is_task_success(self, **kwargs: Any) -> torch.Tensor:
         """Whether each env's current state counts as a success (for dataset saving)."""

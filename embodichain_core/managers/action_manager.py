@@ -33,35 +33,28 @@ class ActionManager(ManagerBase[ActionTermCfg]):
         if cfg.mode not in ("pre", "post"):
             raise ConfigError(join_path(where, "mode"), f"mode must be 'pre' or 'post', got {cfg.mode!r}")
 
-    def terms(self, mode: str = "pre") -> list[ActionTerm]:
-        return [e.func for e in self.entries.values() if e.cfg.mode == mode]
-
-    def get_terms_by_mode(self, mode: str) -> dict[str, ActionTerm]:
+    def terms(self, mode: str = "pre") -> dict[str, ActionTerm]:
+        """The ``mode`` (``pre`` or ``post``) terms by name, in declaration order (one term by
+        name: :meth:`get_functor`)."""
         return {n: e.func for n, e in self.entries.items() if e.cfg.mode == mode}
 
-    def get_action_dim_by_mode(self, mode: str) -> int:
-        return sum(t.action_dim for t in self.terms(mode))
-
-    @property
-    def total_action_dim(self) -> int:
-        return self.get_action_dim_by_mode("pre")
-
-    def get_term(self, name: str) -> ActionTerm:
-        return self.get_functor(name)
+    def action_dim(self, mode: str = "pre") -> int:
+        """Values per env the ``mode`` terms take (for ``pre``: the policy action's width)."""
+        return sum(t.action_dim for t in self.terms(mode).values())
 
     def single_action_space(self) -> gym.spaces.Box | None:
         """The policy's per-env Box, or ``None`` without ``pre`` terms."""
         terms = self.terms("pre")
         if not terms:
             return None
-        lows, highs = zip(*(t.action_bounds() for t in terms))
+        lows, highs = zip(*(t.action_bounds() for t in terms.values()))
         low = torch.cat([torch.as_tensor(x, dtype=torch.float32) for x in lows]).numpy()
         high = torch.cat([torch.as_tensor(x, dtype=torch.float32) for x in highs]).numpy()
         return gym.spaces.Box(low=low, high=high, dtype=np.float32)
 
     def process_action(self, action: Any, mode: str = "pre") -> Any:
         """Map the policy action to a command (tensor of qpos targets or a dict)."""
-        terms = self.get_terms_by_mode(mode)
+        terms = self.terms(mode)
         if not terms:
             return action
         if isinstance(action, dict):

@@ -15,16 +15,10 @@ leading dimensions), and returns the flavour and dtype it was given.
 Design: each function is written once, over the namespace ``xp`` of its input (``numpy`` or
 ``torch``, through names both share); three helpers (:func:`_split`, :func:`_stack`,
 :func:`_const`) pick each library's fast form. Torch tensors on the CPU (float32/64, no
-autograd) run the same code on zero-copy numpy views (:func:`_numpy_views`): on the small
-batches of this project a numpy operation costs ~0.5 us and a torch one ~3 us. CUDA tensors
-and tensors that require grad run in torch. Rotation matrices are one matrix product of the
-quaternion's outer product with a constant table. ``timeit`` (us per call, 16 rows, the old
-copies -> this module, interleaved on the shared 2-core machine): numpy ``quat_mul`` 20 -> 13,
-``pose_to_matrix`` 17 -> 8, ``euler_xyz_to_quat`` 11.2 -> 12.8 (yaw only 3.8 -> 4.3: the
-dispatch), the functors' reset chain Euler -> ``quat_mul`` -> ``pose_to_matrix`` 55 -> 38;
-torch ``quat_mul`` 46 -> 17, ``quat_to_matrix`` 85 -> 9, ``pose_to_matrix`` 115 -> 12,
-``euler_xyz_to_quat`` 141 -> 18, ``matrix_to_quat`` 34 (core: a loop over ``mju_mat2Quat``)
-and 192 (functors) -> 42 (256 rows: 224 -> 101).
+autograd) run the same code on zero-copy numpy views (:func:`_numpy_views`; numpy has less
+overhead per operation on the small batches of this project); CUDA tensors and tensors that
+require grad run in torch. Rotation matrices are one matrix product of the quaternion's outer
+product with a constant table.
 
 Dtype exceptions: :func:`euler_xyz_to_quat` always returns float64; :func:`matrix_to_quat`
 computes in float64 and returns the input dtype. On numpy, ``matrix_to_quat`` equals

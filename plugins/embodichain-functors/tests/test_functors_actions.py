@@ -89,7 +89,7 @@ def test_eef_pose_7d_and_6d_through_ik(build) -> None:
     env6.step(torch.tensor([[0.1, 0.0, 0.1, 0.0, 0.0, 0.3]]).expand(4, 6))
     assert torch.allclose(pos_ctrl(env6)[:, :4], torch.tensor([0.2, 0.0, 0.2, 0.3]).expand(4, 4), atol=1e-5)
     with pytest.raises(ValueError, match="6D or 7D"):
-        env6.action_manager.terms()[0].process_action(torch.zeros(4, 5))
+        next(iter(env6.action_manager.terms().values())).process_action(torch.zeros(4, 5))
 
 
 def test_qvel_term_drives_velocity(build) -> None:
