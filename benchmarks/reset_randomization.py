@@ -141,8 +141,8 @@ class ConstCounter:
                 self.seconds += time.perf_counter() - start
 
         sim.flush_const = timed
-        if sim._free_const is not None:
-            self._wrap(sim._free_const, "update", "closed")
+        if sim.constants.free_const is not None:
+            self._wrap(sim.constants.free_const, "update", "closed")
 
     def _wrap(self, obj: Any, name: str, key: str) -> None:
         original = getattr(obj, name)

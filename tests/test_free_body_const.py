@@ -173,8 +173,8 @@ def test_non_inertial_or_robot_fields_are_not_fast(field, index):
     fast, _, model = _sims()
     if index == "arm":
         index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "arm")
-    assert not fast._closed_form_field(field, index)
-    assert fast._closed_form_field("body_ipos", (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"),))
+    assert not fast.constants.closed_form_field(field, index)
+    assert fast.constants.closed_form_field("body_ipos", (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"),))
 
 
 def _assert_same(fast: BatchSim, full: BatchSim) -> None:

@@ -40,7 +40,7 @@ def test_envs_run_different_meshes_and_collide_with_their_own(tmp_path):
     # resting heights follow each env's own mesh: half-heights 0.02, 0.10, 0.02
     assert torch.allclose(z, torch.tensor([0.02, 0.10, 0.02]), atol=6e-3), z
     assert scene.current_mesh["obj"] == [small, tall, two]
-    # per-env model fields still work on per-env models, only for the chosen env
+    # per-env model fields still work with mesh variants, only for the chosen env
     obj.set_mass([1.0, 2.0, 3.0])
     assert torch.allclose(obj.get_mass(), torch.tensor([1.0, 2.0, 3.0]))
     # env 0 collides with its own mesh only: the tall variant's geoms are off there

@@ -54,8 +54,6 @@ def test_views_are_the_warp_arrays() -> None:
     sim.arrays["qpos"][1, 0] = 0.25  # the numpy view on the CPU device is the same memory too
     assert float(sim.qpos[1, 0]) == 0.25
     assert sim.xmat.shape == (2, sim.model.nbody, 9)  # mujoco.batch's layout, still a view
-    with pytest.raises(ConfigError, match="per-env models"):
-        sim.use_env_models([sim.model, sim.model])
 
 
 def test_a_saved_state_row_is_refused_and_changes_nothing() -> None:

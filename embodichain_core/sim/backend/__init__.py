@@ -2,8 +2,7 @@
 
 :class:`SimBackend` (:mod:`.interface`) is what envs, entities and plugins call;
 :class:`BatchSim` (:mod:`.batch_sim`, ``mujoco.batch`` on the CPU) implements it, with
-per-env models (:mod:`.batch_env_models`), deferred derived constants
-(:mod:`.batch_constants`, closed form in :mod:`.free_body_const` /
+deferred derived constants (:mod:`.batch_constants`, closed form in :mod:`.free_body_const` /
 :mod:`.free_body_geometry`) and env-id helpers (:mod:`.env_rows`: ``np_ids``,
 ``field_selector``) that plugins may use too.
 """

@@ -2,17 +2,15 @@
 
 One state row per env, stepped on a thread pool with the GIL released and
 bit-identical to a loop. It implements :class:`~embodichain_core.sim.backend.interface.SimBackend`:
-state and derived fields are zero-copy float64 torch views created once (and numpy
-views, ``arrays``), forward is lazy (:meth:`BatchSim.mark_dirty`), any subset of envs
-steps natively. Per-env model fields come in two ways:
+state and derived fields are zero-copy float64 torch views of the one batch, created
+once (and numpy views, ``arrays``), forward is lazy (:meth:`BatchSim.mark_dirty`), any
+subset of envs steps natively. Per-env model fields are expanded fields
+(``Batch.expand``) of the one model structure every env shares.
 
-* expanded fields (``Batch.expand``): cheap, while envs share one structure;
-* per-env models (``Batch.set_models``, :mod:`.batch_env_models`), once envs differ in
-  structure. Switching rebuilds the batch and copies the state.
-
-Derived constants after model writes: :mod:`.batch_constants`. ``BatchSim.batch`` (the
-``mujoco.batch.Batch``) is this backend's own business: code outside ``sim/backend/``
-goes through the interface.
+Derived constants after model writes: :mod:`.batch_constants` (a
+:class:`~embodichain_core.sim.backend.batch_constants.DeferredConstants` the backend
+owns). ``BatchSim.batch`` (the ``mujoco.batch.Batch``) is this backend's own business:
+code outside ``sim/backend/`` goes through the interface.
 """
 
 from __future__ import annotations
@@ -27,24 +25,20 @@ import mujoco.batch as mjbatch
 import numpy as np
 import torch
 
-from embodichain_core.sim.backend.batch_constants import BatchConstants
-from embodichain_core.sim.backend.batch_env_models import PerEnvModels
-from embodichain_core.sim.backend.field_views import FieldViews
+from embodichain_core.sim.backend.batch_constants import DeferredConstants
 from embodichain_core.sim.backend.env_rows import batch_ids as _batch_ids
 from embodichain_core.sim.backend.env_rows import field_selector as _field_selector
 from embodichain_core.sim.backend.env_rows import np_ids as _np_ids
-from embodichain_core.sim.backend.free_body_const import FreeBodyConstants
+from embodichain_core.sim.backend.field_views import FieldViews
 from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
 
 _VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
 _NONE = int(mujoco.mjtStage.mjSTAGE_NONE)
 _SETCONST_INPUTS = frozenset(mujoco.MjModel._setconst_inputs)
-CAPABILITIES = SimCapabilities(
-    subset_step=True, per_env_models=True, host_arrays=True, float64=True, deterministic=True
-)
+CAPABILITIES = SimCapabilities(subset_step=True, host_arrays=True, float64=True, deterministic=True)
 
 
-class BatchSim(FieldViews, BatchConstants, PerEnvModels):
+class BatchSim(FieldViews):
     """``num_envs`` MuJoCo simulations of one compiled model.
 
     Args:
@@ -77,28 +71,21 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         self.device = torch.device("cpu")
         self.dtype = torch.float64
         self.capabilities = CAPABILITIES
-        self.env_models: Optional[list[mujoco.MjModel]] = None
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
-        self._const_dirty = np.zeros(self.num_envs, dtype=bool)  # full mj_setConst due
-        self._closed_form_dirty = np.zeros(self.num_envs, dtype=bool)  # closed-form update due
-        self._closed_form_fields: set[str] = set()  # the fields written since then
-        self._const_pending = False
-        self._fast_constants = fast_constants  # closed form where it applies (else always mj_setConst)
-        self._free_bodies: Optional[np.ndarray] = None  # see _eligible_bodies
-        self._free_const: Optional[FreeBodyConstants] = None
         self._pending_failed: list[int] = []  # failures of forwards and subset steps, for the next full step
-        self._make_batch()
-        self.batch.reset(None)
-
-    # -- construction and views --------------------------------------------------------------
-    def _make_batch(self) -> None:
-        self.batch = mjbatch.Batch(self.model, self.num_envs, nthread=self.nthread, persistent=self.persistent)
-        self._free_const = None
+        self.batch = mjbatch.Batch(model, self.num_envs, nthread=self.nthread, persistent=persistent)
+        self.constants = DeferredConstants(model, self.batch, fast=fast_constants)
+        """The derived constants due after model-field writes (:mod:`.batch_constants`)."""
         self._views: dict[str, torch.Tensor] = {}
         self.arrays: dict[str, np.ndarray] = {}
         """Numpy views of the state fields (same memory as the torch views): the cheap
         way to write a few values of a few envs (then call :meth:`mark_dirty`)."""
+        self._bind_views()
+        self.batch.reset(None)
+
+    def _bind_views(self) -> None:
+        """The persistent views: the batch is made once, so they hold for the backend's lifetime."""
         for name in STATE_FIELDS:
             self.arrays[name] = self.batch.bind(name)
             self._views[name] = torch.from_numpy(self.arrays[name])
@@ -139,7 +126,7 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         forward (lazy or explicit), are reported again by the next step of every env,
         which the env loop truncates and resets.
         """
-        if self._const_pending:
+        if self.constants.pending:
             self.flush_const()
         if env_ids is None:
             if self._maybe_dirty:
@@ -209,8 +196,6 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
     # -- per-env model fields -----------------------------------------------------------------
     def model_field(self, name: str) -> np.ndarray:
         """Read-only (num_envs, ...) values of a model field (shared fields broadcast)."""
-        if self.env_models is not None:
-            return np.stack([getattr(m, name) for m in self.env_models])
         values = self.batch.expanded(name)
         if values is None:
             base = getattr(self.model, name)
@@ -218,15 +203,13 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         return values
 
     def declare_per_env(self, names: Iterable[str]) -> None:
-        """Give model fields per-env values now (``Batch.expand``; with per-env models every
-        field already is)."""
-        if self.env_models is None:
-            for name in names:
-                self.batch.expand(name)
+        """Give model fields per-env values now (``Batch.expand``)."""
+        for name in names:
+            self.batch.expand(name)
 
     def is_per_env(self, name: str) -> bool:
-        """Whether model field ``name`` holds per-env values (expanded, or per-env models)."""
-        return self.env_models is not None or self.batch.expanded(name) is not None
+        """Whether model field ``name`` holds per-env values (is expanded)."""
+        return self.batch.expanded(name) is not None
 
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into model field ``name[index]`` of each env in ``env_ids``.
@@ -239,13 +222,7 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         """
         ids = _np_ids(env_ids, self.num_envs)
         values = np.asarray(values.detach().cpu().numpy() if isinstance(values, torch.Tensor) else values)
-        if self.env_models is not None:
-            vals = np.broadcast_to(values, (len(ids),) + np.shape(getattr(self.model, name)[index]))
-            for k, env in enumerate(ids):
-                getattr(self.env_models[env], name)[index] = vals[k]
-            self.batch.set_models(self.env_models)
-        else:
-            self.batch.expand(name)[_field_selector(ids, index)] = values
+        self.batch.expand(name)[_field_selector(ids, index)] = values
         if set_const and name in _SETCONST_INPUTS:
             self.mark_const_dirty(ids, [(name, index)])
 
@@ -257,10 +234,6 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         mass = np.broadcast_to(np.asarray(mass, dtype=np.float64), (len(rows), len(bodies)))
         sel = (rows[:, None], bodies[None, :])
         ratio = (mass / np.maximum(self.model_field("body_mass")[sel], 1e-12))[..., None]
-        if self.env_models is not None:
-            self.set_model_field("body_inertia", rows, bodies, self.model_field("body_inertia")[sel] * ratio)
-            self.set_model_field("body_mass", rows, bodies, mass)
-            return
         self.batch.expand("body_inertia")[sel] *= ratio
         self.batch.expand("body_mass")[sel] = mass
         self.mark_const_dirty(rows, (("body_mass", bodies), ("body_inertia", bodies)))
@@ -272,8 +245,6 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         filled in place instead of allocating a copy per call.
         """
         self.flush_const()
-        if self.env_models is not None:
-            return self.env_models[int(env_id)]
         return self.batch.get_model(int(env_id), model)
 
     def get_data(self, env_id: int, data: Optional[mujoco.MjData] = None) -> mujoco.MjData:
@@ -282,3 +253,27 @@ class BatchSim(FieldViews, BatchConstants, PerEnvModels):
         if self._dirty[int(env_id)]:
             self.forward([int(env_id)])
         return self.batch.get_data(int(env_id), data)
+
+    # -- derived constants ----------------------------------------------------------------------
+    def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
+        """Note that constant inputs of ``env_ids`` changed (written directly into
+        expanded fields); they are recomputed once before they are next used.
+
+        ``fields`` (``(name, index)`` pairs of what was written) lets a write of only
+        free bodies' masses and inertial frames, or of geoms' collision filters, take
+        the closed form (:mod:`embodichain_core.sim.backend.free_body_const`); without it the
+        full ``mj_setConst`` runs.
+        """
+        self.constants.mark(_np_ids(env_ids, self.num_envs), fields)
+
+    def flush_const(self) -> None:
+        """Recompute MuJoCo's derived constants once for every env whose inputs changed.
+
+        Deferred from :meth:`set_model_field` so that a reset writing several fields
+        (mass, centre of mass, light position) pays for one call; run automatically
+        before stepping, forward and ``get_model``/``get_data``.
+        """
+        if self.constants.pending:
+            full = self.constants.flush()
+            if len(full):
+                self.batch.set_const(_batch_ids(full, self.num_envs))

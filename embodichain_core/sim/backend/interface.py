@@ -28,7 +28,7 @@ Conventions:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping, Optional, Protocol, Sequence, runtime_checkable
+from typing import Any, Iterable, Mapping, Optional, Protocol, runtime_checkable
 
 import mujoco
 import numpy as np
@@ -66,15 +66,12 @@ class SimCapabilities:
     Attributes:
         subset_step: :meth:`SimBackend.step` of a subset runs only those envs (without
             it a backend steps every env with the others' state saved and restored).
-        per_env_models: envs may run on structurally different models
-            (:meth:`SimBackend.use_env_models`).
         host_arrays: ``sim.arrays`` are zero-copy numpy views of the state.
         float64: state and views are float64 (else float32).
         deterministic: the same inputs give bit-identical results at any thread count.
     """
 
     subset_step: bool
-    per_env_models: bool
     host_arrays: bool
     float64: bool
     deterministic: bool
@@ -171,11 +168,7 @@ class SimBackend(Protocol):
         """Run the scheduled constant recomputes now (otherwise before the next step/forward)."""
         ...
 
-    # -- per-env models and host copies ----------------------------------------------------------
-    def use_env_models(self, models: Sequence[mujoco.MjModel]) -> None:
-        """Run env ``i`` on ``models[i]`` (same data layout), keeping every env's state."""
-        ...
-
+    # -- host copies ---------------------------------------------------------------------------
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
         """Env ``env_id``'s model on the host (for rendering or any ``mj_`` function)."""
         ...

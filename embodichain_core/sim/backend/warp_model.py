@@ -13,13 +13,12 @@ forward or host copy (the groups of every write since the last one, together).
 from __future__ import annotations
 
 import copy
-from typing import Any, Iterable, Optional, Sequence
+from typing import Any, Iterable, Optional
 
 import mujoco
 import numpy as np
 import torch
 
-from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.backend.env_rows import field_selector, np_ids
 from embodichain_core.sim.backend.warp_device import StepGraphs
 from embodichain_core.sim.backend.warp_fields import ALL, const_groups, derived_outputs, field_kind, unsupported
@@ -167,14 +166,6 @@ class WarpModelFields:
             self.mjw.set_const(self.wp_model, self.wp_data, groups=self.mjw.SetConstGroup(groups))
 
     # -- host copies -----------------------------------------------------------------------------
-    def use_env_models(self, models: Sequence[mujoco.MjModel]) -> None:
-        """Not on this backend: every world runs one model structure."""
-        raise ConfigError(
-            "sim_cfg.backend",
-            "per-env models (structurally different envs) are not supported "
-            "on backend 'warp'; use backend 'mujoco_batch'",
-        )
-
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
         """Env ``env_id``'s model on the host: the template with that env's per-env rows
         (pass ``model``, a copy of ``self.model``, to fill it in place)."""

@@ -98,7 +98,6 @@ class WarpSim(FieldViews, WarpModelFields):
         on_cpu = self.wp_device == "cpu"
         self.capabilities = SimCapabilities(
             subset_step=False,
-            per_env_models=False,
             host_arrays=on_cpu and self.host_arrays_on_cpu,
             float64=False,
             deterministic=on_cpu,

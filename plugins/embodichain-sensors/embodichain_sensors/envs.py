@@ -24,7 +24,7 @@ class EnvReader:
         """The model env ``env_id`` runs on (valid until the next call)."""
         sim = self.scene.sim
         batch = getattr(sim, "batch", None)
-        if getattr(sim, "env_models", None) is not None or batch is None:
+        if batch is None:
             return sim.get_model(env_id)
         if self._model is None:
             self._model = batch.get_model(int(env_id))
