@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-import torch
-
 import numpy as np
+import torch
 
 from embodichain_core.sim.entities.base import Entity, StateSlices
 from embodichain_core.sim.entities.rigid_object import RigidObject
