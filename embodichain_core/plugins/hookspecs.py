@@ -167,120 +167,52 @@ def new_registries() -> dict[str, Registry]:
 
 @hookspec
 def embodichain_register_functors(register: FunctorRegister) -> None:
-    """Register manager functors (events, observations, rewards, actions, datasets).
+    """Register manager functors: ``register(name, target, *, kind, category="", description="")``.
 
-    Args:
-        register: ``register(name, target, *, kind, category="", description="")``.
-            ``target`` is a callable/class or a lazy ``"module:attr"`` string; ``kind`` is
-            one of ``event``, ``observation``, ``reward``, ``action``, ``dataset``;
-            ``filter_visual_rand`` drops functors of the category ``"randomization.visual"``
-            whose name starts with ``randomize_``.
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_functors(register):
-        ...     register("randomize_light", "my_pkg.events:randomize_light",
-        ...              kind="event", category="randomization.visual")
+    ``kind`` is one of :data:`FUNCTOR_KINDS`; ``filter_visual_rand`` drops the functors of
+    the category ``"randomization.visual"`` whose name starts with ``randomize_``.
     """
 
 
 @hookspec
 def embodichain_register_robots(register: RobotRegister) -> None:
-    """Register robot config classes, looked up by ``class_type``/``robot_type``.
-
-    Args:
-        register: ``register(name, cfg_class)``; ``cfg_class`` is a class or a lazy
-            ``"module:Class"`` string. Lookups ignore case and a trailing ``Cfg``.
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_robots(register):
-        ...     register("DexforceW1", "embodichain_robots.w1:DexforceW1Cfg")
-    """
+    """Register robot config classes by ``class_type``/``robot_type``: ``register(name, cfg_class)``."""
 
 
 @hookspec
 def embodichain_register_solvers(register: SolverRegister) -> None:
-    """Register kinematics solver classes, named by ``solver_cfg.<part>.class_type``.
+    """Register kinematics solvers by ``solver_cfg.<part>.class_type``: ``register(name, solver_class)``.
 
-    The class provides ``from_config(cfg: dict, robot: Robot, part: str) -> solver``:
-    ``cfg`` is the part's mapping (``class_type`` included), ``robot`` the built robot; a
-    bad value raises ``ConfigError`` with its key relative to the part, which the core
-    reports as ``robot.solver_cfg.<part>.<key>``. The solver has ``joint_ids``,
-    ``root_link_name``, ``get_fk`` and ``get_ik`` (see :mod:`embodichain_core.sim.entities.robot`).
-
-    Args:
-        register: ``register(name, solver_class, description="")``; ``solver_class`` is a
-            class or a lazy ``"module:Class"`` string.
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_solvers(register):
-        ...     register("DLSSolver", "my_pkg.ik:DLSSolver")
+    The class provides ``from_config(cfg: dict, robot, part: str) -> solver`` (``cfg`` is the
+    part's mapping; a bad value raises ``ConfigError`` keyed relative to the part); the solver
+    has ``joint_ids``, ``root_link_name``, ``get_fk`` and ``get_ik``.
     """
 
 
 @hookspec
 def embodichain_register_sensors(register: SensorRegister) -> None:
-    """Register sensors by their ``sensor_type``.
-
-    Args:
-        register: ``register(sensor_type, cfg_class, sensor_class)``; both classes may be
-            lazy ``"module:Class"`` strings.
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_sensors(register):
-        ...     register("StereoCamera", "my_pkg.stereo:StereoCameraCfg", "my_pkg.stereo:StereoCamera")
-    """
+    """Register sensors by ``sensor_type``: ``register(sensor_type, cfg_class, sensor_class)``."""
 
 
 @hookspec
 def embodichain_register_assets(register: AssetRegister) -> None:
-    """Register data roots searched by ``get_data_path``.
-
-    Args:
-        register: ``register(name, root)``; ``root`` is a directory or a zero-argument
-            callable returning one (called on first use).
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_assets(register):
-        ...     register("embodichain-assets", Path(__file__).parent / "data")
-    """
+    """Register data roots searched by ``get_data_path``: ``register(name, root)``, a directory
+    or a zero-argument callable returning one (called on first use)."""
 
 
 @hookspec
 def embodichain_register_tasks(register: TaskRegister) -> None:
-    """Register gym tasks; each is registered with gymnasium too.
+    """Register gym tasks (each goes into gymnasium's registry too): ``register(task_id,
+    "module:Class", *, max_episode_steps=None, kwargs=None, config=None, description="")``.
 
-    Args:
-        register: ``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None,
-            config=None, description="")``. ``entry_point`` is a ``"module:Class"`` string,
-            imported only by ``gymnasium.make``. ``max_episode_steps`` is the task's episode
-            limit: the env uses it when its config leaves ``max_episode_steps`` at the class
-            default (never gymnasium's ``TimeLimit``). ``config`` is the task's default gym
-            config (used by ``embodichain run-env <id>``).
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_tasks(register):
-        ...     register("PushCube-v1", "my_pkg.push:PushCubeEnv", max_episode_steps=200,
-        ...              description="Push a cube")
+    ``max_episode_steps`` is the task's episode limit: the env uses it when its config leaves
+    ``max_episode_steps`` at the class default (never gymnasium's ``TimeLimit``); ``config`` is
+    the default gym config ``embodichain run-env <id>`` runs.
     """
 
 
 @hookspec
 def embodichain_register_commands(register: CommandRegister) -> None:
-    """Register ``embodichain`` CLI subcommands.
-
-    Args:
-        register: ``register(name, target, help="")``; ``target`` is a ``"module:function"``
-            string (or a function) taking ``argv: list[str]`` and returning an exit code,
-            imported only when the command runs.
-
-    Example:
-        >>> @hookimpl
-        ... def embodichain_register_commands(register):
-        ...     register("dataset", "my_pkg.cli:main", help="Inspect datasets")
-    """
+    """Register ``embodichain`` subcommands: ``register(name, target, help="")``; ``target`` (a
+    ``"module:function"`` string, imported when the command runs) takes ``argv`` and returns
+    an exit code."""

@@ -1,20 +1,12 @@
-"""The plugin host: loads plugins, fills the registries, mirrors tasks into gymnasium.
+"""The plugin host: loads plugins, fills the registries, mirrors the tasks into gymnasium.
 
-``load_plugins()`` is lazy and idempotent. It registers the core's own commands
-(:mod:`embodichain_core.plugins.builtin`), then the setuptools entry points of the group
-``"embodichain"`` sorted by plugin name, so the outcome never depends on the install or
-discovery order. A plugin is named after its distribution (PEP 503-normalized), so two
-distributions declaring one entry point name both load. Each plugin's hooks write into a
-staging copy of the registries, merged only when all of them succeed: a plugin that fails
-(import error, unknown or misspelled hook, bad hook signature, a hook raising) contributes
-nothing, is reported in one line as a :class:`PluginLoadWarning` (the traceback is kept for
-``failed_plugins()`` and ``embodichain list plugins -v``), and does not take the others down.
-A name another plugin registers too is no failure: both stay, under their qualified names.
-
-Environment variables:
-    ``EMBODICHAIN_BLOCK_PLUGINS``: comma-separated plugin (distribution) or entry point
-        names to skip (``*`` skips all entry points).
-    ``EMBODICHAIN_TRACE_PLUGINS=1``: trace hook calls to stderr.
+``load_plugins()`` (lazy, idempotent) registers the core's commands, then the entry points
+of the group ``"embodichain"`` sorted by plugin name (the distribution's, PEP 503-normalized).
+Each plugin's hooks write into staging registries, merged when all of them succeed: a plugin
+that fails (import error, unknown hook, bad signature, a hook raising) contributes nothing, is
+reported in one line as a :class:`PluginLoadWarning` and leaves the others loaded.
+``EMBODICHAIN_BLOCK_PLUGINS=a,b`` skips plugins (``*``: every entry point);
+``EMBODICHAIN_TRACE_PLUGINS=1`` traces hook calls to stderr.
 """
 
 from __future__ import annotations
@@ -56,18 +48,9 @@ class NameClashWarning(UserWarning):
 
 @dataclass
 class PluginInfo:
-    """What ``list_plugins()`` reports about one plugin.
-
-    Attributes:
-        name: the distribution name (PEP 503-normalized) for an entry point, the given
-            name for a runtime plugin; qualified names start with it.
-        version: the distribution's version, ``""`` when unknown.
-        status: ``"loaded"``, ``"failed"`` or ``"blocked"``.
-        module: the entry point value or the plugin object's module.
-        error: the failure's traceback (``""`` unless failed).
-        registered: names registered per kind (``{"functors": [...], ...}``).
-        entry_point: the entry point's name (``""`` for runtime plugins).
-    """
+    """What ``list_plugins()`` reports about one plugin: its ``status`` (``"loaded"``,
+    ``"failed"`` or ``"blocked"``), the ``error`` traceback of a failure, the names it
+    ``registered`` per kind, and where it comes from."""
 
     name: str
     version: str = ""

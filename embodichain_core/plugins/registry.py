@@ -1,20 +1,9 @@
-"""Registries of named things that plugins provide, their entries and errors.
+"""Registries of what plugins provide: entries owned by their plugin, and the lookup errors.
 
-A :class:`Registry` maps names to :class:`Entry` objects, each owned by the plugin that
-registered it (its *provider*). Two plugins may register one name: both entries stay,
-each reachable by its qualified name ``<plugin>/<name>`` (for tasks, that is also the
-gymnasium id); the bare name is then ambiguous and looking it up raises
-:class:`AmbiguousNameError`, naming every provider and the qualified names. ``:`` only
-ever separates a Python import path (``"module:attr"``): a target given that way is
-imported on first :meth:`Registry.get`.
-
-Example:
-    >>> reg = Registry("functors")
-    >>> _ = reg.add("randomize_light", "my_pkg.events:randomize_light", provider="my-plugin")
-    >>> reg.get("randomise_light")
-    Traceback (most recent call last):
-    ...
-    embodichain_core.plugins.registry.UnknownNameError: unknown functor 'randomise_light'. Did you mean 'randomize_light'?
+Two plugins may register one name: both entries stay, each reachable by its qualified name
+``<plugin>/<name>`` (for a task, its gymnasium id); the bare name is then ambiguous
+(:class:`AmbiguousNameError` names the qualified names). ``:`` only separates a Python
+import path: a ``"module:attr"`` target is imported on first :meth:`Registry.get`.
 """
 
 from __future__ import annotations
@@ -43,13 +32,8 @@ class DuplicateRegistrationError(RegistryError, ValueError):
 
 
 class AmbiguousNameError(RegistryError, LookupError, ValueError):
-    """A name that does not say which plugin's entry it means.
-
-    Attributes:
-        name: the name asked for.
-        providers: the plugins it may mean, sorted.
-        choices: the qualified names to write instead, one per provider.
-    """
+    """A name that does not say which plugin's entry it means: ``providers`` (sorted) and, in
+    their order, the qualified names to write instead (``choices``)."""
 
     def __init__(self, message: str, name: str, providers: Sequence[str], choices: Sequence[str]):
         super().__init__(message)
@@ -117,15 +101,8 @@ _UNSET: Any = object()
 
 
 class Entry:
-    """One registration: ``name`` -> ``target`` provided by ``provider``.
-
-    Attributes:
-        name: the registered name (as spelled by the provider).
-        target: the object, or a lazy ``"module:attr"`` string.
-        provider: the plugin name (for entry points: the distribution name).
-        meta: extra data of the kind (``kind``/``category``/``description`` for functors...).
-        lazy: whether ``target`` is imported on first :meth:`resolve`.
-    """
+    """One registration: ``name`` -> ``target`` (an object, or a lazy ``"module:attr"``
+    string) provided by the plugin ``provider``, with the kind's ``meta`` data."""
 
     def __init__(self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None):
         self.name, self.target, self.provider = name, target, provider
@@ -140,11 +117,7 @@ class Entry:
         return self._value is not _UNSET
 
     def resolve(self) -> Any:
-        """The target object, importing a lazy target on first call.
-
-        Raises:
-            TargetImportError: naming the entry and its provider.
-        """
+        """The target object, imported on first call (:class:`TargetImportError` naming the entry)."""
         if self._value is _UNSET:
             self._value = self._import(self.target)
             if "description" in self.meta and not self.meta["description"]:
@@ -226,12 +199,8 @@ class Registry:
     def add(
         self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None
     ) -> Entry:
-        """Add an entry; re-adding an identical entry is a no-op.
-
-        Raises:
-            DuplicateRegistrationError: ``provider`` already registered ``name`` with another target.
-            ValueError: an empty name, a name with ``/`` or ``:``, or a malformed lazy target.
-        """
+        """Add an entry (an identical one again is a no-op); ``ValueError`` for a name with
+        ``/`` or ``:`` or a malformed lazy target."""
         if not isinstance(name, str) or not name or SEPARATOR in name or ":" in name:
             raise ValueError(
                 f"{self.noun} {name!r} from {provider!r}: names are non-empty strings without '/' or ':' "
@@ -283,12 +252,8 @@ class Registry:
         return (providers[prefix], bare) if found and bare and prefix in providers else None
 
     def find(self, name: str) -> Entry | None:
-        """The entry for ``name`` (bare or qualified), or ``None``.
-
-        Raises:
-            AmbiguousNameError: a bare name several plugins provide, or a qualified name
-                spelled with ``:`` (the separator of import paths), naming what to write.
-        """
+        """The entry for ``name`` (bare or qualified), or ``None``. :class:`AmbiguousNameError`
+        for a bare name several plugins provide, or a qualified name spelled with ``:``."""
         if not isinstance(name, str):
             return None
         split = self._split(name)
