@@ -231,8 +231,6 @@ def test_timing_is_exact(make_env, make_cfg) -> None:
     assert env.step_dt == pytest.approx(0.042, abs=1e-12)
     assert env.physics_frequency == pytest.approx(1 / 0.006)
     assert env.control_frequency == pytest.approx(1 / 0.042)
-    assert env.sim_freq == env.physics_frequency
-    assert env.control_freq == env.control_frequency
     assert env.metadata["render_fps"] == env.control_frequency
     assert "render_fps" not in BaseEnv.metadata
     assert "render_fps" not in EmbodiedEnv.metadata

@@ -1,4 +1,5 @@
-"""Env classes and configs (``BaseEnv`` is an alias of ``EmbodiedEnv``)."""
+"""Env classes and configs: ``BaseEnv`` (a step written in overrides, no managers) and
+``EmbodiedEnv`` (the configuration-driven env built on it)."""
 
 from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg, EnvCfg

@@ -1,7 +1,8 @@
 """``EmbodiedEnv``: the batched, configuration-driven env (leading ``num_envs`` dim everywhere).
 
-Construction (:mod:`embodichain_core.envs.env_build`): config -> timing and seed ->
-scene -> managers -> first observation and spaces -> action check -> summary.
+Construction (:mod:`embodichain_core.envs.env_build`): config -> timing and seed (shared
+with :class:`~embodichain_core.envs.base_env.BaseEnv`) -> scene -> managers -> first
+observation and spaces -> action check -> summary.
 :meth:`EmbodiedEnv.step` and :meth:`EmbodiedEnv.reset` each read top to bottom, one
 named phase after the other; docs/embodied_env.md lists the same phases with the
 same numbers. ``step`` auto-resets finished envs in the same call (gymnasium
@@ -11,31 +12,33 @@ with the mask ``info["_final_obs"]``.
 
 from __future__ import annotations
 
-import os
 import warnings
 from typing import Any, Optional
 
 import gymnasium as gym
-import numpy as np
 import torch
 from gymnasium.vector import AutoresetMode
 
 from embodichain_core.envs import env_build
+from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
-from embodichain_core.envs.episode_rng import EpisodeRandom, episode_seeds_option
+from embodichain_core.envs.episode_rng import episode_seeds_option
 from embodichain_core.envs.robot_io import RobotIO
 from embodichain_core.envs.rollout_buffer import RolloutBuffer
 from embodichain_core.envs.scene_setup import build_scene
-from embodichain_core.envs.spaces import batch_space, space_from_obs
 from embodichain_core.envs.summary import print_summary
 from embodichain_core.envs.task_api import TaskApi
-from embodichain_core.envs.timing import resolve_num_envs, resolve_timing
 from embodichain_core.managers.env_keys import check_after_first_reset
 from embodichain_core.viewing import attach_viewer
 
 
-class EmbodiedEnv(TaskApi, gym.Env):
+class EmbodiedEnv(BaseEnv):
     """The configuration-driven env (see docs/embodied_env.md).
+
+    It builds its scene from the config and runs its own ``step`` and ``reset``: the
+    :class:`BaseEnv` overrides of a hand-written step (``design_scene``,
+    ``define_action_space``, ``apply_action``, ``step_physics``, ``reset_envs``) are
+    not called here, and a subclass defining one is an error.
 
     Example:
         >>> env = gym.make("MyTask-v0", cfg=MyTaskCfg(num_envs=4))
@@ -46,7 +49,6 @@ class EmbodiedEnv(TaskApi, gym.Env):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
     cfg_cls: type = EmbodiedEnvCfg
     # set during construction (env_build)
-    cfg: Any
     single_action_space: gym.spaces.Box  # joint-position limits, or the action manager's ``pre`` terms
     scene: Any
     robot: Any
@@ -57,8 +59,18 @@ class EmbodiedEnv(TaskApi, gym.Env):
     reward_manager: Any
     action_manager: Any
     dataset_manager: Any
-    _active_qpos_adr: torch.Tensor
     _robot_io: RobotIO
+    _check_action: Any  # env_build.action_checker
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        hooks = [name for name in _BASE_ENV_HOOKS if name in cls.__dict__]
+        if hooks:
+            raise TypeError(
+                f"{cls.__name__} defines {', '.join(hooks)}, which only BaseEnv's step calls: EmbodiedEnv "
+                "builds its scene from the config and runs its own step (override compute_task_state, "
+                "get_reward, check_truncated, get_info or get_obs instead; or subclass BaseEnv)"
+            )
 
     def __init__(
         self,
@@ -70,27 +82,11 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self.event_manager = self.observation_manager = self.reward_manager = None
         self.action_manager = self.dataset_manager = None
         self._pre_terms = self._post_terms = self._obs_terms = self._reward_terms = False  # set once built
-        self.affordance_datas: dict[str, Any] = {}
-        self._detached_uids_for_reset: list[str] = []
         self._pending_env_keys: list = []  # env attributes to find after the first reset (env_keys)
         self.rollout_buffer: Optional[RolloutBuffer] = None
-        self._closed = False
         self._viewer: Optional[Any] = None  # headless: false opens one once built (embodichain_core.viewing)
-        # config, timing, seed
-        self.cfg = env_build.resolve_cfg(self.cfg_cls, cfg, kwargs)
-        self.metadata = dict(type(self).metadata)
-        self.render_mode = render_mode
-        self._num_envs = resolve_num_envs(self.cfg, num_envs)
-        self.physics_dt, self.sim_steps_per_control = resolve_timing(self.cfg)
-        self.step_dt = self.physics_dt * self.sim_steps_per_control
-        self.metadata["render_fps"] = self.control_frequency
-        sim_device = self.cfg.sim_cfg.sim_device
-        on_warp = self.cfg.sim_cfg.backend == "warp"  # its tensors live on sim_device
-        self.device = torch.device(sim_device if sim_device != "cuda" or on_warp else "cpu")
-        self._seed_rng(self.cfg.seed)
-        self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
-        self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
-        self._elapsed_np = self._elapsed_steps.numpy()  # same memory: the cheap increment of phase 5
+        # config, timing, device, seed, counters (BaseEnv)
+        self._init_run(cfg, num_envs, render_mode, kwargs)
         # phase 10 asks the task for truncations only when it overrides check_truncated (the default has none)
         self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
         self._default_reward = type(self).get_reward is TaskApi.get_reward  # zeros: phase 8 skips it
@@ -103,9 +99,7 @@ class EmbodiedEnv(TaskApi, gym.Env):
         self._obs_terms = bool(self.observation_manager is not None and len(self.observation_manager))
         self._reward_terms = bool(self.reward_manager is not None and len(self.reward_manager))
         self._init_obs = obs = self.get_obs()
-        self.single_observation_space = space_from_obs(obs)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._init_spaces(obs)
         self._check_action = env_build.action_checker(self)
         if self.cfg.init_rollout_buffer or env_build.recorders_need_buffer(self.dataset_manager):
             self.cfg.init_rollout_buffer = True
@@ -265,15 +259,6 @@ class EmbodiedEnv(TaskApi, gym.Env):
         torch.where(dones, success.to(episode_success.device, torch.bool), episode_success, out=episode_success)
         return terminated, truncated, dones
 
-    def _auto_reset(self, obs: Any, dones: torch.Tensor, info: dict) -> Any:
-        """Phase 12: reset the done envs; the terminal step stays in ``info``."""
-        info["final_obs"] = obs
-        info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs",)}
-        info["_final_obs"] = dones.clone()
-        done_ids = torch.from_numpy(np.flatnonzero(dones.numpy())) if dones.is_cpu else torch.nonzero(dones).flatten()
-        new_obs, _ = self.reset(options={"reset_ids": done_ids})
-        return new_obs
-
     def _commit_or_discard(self, env_ids: torch.Tensor, save: bool) -> None:
         """Reset phase 3: successful episodes (all with ``save_failed_episodes``) are committed."""
         manager = self.dataset_manager
@@ -289,40 +274,21 @@ class EmbodiedEnv(TaskApi, gym.Env):
         manager.commit(env_ids[keep])
         manager.discard(env_ids[~keep])
 
-    @property
-    def out_of_space_actions(self) -> int:
-        """Env-steps so far whose action had a value outside the action space (the action
-        terms and drives clipped it; ``strict_actions`` raises instead)."""
-        return int(self._check_action.out_of_space)
-
-    def _seed_rng(self, seed: Optional[int]) -> None:
-        """Seed ``env.generator``, ``env.np_random`` and the episode streams ``env.rng``."""
-        if seed is None or seed == -1:
-            seed = int.from_bytes(os.urandom(4), "little") >> 1
-        self.cfg.seed = int(seed)
-        self.generator = torch.Generator().manual_seed(int(seed))
-        self.np_random_generator = np.random.default_rng(int(seed))
-        self._np_random = self.np_random_generator
-        if getattr(self, "rng", None) is None:
-            self.rng = EpisodeRandom(self.num_envs, int(seed))
-        else:
-            self.rng.seed(int(seed))
-
     def close(self) -> None:
         """Finalize recorders (never committing partial episodes) and release sensors; idempotent."""
         if self._closed:
             return
-        self._closed = True
         errors: list[Exception] = []
         if self.dataset_manager is not None:
             try:
                 self.dataset_manager.finalize()
             except Exception as err:
                 errors.append(err)
-        for sensor in self.sensors.values():
-            sensor.close()
+        super().close()  # the sensors
         if self._viewer is not None:
             self._viewer.close()
         if errors:
             raise errors[0]
 
+
+_BASE_ENV_HOOKS = ("design_scene", "define_action_space", "apply_action", "step_physics", "reset_envs")

@@ -1,4 +1,5 @@
-"""The construction summary of an env: timing, scene and every manager."""
+"""The construction summary of an env: timing, scene and every manager (a ``BaseEnv``
+has none: its summary ends with the scene)."""
 
 from __future__ import annotations
 
@@ -17,8 +18,11 @@ def summary_text(env: Any) -> str:
     add(f"│ Control  {env.step_dt:g} s ({env.control_frequency:g} Hz, {env.sim_steps_per_control} physics steps)")
     add(f"│ Episode limit  {env.cfg.max_episode_steps} steps")
     scene = env.scene
-    add(f"│ Robot  {env.robot.uid} ({env.robot.dof} joints, {len(env.active_joint_ids)} active)")
+    robot = getattr(env, "robot", None)  # EmbodiedEnv's; a BaseEnv's robots are listed below
+    if robot is not None:
+        add(f"│ Robot  {robot.uid} ({robot.dof} joints, {len(env.active_joint_ids)} active)")
     for label, items in (
+        ("Robots", {} if robot is not None else scene.robots),
         ("Sensors", scene.sensors),
         ("Lights", scene.lights),
         ("Rigid objects", scene.rigid_objects),
@@ -28,6 +32,13 @@ def summary_text(env: Any) -> str:
     ):
         if items:
             add(f"│ {label}  {', '.join(items)}")
+    if hasattr(env, "event_manager"):
+        _manager_lines(env, add)
+    add("╰─ Ready")
+    return "\n".join(lines)
+
+
+def _manager_lines(env: Any, add: Any) -> None:
     managers = [
         ("Event", env.event_manager),
         ("Observation", env.observation_manager),
@@ -44,8 +55,6 @@ def summary_text(env: Any) -> str:
         add(f"│   {label}:")
         for mode, name, detail in manager.summary_rows():
             add(f"│     [{mode}] {name}: {detail}")
-    add("╰─ Ready")
-    return "\n".join(lines)
 
 
 def backend_text(env: Any) -> str:

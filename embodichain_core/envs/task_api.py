@@ -42,9 +42,6 @@ class TaskApi:
     def physics_frequency(self) -> float:
         return 1.0 / self.physics_dt
 
-    sim_freq = physics_frequency
-    control_freq = control_frequency
-
     @property
     def elapsed_steps(self) -> torch.Tensor:
         """Each env's step counter (live; 0 right after its reset)."""
