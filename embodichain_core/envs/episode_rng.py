@@ -160,7 +160,7 @@ class EpisodeRandom:
             return self._all
         if isinstance(env_ids, np.ndarray) and env_ids.dtype == np.int64 and env_ids.ndim == 1:
             return env_ids
-        ids = env_ids.numpy() if hasattr(env_ids, "numpy") else np.asarray(env_ids)  # torch: shares memory
+        ids = env_ids.cpu().numpy() if hasattr(env_ids, "cpu") else np.asarray(env_ids)  # a CPU tensor: shared
         if ids.dtype != np.int64 or ids.ndim != 1:
             ids = ids.astype(np.int64).reshape(-1)
         return ids

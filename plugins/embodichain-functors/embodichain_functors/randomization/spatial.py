@@ -366,7 +366,7 @@ def randomize_target_pose(
     """
     ids = env_ids_of(env, env_ids)
     if getattr(env, store_key, None) is None:
-        setattr(env, store_key, torch.eye(4).repeat(env.num_envs, 1, 1))
+        setattr(env, store_key, torch.eye(4, device=getattr(env, "device", None)).repeat(env.num_envs, 1, 1))
     init = np.broadcast_to(_IDENTITY_POSE, (len(ids), 7))
     if reference_entity_cfg is not None:
         init = env.scene[reference_entity_cfg.uid].get_local_pose()[ids].to(torch.float64)
