@@ -47,6 +47,7 @@ def measure_warp(width: int, height: int, worlds: int, renderer: str, args: argp
     start = time.perf_counter()
     camera.update()  # compiles (or loads) the render kernel
     first = time.perf_counter() - start
+    scene.sim.step(1)  # untimed: the first step compiles (or loads) MuJoCo Warp's physics kernels
 
     def step() -> None:
         scene.sim.step(1)
