@@ -125,6 +125,39 @@ def create_gl_context(width: int, height: int) -> Any:
     return context
 
 
+#: Backends whose contexts :func:`release_current` can unbind (so another thread may bind them).
+THREADED_BACKENDS = ("egl", "osmesa")
+
+
+def release_current() -> None:
+    """Make no OpenGL context current on this thread (EGL and OSMesa).
+
+    A context is current in at most one thread; after this, another thread can bind the
+    one that was current here (``context.as_current()``).
+
+    Raises:
+        RenderingBackendError: the backend in effect is not in :data:`THREADED_BACKENDS`.
+    """
+    backend = gl_backend()
+    if backend == "egl":
+        from mujoco import egl
+        from OpenGL import EGL
+
+        if egl.EGL_DISPLAY is not None:
+            EGL.eglMakeCurrent(egl.EGL_DISPLAY, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, EGL.EGL_NO_CONTEXT)
+    elif backend == "osmesa":
+        from mujoco import osmesa as mj_osmesa
+        from OpenGL import GL, osmesa
+
+        osmesa.OSMesaMakeCurrent(None, None, GL.GL_FLOAT, 0, 0)
+        mj_osmesa._current_context.ref = None
+    else:
+        raise RenderingBackendError(
+            f"cannot release an OpenGL context of MUJOCO_GL={backend!r} for another thread; "
+            f"use one of {', '.join(THREADED_BACKENDS)}"
+        )
+
+
 def mujoco_imported_first() -> bool:
     """True when ``mujoco`` was imported before :func:`configure_gl` (diagnostics)."""
     return "mujoco" in sys.modules and not _state["configured"]

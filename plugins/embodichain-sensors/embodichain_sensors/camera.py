@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.rendering import THREADED_BACKENDS, gl_backend
 from embodichain_core.sim.entities.base import env_index
 from embodichain_core.sim.sensor_base import BaseSensor
 from embodichain_core.utils.math import compose_frames, matrix_to_quat, quat_normalize, quat_to_matrix
@@ -42,6 +43,7 @@ from embodichain_sensors import geometry as geo
 from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
+from embodichain_sensors.render_pool import RenderPool
 from embodichain_sensors.renderer import SensorRenderer
 from embodichain_sensors.warp_renderer import WarpCameraRenderer, choose_renderer
 
@@ -76,6 +78,7 @@ class Camera(BaseSensor):
         self._local_pos, self._local_rot = self._initial_local_pose()
         self.views = self._make_views()
         self._renderer: Optional[SensorRenderer] = None
+        self._pool: Optional[RenderPool] = None
         self._warp: Optional[WarpCameraRenderer] = None
         self._path = f"sensor {self.uid!r}"
         self._ids: Optional[EntityIds] = None
@@ -128,16 +131,29 @@ class Camera(BaseSensor):
 
     def _check_renderer(self) -> str:
         """The renderer in effect (see ``CameraCfg.renderer``); what it cannot do raises here."""
-        return choose_renderer(self.scene.sim_cfg, getattr(self.cfg, "renderer", None), self.uid, self._path)
+        chosen = choose_renderer(self.scene.sim_cfg, getattr(self.cfg, "renderer", None), self.uid, self._path)
+        threads = int(getattr(self.cfg, "render_threads", 1) or 1)
+        backend = gl_backend()
+        if chosen == "opengl" and threads > 1 and self.num_envs > 1 and backend not in THREADED_BACKENDS:
+            raise ConfigError(
+                f"{self._path}.render_threads",
+                f"sensor {self.uid!r}: {threads} render threads need MUJOCO_GL "
+                f"{' or '.join(THREADED_BACKENDS)} (an OpenGL context handed between threads), "
+                f"not {backend!r}; set render_threads: 1",
+            )
+        return chosen
 
     # -- rendering -------------------------------------------------------------------------
     @property
     def renderer(self) -> SensorRenderer:
         """The sensor's renderer (created on first use; raises when no GL backend works)."""
         if self._renderer is None:
-            quality = getattr(getattr(self.scene.sim_cfg, "render_cfg", None), "quality", "fast")
-            self._renderer = SensorRenderer(self.scene.model, self.cfg.width, self.cfg.height, quality=quality)
+            self._renderer = self._new_renderer()
         return self._renderer
+
+    def _new_renderer(self) -> SensorRenderer:
+        quality = getattr(getattr(self.scene.sim_cfg, "render_cfg", None), "quality", "fast")
+        return SensorRenderer(self.scene.model, self.cfg.width, self.cfg.height, quality=quality)
 
     def _wants(self) -> dict[str, bool]:
         cfg = self.cfg
@@ -156,16 +172,43 @@ class Camera(BaseSensor):
         wants, (n, h, w) = self._wants(), (self.num_envs, self.cfg.height, self.cfg.width)
         raw = {f"{key}{v.suffix}": _alloc(key, n, h, w) for v in self.views for key, on in wants.items() if on}
         poses = self.get_view_poses()
-        renderer, envs = self.renderer, self._envs
-        renderer.make_current()
-        near, far = self.cfg.near, self.cfg.far
-        for i in range(n):
-            for k, (view, (pos, rot)) in enumerate(zip(self.views, poses)):
-                renderer.set_camera(pos[i], rot[i], view.intrinsics[i], near, far)
-                if k == 0:  # after the camera: MuJoCo places the ground patch from it
-                    renderer.update_scene(envs.model(i), envs.data(i), view.camera_id)
-                self._render_view(renderer, view.suffix, i, wants, raw)
+        pool = self._render_pool()
+        if pool is None:
+            renderer = self.renderer
+            renderer.make_current()
+            for i in range(n):
+                self._prepare_env(renderer, i, poses)
+                self._render_env(renderer, i, poses, wants, raw)
+        else:
+            pool.run(
+                n,
+                lambda r, i: self._prepare_env(r, i, poses),
+                lambda r, i: self._render_env(r, i, poses, wants, raw),
+            )
         self._data = self._outputs(raw)
+
+    def _prepare_env(self, renderer: SensorRenderer, i: int, poses: list) -> None:
+        """Env ``i``'s scene from the first view's camera (one scene update for all views;
+        the camera first: MuJoCo places the ground patch from it)."""
+        view, (pos, rot) = self.views[0], poses[0]
+        renderer.set_camera(pos[i], rot[i], view.intrinsics[i], self.cfg.near, self.cfg.far)
+        renderer.update_scene(self._envs.model(i), self._envs.data(i), view.camera_id)
+
+    def _render_env(self, renderer: SensorRenderer, i: int, poses: list, wants: dict, raw: dict) -> None:
+        """Every view of env ``i`` (only the camera moves between views)."""
+        for k, (view, (pos, rot)) in enumerate(zip(self.views, poses)):
+            if k:
+                renderer.set_camera(pos[i], rot[i], view.intrinsics[i], self.cfg.near, self.cfg.far)
+            self._render_view(renderer, view.suffix, i, wants, raw)
+
+    def _render_pool(self) -> Optional[RenderPool]:
+        """The pool of ``render_threads`` renderers (``None``: one renderer, this thread)."""
+        threads = min(int(getattr(self.cfg, "render_threads", 1) or 1), self.num_envs)
+        if threads <= 1:
+            return None
+        if self._pool is None:
+            self._pool = RenderPool(self._new_renderer, threads)
+        return self._pool
 
     @property
     def warp_renderer(self) -> WarpCameraRenderer:
@@ -303,6 +346,9 @@ class Camera(BaseSensor):
 
     def close(self) -> None:
         self._warp = None
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

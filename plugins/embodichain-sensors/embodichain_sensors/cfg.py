@@ -70,6 +70,9 @@ class CameraCfg(SensorCfg):
             on ``sim_cfg.backend: warp`` only), ``"opengl"`` (MuJoCo's OpenGL renderer, one
             env at a time, any backend) or ``None``: ``"warp"`` on the warp backend, else
             ``"opengl"`` (docs/sensors.md).
+        render_threads: with ``renderer: "opengl"``, how many envs rasterize at once, each
+            on its own OpenGL context and worker thread (``MUJOCO_GL`` egl or osmesa; the
+            same images). ``1``: one context, on the calling thread.
     """
 
     @configclass
@@ -113,8 +116,12 @@ class CameraCfg(SensorCfg):
     enable_normal: bool = False
     enable_position: bool = False
     renderer: Optional[str] = None
+    render_threads: int = 1
 
     def __post_init__(self) -> None:
+        threads = self.render_threads
+        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+            raise ConfigError("render_threads", f"must be an int >= 1, got {threads!r}")
         if self.renderer is not None and self.renderer not in RENDERERS:
             raise ConfigError(
                 "renderer", f"must be one of {', '.join(map(repr, RENDERERS))} or None (auto), got {self.renderer!r}"

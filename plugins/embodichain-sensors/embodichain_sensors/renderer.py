@@ -26,12 +26,12 @@ from __future__ import annotations
 
 import atexit
 import weakref
-from typing import Any, Optional, Sequence
+from typing import Any, ContextManager, Optional, Sequence
 
 import mujoco
 import numpy as np
 
-from embodichain_core.rendering import create_gl_context
+from embodichain_core.rendering import create_gl_context, release_current
 from embodichain_sensors.geometry import frustum
 
 _FLAGS = mujoco.mjtRndFlag
@@ -96,6 +96,18 @@ class SensorRenderer:
         if self._gl is None:
             raise RuntimeError("the renderer is closed")
         self._gl.make_current()
+
+    def release_current(self) -> None:
+        """Unbind this renderer's GL context from this thread, for :meth:`current` elsewhere."""
+        self.make_current()
+        release_current()
+
+    def current(self) -> ContextManager[Any]:
+        """This renderer's GL context bound on this thread for a ``with`` block (unbound after
+        it when no context was current before)."""
+        if self._gl is None:
+            raise RuntimeError("the renderer is closed")
+        return self._gl.as_current()
 
     def update_scene(self, model: mujoco.MjModel, data: mujoco.MjData, camera_id: int = -1) -> None:
         """Fill the scene from ``model`` and ``data`` (one env's; per-env colours show).

@@ -1,0 +1,97 @@
+"""``render_threads``: envs rendered on several OpenGL contexts and threads give the same
+images as one context; errors of a job surface; the config is checked."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+import torch
+
+from sensors_helpers import CUBE_POS
+
+from embodichain_core.config.errors import ConfigError
+from embodichain_sensors import camera as camera_module
+from embodichain_sensors.cfg import CameraCfg, StereoCameraCfg
+from embodichain_sensors.render_pool import RenderPool
+
+EYE = (CUBE_POS[0] - 0.4, CUBE_POS[1], 0.9)
+
+
+def stereo(**kw) -> StereoCameraCfg:
+    base = dict(
+        uid="stereo",
+        width=48,
+        height=32,
+        intrinsics=(40.0, 40.0, 24.0, 16.0),
+        left_to_right_pos=(0.06, 0.0, 0.0),
+        enable_depth=True,
+        enable_mask=True,
+        extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes"),
+    )
+    base.update(kw)
+    return StereoCameraCfg(**base)
+
+
+def test_threads_render_the_same_images_as_one_context(scene_factory):
+    scene, (cam,) = scene_factory(stereo(), robot=True, num_envs=3)
+    scene["arm"].set_qpos(torch.tensor([[0.0], [0.6], [-0.6]]), target=False)  # three views of the scene
+    cam.cfg.render_threads = 1
+    cam.update()
+    serial = {k: v.clone() for k, v in cam.get_data().items()}
+    assert not torch.equal(serial["color"][0], serial["color"][1])  # the envs differ
+    cam.cfg.render_threads = 2
+    cam.update()
+    pooled = cam.get_data()
+    assert cam._pool is not None
+    assert cam._pool.threads == 2
+    assert serial.keys() == pooled.keys()
+    for key in serial:
+        assert torch.equal(serial[key], pooled[key]), key
+    cam.cfg.render_threads = 1  # the serial renderer still works beside the pool
+    cam.update()
+    assert torch.equal(cam.get_data()["color_right"], serial["color_right"])
+
+
+def test_threads_are_capped_at_the_env_count(scene_factory):
+    _, (cam,) = scene_factory(stereo(render_threads=4), robot=True, num_envs=2)
+    cam.update()
+    assert cam._pool is not None
+    assert cam._pool.threads == 2
+
+
+def test_a_failing_job_is_raised_after_every_job_stopped(scene_factory):
+    _, (cam,) = scene_factory(stereo(), robot=True, num_envs=1)
+    pool = RenderPool(cam._new_renderer, threads=2)
+    done: list[int] = []
+    lock = threading.Lock()
+
+    def render(renderer, i):
+        if i == 1:
+            raise ValueError("env 1 failed")
+        with lock:
+            done.append(i)
+
+    try:
+        with pytest.raises(ValueError, match="env 1 failed"):
+            pool.run(4, prepare=lambda r, i: None, render=render)
+        assert sorted(done) == [0, 2]  # env 3 waits for renderer 1, whose job failed
+        pool.run(2, prepare=lambda r, i: None, render=lambda r, i: done.append(10 + i))
+        assert sorted(done)[-2:] == [10, 11]
+    finally:
+        pool.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        pool.run(1, prepare=lambda r, i: None, render=lambda r, i: None)
+
+
+@pytest.mark.parametrize("bad", [0, -1, True, 1.5])
+def test_render_threads_must_be_a_positive_int(bad):
+    with pytest.raises(ConfigError, match="render_threads"):
+        CameraCfg(uid="cam", render_threads=bad)
+
+
+def test_threads_need_a_backend_that_hands_contexts_between_threads(scene_factory, monkeypatch):
+    _, (cam,) = scene_factory(stereo(render_threads=2), robot=True, num_envs=2)
+    monkeypatch.setattr(camera_module, "gl_backend", lambda: "glfw")
+    with pytest.raises(ConfigError, match="render_threads.*egl or osmesa"):
+        cam.bind()
