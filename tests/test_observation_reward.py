@@ -61,10 +61,11 @@ def test_add_nested_name_creates_levels_and_space(make_env) -> None:
 def test_modify_keeps_returned_tensor(make_env) -> None:
     env = make_env(observations={"shift": ObservationCfg(func=plus_ten, mode="modify", name="robot/qpos")})
     obs, _ = env.reset()
-    raw = env.sim.qpos[:, env._active_qpos_adr].float()
+    adr = env.robot.qpos_adr[env.active_joint_ids]
+    raw = env.sim.qpos[:, adr].float()
     assert torch.allclose(obs["robot"]["qpos"], raw + 10.0)
     obs, *_ = env.step(zero_action(env))
-    assert torch.allclose(obs["robot"]["qpos"], env.sim.qpos[:, env._active_qpos_adr].float() + 10.0)
+    assert torch.allclose(obs["robot"]["qpos"], env.sim.qpos[:, adr].float() + 10.0)
 
 
 def test_modify_in_place_and_declaration_order(make_env) -> None:
