@@ -221,3 +221,20 @@ def test_a_constructor_error_relative_to_the_params_gets_the_entry_path(make_env
         make_env(make_cfg(dataset={"rec": DatasetFunctorCfg(func=PickyRecorder, params={"tag": "t"})}))
     assert err.value.path == "env.dataset.rec.params.tag"
     assert "must name a writable place" in str(err.value)
+
+
+class SuccessOnlyInInfo(FlagEnv):
+    """``is_task_success`` never holds: only the terminal step's ``info["success"]`` says so."""
+
+    def is_task_success(self, **kwargs: Any) -> torch.Tensor:
+        return torch.zeros(self.num_envs, dtype=torch.bool)
+
+
+def test_an_episode_that_ended_in_success_is_committed(make_env, make_cfg) -> None:
+    cfg = make_cfg(dataset={"rec": DatasetFunctorCfg(func=EpisodeRecorder, params={"tag": "t"})})
+    env = make_env(cfg, env_cls=SuccessOnlyInInfo)
+    rec = env.dataset_manager.get_functor("rec")
+    env.reset()
+    env.success_flags[1] = True
+    env.step(zero_action(env))  # env 1 terminates in success and is auto-reset in this step
+    assert rec.saved == [(1, 1, "t")]

@@ -110,6 +110,8 @@ class BaseEnv(TaskApi, gym.Env):
         self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
         self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
         self._elapsed_np = self._elapsed_steps.numpy()  # same memory (EmbodiedEnv's counters)
+        # the dones ask the task for truncations only when it overrides check_truncated (the default has none)
+        self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
 
     def _init_spaces(self, obs: Any) -> None:
         """Observation spaces from the first observation; the batched action space."""
@@ -136,7 +138,7 @@ class BaseEnv(TaskApi, gym.Env):
         info["final_obs"] = obs
         info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs",)}
         info["_final_obs"] = dones.clone()
-        done_ids = torch.from_numpy(np.flatnonzero(dones.numpy())) if dones.is_cpu else torch.nonzero(dones).flatten()
+        done_ids = torch.from_numpy(np.flatnonzero(dones.cpu().numpy()))  # env ids live on the CPU
         new_obs, _ = self.reset(options={"reset_ids": done_ids})
         return new_obs
 
@@ -189,16 +191,17 @@ class BaseEnv(TaskApi, gym.Env):
     def _dones(
         self, obs: Any, info: dict, diverged: list[int]
     ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
-        """``(terminated, truncated, dones)``; ``dones`` is None when no env is done."""
+        """``terminated = success | fail`` (none with ``ignore_terminations``); ``truncated =
+        check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
         success, fail = info["success"], info["fail"]
         terminated = torch.zeros_like(success) if self.cfg.ignore_terminations else success | fail
         truncated = self._elapsed_steps >= self.max_episode_steps
         info["diverged"] = torch.zeros(self.num_envs, dtype=torch.bool)
         if diverged:
-            info["diverged"][diverged] = True
-            truncated[diverged] = True
+            truncated[diverged] = info["diverged"][diverged] = True
             warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
-        truncated = truncated | self.check_truncated(obs, info).to(truncated.device)
+        if self._task_truncates:
+            truncated = self.check_truncated(obs, info).to(truncated.device) | truncated
         dones = terminated | truncated.to(terminated.device)
         return terminated, truncated, dones if bool(dones.any()) else None
 

@@ -12,7 +12,6 @@ with the mask ``info["_final_obs"]``.
 
 from __future__ import annotations
 
-import warnings
 from typing import Any, Optional
 
 import gymnasium as gym
@@ -87,8 +86,6 @@ class EmbodiedEnv(BaseEnv):
         self._viewer: Optional[Any] = None  # headless: false opens one once built (embodichain_core.viewing)
         # config, timing, device, seed, counters (BaseEnv)
         self._init_run(cfg, num_envs, render_mode, kwargs)
-        # phase 10 asks the task for truncations only when it overrides check_truncated (the default has none)
-        self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
         self._default_reward = type(self).get_reward is TaskApi.get_reward  # zeros: phase 8 skips it
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
         # scene, managers, spaces, the action check
@@ -241,22 +238,15 @@ class EmbodiedEnv(BaseEnv):
     def _dones(
         self, obs: Any, info: dict, diverged: list[int]
     ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
-        """Phase 10: ``terminated = success | fail`` (none with ``ignore_terminations``);
-        ``truncated = check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
-        success, fail = info["success"], info["fail"]
-        terminated = torch.zeros_like(success) if self.cfg.ignore_terminations else success | fail
-        truncated = self._elapsed_steps >= self.max_episode_steps
-        info["diverged"] = torch.zeros(self.num_envs, dtype=torch.bool)
-        if diverged:
-            truncated[diverged] = info["diverged"][diverged] = True
-            warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
-        if self._task_truncates:
-            truncated = self.check_truncated(obs, info) | truncated
-        dones = terminated | truncated
-        if not bool(dones.any()):
-            return terminated, truncated, None
-        episode_success = self._episode_success
-        torch.where(dones, success.to(episode_success.device, torch.bool), episode_success, out=episode_success)
+        """Phase 10: :meth:`BaseEnv._dones` (``terminated = success | fail``, none with
+        ``ignore_terminations``; ``truncated = check_truncated | time limit | diverged``;
+        ``dones`` None when no env is done); a finished episode's success is kept for the
+        dataset's commit (reset phase 3)."""
+        terminated, truncated, dones = super()._dones(obs, info, diverged)
+        if dones is not None:
+            episode_success = self._episode_success
+            success = info["success"].to(episode_success.device, torch.bool)
+            torch.where(dones.to(episode_success.device), success, episode_success, out=episode_success)
         return terminated, truncated, dones
 
     def _commit_or_discard(self, env_ids: torch.Tensor, save: bool) -> None:
