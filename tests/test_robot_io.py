@@ -33,7 +33,8 @@ def test_host_and_torch_paths_agree(make_env, joints) -> None:
     env = make_env()
     env.reset()
     fast, slow = _pair(env, joints)
-    assert fast.host and not slow.host
+    assert fast.host
+    assert not slow.host
     gen = torch.Generator().manual_seed(0)
     for key in ("qpos", "qvel", "qf"):
         value = torch.rand(2, len(joints), generator=gen)

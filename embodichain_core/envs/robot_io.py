@@ -53,9 +53,7 @@ class RobotIO:
             an actuator, and those actuators' ids.
     """
 
-    def __init__(
-        self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int, host: Optional[bool] = None
-    ):
+    def __init__(self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int, host: Optional[bool] = None):
         aid = torch.as_tensor(active_joint_ids, dtype=torch.long)
         self.sim, self.num_envs = sim, int(num_envs)
         self.active_joint_ids = list(active_joint_ids)
