@@ -206,11 +206,19 @@ def test_missing_overrides_and_misplaced_hooks() -> None:
         NoScene(EnvCfg(verbose=False))
 
     class DiscreteCart(CartReach):
+        closed = 0
+
         def define_action_space(self) -> Any:
             return gym.spaces.Discrete(3)
 
+        def close(self) -> None:
+            type(self).closed += 1
+            super().close()
+
     with pytest.raises(TypeError, match="define_action_space must return a 1-D gym.spaces.Box"):
         DiscreteCart(EnvCfg(verbose=False))
+    assert DiscreteCart.closed == 1  # a failed build closes what it opened
+
     with pytest.raises(TypeError, match="defines apply_action, which only BaseEnv's step calls"):
 
         class Confused(EmbodiedEnv):

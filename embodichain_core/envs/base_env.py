@@ -76,9 +76,19 @@ class BaseEnv(TaskApi, gym.Env):
         check_run_settings(self.cfg)
         check_sim(self.cfg.sim_cfg, "sim_cfg")
         self.scene = Scene(self.cfg.sim_cfg, self.num_envs, str(self.device))
+        self.sensors = self.scene.sensors  # filled as design_scene adds them
+        try:
+            self._build_task()
+        except BaseException:
+            self.close()  # nothing half-built stays open (sensors' renderers)
+            raise
+        if self.cfg.verbose:
+            print_summary(self)
+
+    def _build_task(self) -> None:
+        """The task's scene, its action space, the first observation and the spaces."""
         self.design_scene(self.scene)
         self.scene.build()
-        self.sensors = self.scene.sensors
         space = self.define_action_space()
         if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
             raise TypeError(
@@ -87,8 +97,6 @@ class BaseEnv(TaskApi, gym.Env):
         self.single_action_space = space
         self._init_spaces(self.get_obs())
         self._check_action = ActionChecker(self.num_envs, [space.shape[0]], self.device, self.action_space)
-        if self.cfg.verbose:
-            print_summary(self)
 
     # -- what EmbodiedEnv shares ----------------------------------------------------------------
     def _init_run(self, cfg: Any, num_envs: Optional[int], render_mode: Optional[str], overrides: dict) -> None:
