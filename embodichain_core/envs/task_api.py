@@ -1,5 +1,5 @@
-"""The members of :class:`~embodichain_core.envs.embodied_env.EmbodiedEnv` that tasks and
-functors use besides the loop: sizes and timing, the task override points
+"""The members of :class:`~embodichain_core.envs.base_env.BaseEnv` and ``EmbodiedEnv`` that
+tasks and functors use besides the loop: sizes and timing, the task override points
 (``compute_task_state``, ``get_reward``, ``check_truncated``, ``is_task_success``,
 ``get_info``, ``evaluate``), and small extras (affordances, detached entities, sensors).
 
@@ -16,7 +16,7 @@ import torch
 
 
 class TaskApi:
-    """Mixin of :class:`EmbodiedEnv` (which sets ``_num_envs``, ``step_dt``, ``physics_dt``,
+    """Mixin of :class:`BaseEnv` (which sets ``_num_envs``, ``step_dt``, ``physics_dt``,
     ``_elapsed_steps``, ``rng``, ``scene``, ``sensors`` and ``affordance_datas``)."""
 
     _num_envs: int
