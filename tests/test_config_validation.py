@@ -16,9 +16,9 @@ from embodichain_core.config.checks import check_int, check_number, check_range,
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.config.loader import load_gym_config
 from embodichain_core.config.resources import MEMORY_LIMIT_ENV, available_memory, check_memory, estimate_memory
-from embodichain_core.config.sections import check_event_mode, close_modes
 from embodichain_core.envs import EmbodiedEnv
 from embodichain_core.managers import EventCfg, ObservationCfg, SceneEntityCfg
+from embodichain_core.managers.event_manager import check_event_mode
 from embodichain_core.managers.param_rules import check_named_params, check_param_types
 from embodichain_core.sim.cfg import LightCfg, SensorCfg
 from embodichain_core.utils.configclass import configclass
@@ -130,13 +130,25 @@ def test_light_ambient_and_group_values() -> None:
 
 
 # -- manager sections and event modes ---------------------------------------------------------------
-def test_close_modes_catches_typos_only() -> None:
-    assert close_modes("rset", ["reset"]) == ["reset"]
-    assert close_modes("intervall", ["interval"]) == ["interval"]
-    assert close_modes("Reset", ["reset"]) == ["reset"]
-    assert close_modes("rseet", ["reset"]) == ["reset"]
-    assert close_modes("attach", ["startup", "reset", "interval"]) == []
-    assert close_modes("test", ["reset"]) == []
+@pytest.mark.parametrize(
+    "mode, declared, near",
+    [
+        ("rset", [], "reset"),
+        ("intervall", [], "interval"),
+        ("Reset", [], "reset"),
+        ("rseet", [], "reset"),
+        ("atach", ["attach"], "attach"),
+        ("attach", [], None),
+        ("every_step", [], None),
+    ],
+)
+def test_event_mode_typos_are_told_from_undeclared_modes(mode: str, declared: list, near: Any) -> None:
+    reason = raise_path(check_event_mode, mode, "env.events.x", declared).reason
+    if near is None:
+        assert "Did you mean" not in reason
+        assert "must be declared in env.custom_event_modes" in reason
+    else:
+        assert f"Did you mean {near!r}" in reason
 
 
 @pytest.mark.parametrize(

@@ -485,3 +485,27 @@ def test_rollout_buffer_holds_each_envs_episode_and_clears_on_reset(make_cfg):
     assert torch.equal(ep["obs/robot/qpos"][0], obs0["robot"]["qpos"][1])  # frame 0 = the obs acted on
     env.reset(options={"reset_ids": [0]})
     assert buf.length.tolist() == [0, 3]
+
+
+def randomize_cube_tint(env: Any, env_ids: Any) -> None:
+    env.__dict__.setdefault("visual_calls", []).append("tint")
+
+
+randomize_cube_tint.__module__ = "some_plugin.randomization.visual"  # a module name decides nothing
+
+
+def test_visual_randomization_is_what_the_registry_or_the_functor_declares(make_env) -> None:
+    from embodichain_core.plugins import hookimpl, isolated_plugins, register_plugin
+
+    class TintPlugin:
+        @hookimpl
+        def embodichain_register_functors(self, register: Any) -> None:
+            register("randomize_ec_loop_tint", randomize_cube_tint, kind="event", category="randomization.visual")
+
+    tint = f"{__name__}:randomize_cube_tint"
+    events = {"by_path": EventCfg(func=tint, mode="reset"), "by_func": EventCfg(func=randomize_cube_tint)}
+    assert make_env(events=events, filter_visual_rand=True).event_manager.active_functors == ["by_path", "by_func"]
+    with isolated_plugins():
+        register_plugin(TintPlugin(), name="ec-loop-tint")
+        events = {"by_name": EventCfg(func="randomize_ec_loop_tint", mode="reset"), **events}
+        assert make_env(events=events, filter_visual_rand=True).event_manager.active_functors == ["by_path", "by_func"]

@@ -230,3 +230,24 @@ def test_event_cfg_is_copied_per_manager(make_env, make_cfg) -> None:
     assert a.event_manager.get_functor("count") is not b.event_manager.get_functor("count")
     assert b.event_manager.get_functor("count").calls == []
     assert cfg.events["count"].func is CountingEvent  # the user's config is left untouched
+
+
+def test_each_functor_is_resolved_once_per_build(make_env, monkeypatch) -> None:
+    """Validation resolves every functor; the filter, the scene hooks and the managers
+    build from that result instead of resolving again."""
+    import embodichain_core.managers.manager_base as manager_base
+
+    calls: list[str] = []
+    resolve = manager_base.resolve_functor
+
+    def counting(func: Any, kind: str, path: str) -> Any:
+        calls.append(path)
+        return resolve(func, kind, path)
+
+    monkeypatch.setattr(manager_base, "resolve_functor", counting)
+    events = {
+        "boot": EventCfg(func=log_event, mode="startup", params={"tag": "s"}),
+        "tick": EventCfg(func=f"{__name__}:log_event", mode="reset", params={"tag": "r"}),
+    }
+    make_env(events=events, filter_visual_rand=True)
+    assert sorted(calls) == ["env.events.boot", "env.events.tick"]

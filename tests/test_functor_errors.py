@@ -307,3 +307,32 @@ def test_registered_functor_name_resolves_and_unknown_suggests() -> None:
     cfg.events["lift"].func = "ec_test_lift_cube"
     with pytest.raises(ConfigError, match="ec_test_lift_cube"):  # gone with the isolated plugins
         EmbodiedEnv(cfg)
+
+
+def test_entity_params_are_found_by_annotation(make_env) -> None:
+    """A param annotated ``SceneEntityCfg`` (or a list of it) names entities whatever its
+    name; an unannotated one not named ``*entity_cfg`` is left as given."""
+
+    def place(env: Any, env_ids: Any, goal: SceneEntityCfg, others: list[SceneEntityCfg], tag: Any = None) -> None:
+        env.__dict__["placed"] = (goal, others, tag)
+
+    def event(**params: Any) -> dict:
+        return {"p": EventCfg(func=place, mode="reset", params={"others": [], **params})}
+
+    env = make_env(events=event(goal={"uid": "cube"}, others=[{"uid": "table"}], tag={"uid": "cube"}))
+    env.reset()
+    goal, others, tag = env.placed
+    assert isinstance(goal, SceneEntityCfg)
+    assert goal.uid == "cube"
+    assert isinstance(others[0], SceneEntityCfg)
+    assert others[0].uid == "table"
+    assert tag == {"uid": "cube"}  # not an entity param: a plain mapping
+    with pytest.raises(ConfigError) as err:
+        make_env(events=event(goal={"uid": "cueb"}))
+    assert err.value.path == "env.events.p.params.goal.uid"
+    assert "Did you mean 'cube'" in err.value.reason
+    with pytest.raises(ConfigError) as err:
+        make_env(events=event(goal={"uid": "cube"}, others=[{"uid": "cube"}, {"uid": "tabel"}]))
+    assert err.value.path == "env.events.p.params.others[1].uid"
+    with pytest.raises(ConfigError, match="expected an entity"):
+        make_env(events=event(goal="cube"))

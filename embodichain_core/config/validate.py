@@ -41,13 +41,16 @@ MAX_PHYSICS_DT = 1.0
 _MAX_SIDE = 16384
 
 
-def validate_env_cfg(cfg: Any, num_envs: Optional[int] = None, *, memory: bool = True) -> None:
+def validate_env_cfg(cfg: Any, num_envs: Optional[int] = None, *, memory: bool = True, functors: bool = True) -> None:
     """Check an ``EmbodiedEnvCfg`` completely; ``memory=False`` skips the memory estimate.
 
     Args:
         cfg: the config (required values already set).
         num_envs: the env count to check the memory for (default ``cfg.num_envs``).
         memory: compare the memory estimate with the available memory.
+        functors: check the manager sections (the env's build checks them itself with
+            :func:`~embodichain_core.config.sections.check_sections`, which returns each
+            functor resolved for the build).
 
     Raises:
         ConfigError: the first bad value, at its config path.
@@ -57,7 +60,8 @@ def validate_env_cfg(cfg: Any, num_envs: Optional[int] = None, *, memory: bool =
     check_scene(cfg)
     check_plausible(cfg)
     check_robot_joints(cfg.robot, "robot")
-    check_sections(cfg)
+    if functors:
+        check_sections(cfg)
     if memory:
         check_memory(cfg, num_envs)
 

@@ -86,14 +86,14 @@ class EmbodiedEnvCfg(EnvCfg):
     #: by the action terms and drives (and counted; docs/embodied_env.md, "Actions").
     strict_actions: bool = False
 
-    def validate(self, prefix: str = "", *, memory: bool = True) -> List[str]:
+    def validate(self, prefix: str = "", *, memory: bool = True, functors: bool = True) -> List[str]:
         """Check the config before the env builds anything.
 
         With a ``prefix`` (as the gym-config loader calls it) only the still-missing
         required fields are listed. Without one, a missing field raises, then every
         value is checked (run settings, simulation, physical values of the scene,
-        manager sections, the memory estimate unless ``memory=False``); see
-        :func:`embodichain_core.config.validate.validate_env_cfg`.
+        manager sections unless ``functors=False``, the memory estimate unless
+        ``memory=False``); see :func:`embodichain_core.config.validate.validate_env_cfg`.
 
         Raises:
             ConfigError: a missing field or a bad value, at its config path.
@@ -102,7 +102,7 @@ class EmbodiedEnvCfg(EnvCfg):
         if not prefix:
             from embodichain_core.config.validate import validate_env_cfg
 
-            validate_env_cfg(self, memory=memory)
+            validate_env_cfg(self, memory=memory, functors=functors)
         return missing
 
     def all_articulations(self) -> List[ArticulationCfg]:

@@ -18,6 +18,7 @@ import torch
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.config.ignored import warn_ignored
+from embodichain_core.config.sections import check_sections
 from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.cfg import EnvCfg
 from embodichain_core.envs.robot_io import RobotIO
@@ -80,13 +81,14 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
             module names it (the seam tests replace to prove nothing was built).
 
     Returns:
-        The events config after the filters (for the event manager).
+        The checked manager sections after the filters, each functor resolved once
+        (for the managers).
     """
-    env.cfg.validate()
+    env.cfg.validate(functors=False)
+    functors = filter_functors(env.cfg, check_sections(env.cfg, warn=True))
     warn_ignored(env.cfg)
     bind_extensions(env)
-    events = filter_functors(env.cfg, "events")
-    env.scene = build_scene(env, events)
+    env.scene = build_scene(env, functors["events"])
     env.robot = next(iter(env.scene.robots.values()))
     env.sensors = env.scene.sensors
     env.active_joint_ids = resolve_active_joints(env.cfg, env.robot)
@@ -95,24 +97,23 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
     env._robot_io = RobotIO(env.sim, env.robot, env.active_joint_ids, env.num_envs)
     limits = env.robot.get_qpos_limits()[0, aid].numpy()
     env.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
-    return events
+    return functors
 
 
-def build_managers(env: Any, events: Any) -> None:
+def build_managers(env: Any, functors: dict) -> None:
     """Event manager (then the ``startup`` events), observation, reward, action and
-    dataset managers; ``pre`` action terms replace the action space."""
-    cfg = env.cfg
-    env.event_manager = EventManager(events, env)
+    dataset managers from the checked sections ``functors`` (:func:`setup_scene`);
+    ``pre`` action terms replace the action space."""
+    env.event_manager = EventManager(functors["events"], env)
     env.event_manager.apply("startup", None)
-    env.observation_manager = ObservationManager(cfg.observations, env)
-    env.reward_manager = RewardManager(cfg.rewards, env)
-    env.action_manager = ActionManager(cfg.actions, env)
+    env.observation_manager = ObservationManager(functors["observations"], env)
+    env.reward_manager = RewardManager(functors["rewards"], env)
+    env.action_manager = ActionManager(functors["actions"], env)
     space = env.action_manager.single_action_space()
     if space is not None:
         env.single_action_space = space
-    dataset = filter_functors(cfg, "dataset")
-    if dataset is not None and not cfg.filter_dataset_saving:
-        manager = DatasetManager(dataset, env)
+    if functors["dataset"] is not None:
+        manager = DatasetManager(functors["dataset"], env)
         env.dataset_manager = manager if len(manager) else None
     # functors passing an env attribute (randomize_target_pose -> target_position) agree on its name
     env._pending_env_keys = check_env_keys(env)

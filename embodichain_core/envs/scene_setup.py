@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, Optional
 
-from embodichain_core.config.errors import ConfigError, join_path
-from embodichain_core.managers.cfg import EventCfg
-from embodichain_core.managers.manager_base import iter_section, resolve_func
+from embodichain_core.config.errors import ConfigError
+from embodichain_core.managers.manager_base import CheckedFunctor
 from embodichain_core.sim.scene import Scene
 
 
-def build_scene(env: Any, events: Any) -> Scene:
-    """Add every configured entity, let functors edit the spec, compile, reset."""
+def build_scene(env: Any, events: dict[str, CheckedFunctor]) -> Scene:
+    """Add every configured entity, let the event functors edit the spec, compile, reset.
+
+    ``events`` is the checked events section (``check_sections``, after :func:`filter_functors`)."""
     cfg = env.cfg
     scene = Scene(cfg.sim_cfg, env.num_envs, str(env.device))
     robot = cfg.robot
@@ -61,46 +62,38 @@ def _make_sensor(sensor_cfg: Any, scene: Scene, path: str) -> Any:
     return sensor_cls(sensor_cfg, scene)
 
 
-def _run_scene_hooks(env: Any, scene: Scene, events: Any) -> None:
+def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, CheckedFunctor]) -> None:
     """Class functors with ``modify_scene(cfg, scene)`` edit the spec before compile."""
-    for section, cfg_type, kind in ((events, EventCfg, "event"),):
-        for name, fcfg in iter_section(section, cfg_type, "env.events"):
-            func = resolve_func(fcfg.func, kind, join_path("env.events", name))
-            hook = getattr(func, "modify_scene", None)
-            if inspect.isclass(func) and callable(hook):
-                hook(fcfg, scene)
+    for checked in events.values():
+        hook = getattr(checked.func, "modify_scene", None)
+        if inspect.isclass(checked.func) and callable(hook):
+            hook(checked.cfg, scene)
 
 
-def filter_functors(cfg: Any, section: str) -> Any:
-    """The ``events`` section without visual randomization when ``filter_visual_rand``;
-    the ``dataset`` section or ``None`` when ``filter_dataset_saving``."""
-    value = getattr(cfg, section)
-    if section == "dataset":
-        return None if cfg.filter_dataset_saving else value
-    if section != "events" or not cfg.filter_visual_rand or value is None:
-        return value
-    kept = {}
-    for name, fcfg in iter_section(value, EventCfg, "env.events"):
-        func = resolve_func(fcfg.func, "event", join_path("env.events", name))
-        if not is_visual_randomization(func, fcfg.func):
-            kept[name] = fcfg
-    return kept
+def filter_functors(cfg: Any, functors: dict[str, Optional[dict[str, CheckedFunctor]]]) -> dict:
+    """The checked sections (``check_sections``) the env builds: ``events`` without the
+    visual randomization when ``cfg.filter_visual_rand``; ``dataset`` ``None`` when
+    ``cfg.filter_dataset_saving``."""
+    out = dict(functors)
+    if cfg.filter_dataset_saving:
+        out["dataset"] = None
+    if cfg.filter_visual_rand:
+        out["events"] = {n: c for n, c in (functors["events"] or {}).items() if not is_visual_randomization(c)}
+    return out
 
 
-def is_visual_randomization(func: Any, given: Any) -> bool:
-    """``randomize_*`` functors of the visual randomization category."""
-    name = getattr(func, "__name__", "")
-    from embodichain_core.plugins.manager import is_qualified_name
+def is_visual_randomization(checked: CheckedFunctor) -> bool:
+    """A ``randomize_*`` functor of category ``randomization.visual``, as its registry
+    entry says (a registered name) or as the functor declares it (``embodichain_category``,
+    for a callable or an import path)."""
+    from embodichain_core.plugins import VISUAL_RANDOMIZATION
 
-    if isinstance(given, str) and (":" not in given or is_qualified_name(given)):
-        from embodichain_core.plugins import is_visual_randomization as registered
-
-        return registered(given)
-    if not name.startswith("randomize_"):
-        return False
-    category = getattr(func, "embodichain_category", "")
-    module = getattr(func, "__module__", "") or ""
-    return category == "randomization.visual" or module.endswith(("randomization.visual", "randomization.rendering"))
+    if checked.entry is not None:
+        name, category = checked.entry.name, checked.entry.meta.get("category", "")
+    else:
+        name = getattr(checked.func, "__name__", "")
+        category = getattr(checked.func, "embodichain_category", "")
+    return name.startswith("randomize_") and category == VISUAL_RANDOMIZATION
 
 
 def resolve_active_joints(cfg: Any, robot: Any) -> list[int]:

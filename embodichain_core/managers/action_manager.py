@@ -16,7 +16,7 @@ import torch
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ActionTermCfg
 from embodichain_core.managers.functor import ActionTerm
-from embodichain_core.managers.manager_base import ManagerBase
+from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase
 
 
 class ActionManager(ManagerBase[ActionTermCfg]):
@@ -25,13 +25,18 @@ class ActionManager(ManagerBase[ActionTermCfg]):
     section = "actions"
     kind = "action"
     cfg_type = ActionTermCfg
-    min_argc = 0
+    min_argc = None  # the params go to the term's constructor
+    modes = ("pre", "post")
 
-    def _check(self, func: Any, cfg: ActionTermCfg, where: str) -> None:
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """An ``ActionTerm`` class and a known ``mode``."""
+        func = checked.func
         if not (isinstance(func, type) and issubclass(func, ActionTerm)):
-            raise ConfigError(join_path(where, "func"), f"an action term must be an ActionTerm class, got {func!r}")
-        if cfg.mode not in ("pre", "post"):
-            raise ConfigError(join_path(where, "mode"), f"mode must be 'pre' or 'post', got {cfg.mode!r}")
+            raise ConfigError(
+                join_path(checked.path, "func"), f"an action term must be an ActionTerm class, got {func!r}"
+            )
+        cls.check_mode(checked.cfg.mode, checked.path)
 
     def terms(self, mode: str = "pre") -> dict[str, ActionTerm]:
         """The ``mode`` (``pre`` or ``post``) terms by name, in declaration order (one term by

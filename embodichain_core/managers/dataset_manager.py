@@ -12,8 +12,10 @@ from typing import Any, Optional
 
 import torch
 
+from embodichain_core.config.checks import describe
+from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import DatasetFunctorCfg
-from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
+from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase, tag_functor_error
 
 
 class DatasetManager(ManagerBase[DatasetFunctorCfg]):
@@ -23,6 +25,17 @@ class DatasetManager(ManagerBase[DatasetFunctorCfg]):
     kind = "dataset"
     cfg_type = DatasetFunctorCfg
     min_argc = 2
+    modes = ("save",)
+
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """A known ``mode``; ``save_failed_episodes`` true or false."""
+        cls.check_mode(checked.cfg.mode, checked.path)
+        if not isinstance(checked.cfg.save_failed_episodes, bool):
+            raise ConfigError(
+                join_path(checked.path, "save_failed_episodes"),
+                f"expected true/false, got {describe(checked.cfg.save_failed_episodes)}",
+            )
 
     def __init__(self, cfg: Any, env: Any, path: str | None = None):
         super().__init__(cfg, env, path)

@@ -2,7 +2,7 @@
 
 Custom modes are declared in ``env.custom_event_modes`` (or by a functor's
 ``event_modes`` attribute); a mode that looks like a typo of a known one is a
-``ConfigError`` with the suggestion (see :func:`~embodichain_core.config.sections.check_event_mode`).
+``ConfigError`` with the suggestion (see :func:`check_event_mode`).
 
 Interval counters are per env and restart with each env's episode, so an
 ``interval_step=5`` event fires on steps 5, 10, ... of every episode of every env
@@ -17,16 +17,23 @@ every env's counter (``env_throughput`` at 64 envs fires on every step for a few
 
 from __future__ import annotations
 
-from typing import Any
+import warnings
+from typing import Any, Iterable, Optional
 
 import numpy as np
 import torch
 
-from embodichain_core.config.sections import check_event_mode, check_interval
+from embodichain_core.config.checks import check_int, describe
+from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import EventCfg
-from embodichain_core.managers.manager_base import FunctorEntry, ManagerBase
-from embodichain_core.managers.param_rules import check_param_types
+from embodichain_core.managers.manager_base import OWN_SECTION, CheckedFunctor, FunctorEntry, ManagerBase
 from embodichain_core.sim.backend.env_rows import np_ids
+from embodichain_core.utils.suggest import closest, did_you_mean
+
+#: The event modes the env itself runs.
+EVENT_MODES = ("startup", "reset", "interval")
+#: Largest ``interval_step`` accepted (an interval event fires every that many env steps).
+MAX_INTERVAL_STEP = 10_000_000
 
 
 class EventManager(ManagerBase[EventCfg]):
@@ -36,6 +43,7 @@ class EventManager(ManagerBase[EventCfg]):
     kind = "event"
     cfg_type = EventCfg
     min_argc = 2
+    modes = EVENT_MODES
 
     def __init__(self, cfg: Any, env: Any, path: str | None = None):
         super().__init__(cfg, env, path)
@@ -51,13 +59,18 @@ class EventManager(ManagerBase[EventCfg]):
                 else:
                     self._phases[name] = _Phases(env.num_envs, int(entry.cfg.interval_step))
 
-    def _check(self, func: Any, cfg: EventCfg, where: str) -> None:
-        super()._check(func, cfg, where)
-        env_cfg = getattr(self._env, "cfg", None)
-        declared = [*(getattr(env_cfg, "custom_event_modes", None) or []), *getattr(func, "event_modes", ())]
-        check_event_mode(cfg.mode, where, declared)
-        check_interval(cfg, where, getattr(env_cfg, "max_episode_steps", None))
-        check_param_types(func, cfg.params, where, self.min_argc)
+    @classmethod
+    def validate_section(cls, env_cfg: Any, section: Any = OWN_SECTION, **kwargs: Any) -> dict[str, CheckedFunctor]:
+        """:meth:`ManagerBase.validate_section`, after ``env.custom_event_modes``."""
+        check_declared_modes(getattr(env_cfg, "custom_event_modes", None))
+        return super().validate_section(env_cfg, section, **kwargs)
+
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """A known or declared ``mode``; ``interval_step`` and ``is_global``."""
+        declared = [*(getattr(env_cfg, "custom_event_modes", None) or []), *getattr(checked.func, "event_modes", ())]
+        check_event_mode(checked.cfg.mode, checked.path, declared)
+        check_interval(checked.cfg, checked.path, getattr(env_cfg, "max_episode_steps", None), warn)
 
     @property
     def available_modes(self) -> list[str]:
@@ -124,6 +137,67 @@ class EventManager(ManagerBase[EventCfg]):
                     detail += f" (every {cfg.interval_step} steps{', global' if cfg.is_global else ''})"
                 rows.append((mode, n, detail))
         return rows
+
+
+def check_event_mode(mode: Any, path: str, declared: Iterable[str] = ()) -> None:
+    """Check an event's ``mode`` (``path`` is the entry's path).
+
+    ``startup``/``reset``/``interval`` and declared custom modes (``env.custom_event_modes``
+    or a functor's ``event_modes``) are accepted; any other mode is an error, with a
+    suggestion when it looks like a typo of a known one (an undeclared mode would never
+    fire on its own).
+    """
+    where = join_path(path, "mode")
+    if not isinstance(mode, str) or not mode.strip():
+        raise ConfigError(
+            where,
+            f"expected an event mode ('startup', 'reset', 'interval' or a declared custom mode), got {describe(mode)}",
+        )
+    known = [*EVENT_MODES, *(str(m) for m in declared)]
+    if mode in known:
+        return
+    if closest(mode.strip(), known):
+        raise ConfigError(
+            where,
+            f"unknown event mode {mode!r}.{did_you_mean(mode.strip(), known)} (a custom mode "
+            f"with this name must be declared in env.custom_event_modes)",
+        )
+    raise ConfigError(
+        where,
+        f"unknown event mode {mode!r}: not one of {', '.join(repr(m) for m in known)}. A custom mode "
+        f"(run by task code with env.event_manager.apply({mode!r}, env_ids)) must be declared in "
+        "env.custom_event_modes",
+    )
+
+
+def check_declared_modes(modes: Any, path: str = "env.custom_event_modes") -> list[str]:
+    """``custom_event_modes``: a list of non-empty names, none of them a built-in mode."""
+    if modes is None:
+        return []
+    if isinstance(modes, (str, dict)) or not isinstance(modes, (list, tuple)):
+        raise ConfigError(path, f"expected a list of mode names, got {describe(modes)}")
+    for i, mode in enumerate(modes):
+        if not isinstance(mode, str) or not mode.strip():
+            raise ConfigError(f"{path}[{i}]", f"expected a mode name, got {describe(mode)}")
+        if mode in EVENT_MODES:
+            raise ConfigError(f"{path}[{i}]", f"{mode!r} is a built-in event mode; list only custom ones")
+    return list(modes)
+
+
+def check_interval(fcfg: Any, where: str, max_episode_steps: Optional[int], warn: bool = True) -> None:
+    """``interval_step``: an int in [1, MAX_INTERVAL_STEP]. A per-env ``interval`` event
+    whose step is above ``max_episode_steps`` never fires (its counter restarts with each
+    episode): a warning says so (a short smoke-test episode is not an error)."""
+    if not isinstance(fcfg.is_global, bool):
+        raise ConfigError(join_path(where, "is_global"), f"expected true/false, got {describe(fcfg.is_global)}")
+    step = check_int(fcfg.interval_step, join_path(where, "interval_step"), low=1, high=MAX_INTERVAL_STEP)
+    limit = max_episode_steps if isinstance(max_episode_steps, int) and max_episode_steps > 0 else None
+    if warn and fcfg.mode == "interval" and limit is not None and step > limit and not fcfg.is_global:
+        warnings.warn(
+            f"{join_path(where, 'interval_step')}: {step} is above max_episode_steps ({limit}): the "
+            f"per-env counter restarts with each episode, so this event never fires",
+            stacklevel=3,
+        )
 
 
 class _Phases:

@@ -1,35 +1,44 @@
-"""Shared machinery of the managers: reading a config section, resolving functors,
-checking their params against their signatures, resolving ``SceneEntityCfg``."""
+"""Shared machinery of the managers: validating a section before the build
+(:meth:`ManagerBase.validate_section`, each manager adding its own rules), building its
+functors, tagging the errors they raise with their config path."""
 
 from __future__ import annotations
 
 import copy
-import dataclasses
-import importlib
 import inspect
 import sys
 from dataclasses import dataclass
-from typing import Any, Generic, Iterator, Optional, TypeVar
+from typing import Any, Generic, Optional, TypeVar
 
+from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
-from embodichain_core.managers.cfg import FunctorCfg, SceneEntityCfg
+from embodichain_core.managers.cfg import FunctorCfg
 from embodichain_core.managers.functor import Functor
-from embodichain_core.utils.configclass import MISSING, is_configclass
-from embodichain_core.utils.suggest import did_you_mean
+from embodichain_core.managers.param_rules import (
+    DATA_PATH_PARAMS,
+    check_data_path,
+    check_entity_params,
+    check_named_params,
+    check_param_types,
+    check_signature,
+    entity_params,
+)
+from embodichain_core.managers.resolution import iter_section, resolve_entities, resolve_func, resolve_functor
+from embodichain_core.utils.configclass import MISSING
+from embodichain_core.utils.suggest import closest, did_you_mean
 
-ENTITY_PARAM_KEYS = {
-    "entity_cfg",
-    "source_entity_cfg",
-    "target_entity_cfg",
-    "object_cfg",
-    "goal_cfg",
-    "reference_entity_cfg",
-    "end_effector_cfg",
-    "robot_cfg",
-    "obj_a_cfg",
-    "obj_b_cfg",
-}
-
+__all__ = [
+    "CheckedFunctor",
+    "FunctorEntry",
+    "ManagerBase",
+    "OWN_SECTION",
+    "functor_path_of",
+    "is_checked",
+    "iter_section",
+    "resolve_func",
+    "resolve_functor",
+    "tag_functor_error",
+]
 
 CfgT = TypeVar("CfgT", bound=FunctorCfg)
 
@@ -82,160 +91,152 @@ def functor_path_of(err: BaseException) -> Optional[str]:
     return getattr(err, FUNCTOR_PATH_ATTR, None)
 
 
-def iter_section(section: Any, cfg_type: type[FunctorCfg], path: str) -> Iterator[tuple[str, Any]]:
-    """Yield ``(name, functor cfg)`` of a manager section (config object or dict)."""
-    if section is None:
-        return
-    if isinstance(section, dict):
-        items = list(section.items())
-    elif is_configclass(section):
-        items = [(f.name, getattr(section, f.name)) for f in dataclasses.fields(section)]
-    else:
-        items = [(k, v) for k, v in vars(section).items() if not k.startswith("_")]
-    for name, value in items:
-        where = join_path(path, name)
-        if value is None:
-            continue
-        if isinstance(value, dict):
-            if "func" not in value:
-                continue  # plain metadata next to functors (e.g. dataset robot_meta)
-            value = cfg_type.from_dict(value, where)
-        if not isinstance(value, FunctorCfg):
-            raise ConfigError(where, f"expected a {cfg_type.__name__}, got {type(value).__name__}")
-        yield name, value
+@dataclass(frozen=True)
+class CheckedFunctor(Generic[CfgT]):
+    """One entry of a manager section that passed :meth:`ManagerBase.validate_section`.
 
-
-def resolve_func(func: Any, kind: str, path: str) -> Any:
-    """A functor from a callable, a registered name or a ``"module:attr"`` import path.
-
-    A string is read by one rule, whatever is installed: a string with a ``:`` is a
-    ``"module:attr"`` import path; ``"<plugin>/<name>"``
-    (``"embodichain-functors/randomize_light"``) is a qualified registered name; any other
-    string is a bare registered name (an error naming every provider when several plugins
-    register it).
+    Attributes:
+        name: the entry's key in its section.
+        path: its config path (``env.events.fork_mass``).
+        cfg: the entry as configured (``func`` as given).
+        func: the resolved function or class.
+        entry: the registry entry when ``func`` was given by a registered name, else ``None``.
+        entities: the params naming scene entities -> whether each takes a list of them.
     """
-    if func is None or isinstance(func, type(MISSING)):  # a deep-copied cfg holds a copy of MISSING
-        raise ConfigError(f"{path}.func", "no 'func' given")
-    if not isinstance(func, str):
-        if not callable(func):
-            raise ConfigError(f"{path}.func", f"{func!r} is not callable")
-        return func
-    from embodichain_core.plugins.manager import known_providers
 
-    if ":" not in func:
-        return _from_registry(func, kind, path)
-    module, _, attr = func.partition(":")
-    try:
-        obj = importlib.import_module(module)
-        for part in attr.split("."):
-            obj = getattr(obj, part)
-        return obj
-    except (ImportError, AttributeError) as err:
-        hint = f" ({module!r} is a plugin: its functor {attr!r} is written {module + '/' + attr!r})"
-        hint = hint if module in known_providers() else ""
-        raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}{hint}") from err
+    name: str
+    path: str
+    cfg: CfgT
+    func: Any
+    entry: Any
+    entities: dict[str, bool]
 
 
-def _from_registry(name: str, kind: str, path: str) -> Any:
-    """The functor registered as ``name`` (bare or ``"<plugin>/<name>"``); errors name
-    the config path, and suggest functors of the same ``kind``."""
-    from embodichain_core.plugins import AmbiguousNameError, get_registry
-
-    registry = get_registry("functors")
-    try:
-        entry = registry.find(name)
-    except AmbiguousNameError as err:
-        raise ConfigError(f"{path}.func", str(err)) from None
-    if entry is not None:
-        return entry.resolve()
-    if "/" in name:
-        raise ConfigError(f"{path}.func", str(registry.unknown(name)))
-    same_kind = [e.name for e in registry.entries() if e.meta.get("kind") == kind] or registry.names()
-    hint = did_you_mean(name, same_kind) or " No functor plugin registers it (is the plugin installed?)."
-    raise ConfigError(f"{path}.func", f"unknown {kind} functor {name!r}.{hint}")
+def is_checked(section: Any) -> bool:
+    """True for a section :meth:`ManagerBase.validate_section` returned."""
+    return isinstance(section, dict) and all(isinstance(v, CheckedFunctor) for v in section.values())
 
 
-def check_params(func: Any, params: dict, min_argc: int, path: str) -> None:
-    """Unknown params and missing required params are errors naming the functor."""
-    target = func.__call__ if inspect.isclass(func) else func
-    try:
-        sig = inspect.signature(target)
-    except (TypeError, ValueError):
-        return
-    args = [p for p in sig.parameters.values() if p.name != "self"]
-    if any(p.kind is p.VAR_KEYWORD for p in args):
-        allowed = None
-    else:
-        allowed = {p.name for p in args[min_argc:] if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
-    required = [
-        p.name for p in args[min_argc:] if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
-    ]
-    name = getattr(func, "__name__", repr(func))
-    if allowed is not None:
-        for key in params:
-            if key not in allowed:
-                raise ConfigError(
-                    join_path(path, "params", key),
-                    f"functor {name!r} has no parameter {key!r}.{did_you_mean(key, allowed)}",
-                )
-    missing = [r for r in required if r not in params]
-    if missing:
-        raise ConfigError(join_path(path, "params"), f"functor {name!r} needs parameter(s) {missing}")
-
-
-def check_ranges(params: dict, path: str, name: str) -> None:
-    """Params checked by naming convention (``*_range`` pairs with low <= high, colour
-    ranges in [0, 1], ``*_prob`` in [0, 1], ...): see :mod:`.param_rules`."""
-    from embodichain_core.managers.param_rules import check_named_params
-
-    check_named_params(params, path, name)
-
-
-def resolve_entities(value: Any, scene: Any, path: str, key: str = "") -> Any:
-    """Resolve every ``SceneEntityCfg`` (or entity dict) anywhere in ``value``."""
-    if isinstance(value, SceneEntityCfg):
-        return value.resolve(scene, path)
-    if isinstance(value, dict):
-        if (key in ENTITY_PARAM_KEYS or key.endswith("entity_cfg")) and "uid" in value:
-            return SceneEntityCfg.from_dict(value, path).resolve(scene, path)
-        return {k: resolve_entities(v, scene, join_path(path, k), k) for k, v in value.items()}
-    if isinstance(value, list):
-        return [resolve_entities(v, scene, f"{path}[{i}]", key) for i, v in enumerate(value)]
-    if isinstance(value, tuple):
-        return tuple(resolve_entities(v, scene, f"{path}[{i}]", key) for i, v in enumerate(value))
-    return value
+#: ``validate_section``'s default: the manager's own section of the env config.
+OWN_SECTION: Any = object()
 
 
 class ManagerBase(Generic[CfgT]):
-    """Builds the functors of one config section.
+    """Validates and builds the functors of one config section.
 
     Subclasses set ``section`` (the config key), ``kind`` (functor kind in the
-    registry), ``cfg_type`` and ``min_argc`` (positional args before params), and
-    parametrize the class with their cfg type (``ManagerBase[EventCfg]``).
+    registry), ``cfg_type``, ``min_argc`` (positional args before the params; ``None``:
+    the params go to the class's constructor) and ``modes``, and parametrize the class
+    with their cfg type (``ManagerBase[EventCfg]``). Their own rules go in
+    :meth:`check_entry` (one entry) and :meth:`check_entries` (the whole section).
     """
 
     section = ""
     kind = ""
     cfg_type: type = FunctorCfg
-    min_argc = 2
+    min_argc: Optional[int] = 2
+    modes: tuple[str, ...] = ()
 
     def __init__(self, cfg: Any, env: Any, path: Optional[str] = None):
+        """Build the functors of ``cfg``: a section :meth:`validate_section` returned (the
+        env's build), or a section as configured (validated first against ``env.cfg``)."""
         self._env = env
         self.path = path or f"env.{self.section}"
-        self.entries: dict[str, FunctorEntry[CfgT]] = {}
-        for name, fcfg in iter_section(cfg, self.cfg_type, self.path):
-            self.entries[name] = self._build_entry(name, copy.deepcopy(fcfg))
+        if not is_checked(cfg):
+            uids = getattr(getattr(env, "scene", None), "asset_uids", None)
+            cfg = self.validate_section(getattr(env, "cfg", None), cfg, uids=uids, path=self.path, warn=True)
+        self.entries: dict[str, FunctorEntry[CfgT]] = {n: self._build_entry(c) for n, c in cfg.items()}
 
-    def _build_entry(self, name: str, cfg: CfgT) -> FunctorEntry[CfgT]:
-        where = join_path(self.path, name)
-        func = resolve_func(cfg.func, self.kind, where)
-        is_class = inspect.isclass(func)
-        if is_class and not issubclass(func, Functor):
+    @classmethod
+    def validate_section(
+        cls,
+        env_cfg: Any,
+        section: Any = OWN_SECTION,
+        *,
+        uids: Optional[list[str]] = None,
+        path: Optional[str] = None,
+        warn: bool = False,
+    ) -> dict[str, CheckedFunctor[CfgT]]:
+        """Check every entry of this manager's section, before anything is built.
+
+        Each ``func`` is resolved (once: the env builds from the result), its params are
+        checked against its signature and the rules of :mod:`.param_rules`, entity params
+        against ``uids``, and the entry against the manager's own rules (modes...).
+
+        Args:
+            env_cfg: the env config (may be ``None``): its section, unless ``section`` is
+                given, and the settings the rules read (``custom_event_modes``...).
+            section: the section to check instead of ``env_cfg.<section>``.
+            uids: the scene's entity uids (``None``: entity uids are checked at the build).
+            path: the section's config path (default ``env.<section>``).
+            warn: warn about valid values that look like mistakes.
+
+        Returns:
+            ``{name: CheckedFunctor}`` in config order.
+
+        Raises:
+            ConfigError: at the config path of the first bad value.
+        """
+        path = path or join_path("env", cls.section)
+        if section is OWN_SECTION:
+            section = getattr(env_cfg, cls.section, None)
+        checked: dict[str, CheckedFunctor[CfgT]] = {}
+        for name, fcfg in iter_section(section, cls.cfg_type, path):
+            checked[name] = cls._check_functor(name, fcfg, join_path(path, name), uids)
+            cls.check_entry(checked[name], env_cfg, warn)
+        cls.check_entries(checked, path)
+        return checked
+
+    @classmethod
+    def _check_functor(cls, name: str, fcfg: Any, where: str, uids: Optional[list[str]]) -> CheckedFunctor:
+        """The rules every section shares: ``func`` resolves, the params fit it."""
+        given = fcfg.func
+        if given is None or isinstance(given, type(MISSING)) or (isinstance(given, str) and not given.strip()):
+            raise ConfigError(join_path(where, "func"), "missing 'func' (a registered functor name or 'module:attr')")
+        if not isinstance(given, str) and not callable(given):
+            raise ConfigError(join_path(where, "func"), f"expected a functor name or a callable, got {describe(given)}")
+        func, entry = resolve_functor(given, cls.kind, where)
+        if inspect.isclass(func) and not issubclass(func, Functor):
             raise ConfigError(f"{where}.func", f"class {func.__name__} must subclass Functor")
-        self._check(func, cfg, where)
-        cfg.params = resolve_entities(dict(cfg.params), self._env.scene, join_path(where, "params"))
+        params = fcfg.params
+        if not isinstance(params, dict):
+            raise ConfigError(join_path(where, "params"), f"expected a mapping of params, got {describe(params)}")
+        label = getattr(func, "__name__", type(func).__name__)
+        if cls.min_argc is not None:
+            check_signature(func, params, cls.min_argc, where)
+            check_param_types(func, params, where, cls.min_argc)
+        check_named_params(params, where, label)
+        for key in DATA_PATH_PARAMS:
+            if params.get(key) is not None:
+                check_data_path(params[key], join_path(where, "params", key), label)
+        entities = entity_params(func, cls.min_argc, params)
+        check_entity_params(params, entities, join_path(where, "params"), uids)
+        return CheckedFunctor(name, where, fcfg, func, entry, entities)
+
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """The manager's own rules for one entry (by default: its ``mode``)."""
+        cls.check_mode(checked.cfg.mode, checked.path)
+
+    @classmethod
+    def check_entries(cls, checked: dict[str, CheckedFunctor], path: str) -> None:
+        """The manager's rules across the entries of its section (none by default)."""
+
+    @classmethod
+    def check_mode(cls, mode: Any, where: str) -> None:
+        """``mode`` is one of :attr:`modes` (a typo gets the suggestion)."""
+        if mode in cls.modes:
+            return
+        hint = did_you_mean(mode, cls.modes) if isinstance(mode, str) and closest(mode, cls.modes) else ""
+        choices = " or ".join(map(repr, cls.modes))
+        raise ConfigError(join_path(where, "mode"), f"mode must be {choices}, got {describe(mode)}.{hint}")
+
+    def _build_entry(self, checked: CheckedFunctor) -> FunctorEntry[CfgT]:
+        cfg, func, where = copy.deepcopy(checked.cfg), checked.func, checked.path
+        cfg.params = resolve_entities(dict(cfg.params), self._env.scene, join_path(where, "params"), checked.entities)
         cfg.func = func
         self._run_param_check(func, cfg, where)
+        is_class = inspect.isclass(func)
         if is_class:
             try:
                 func = func(cfg=cfg, env=self._env)
@@ -245,7 +246,7 @@ class ManagerBase(Generic[CfgT]):
                 raise
             except Exception as err:
                 raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err
-        return FunctorEntry(name, cfg, func, is_class, where)
+        return FunctorEntry(checked.name, cfg, func, is_class, where)
 
     def _run_param_check(self, func: Any, cfg: CfgT, where: str) -> None:
         """A function functor may carry ``check_params(env, **params)``; it runs
@@ -262,10 +263,6 @@ class ManagerBase(Generic[CfgT]):
             raise err if err.path.startswith(where) else err.under(join_path(where, "params"))
         except (TypeError, ValueError) as err:
             raise ConfigError(join_path(where, "params"), f"{getattr(func, '__name__', func)}: {err}") from err
-
-    def _check(self, func: Any, cfg: CfgT, where: str) -> None:
-        check_params(func, cfg.params, self.min_argc, where)
-        check_ranges(cfg.params, where, getattr(func, "__name__", str(func)))
 
     @property
     def active_functors(self) -> list[str]:

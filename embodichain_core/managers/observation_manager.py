@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ObservationCfg
-from embodichain_core.managers.manager_base import ManagerBase
-from embodichain_core.managers.param_rules import check_param_types
+from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase
+
+#: Observation groups the env itself fills (``robot``: joint state; ``sensor``: sensor data).
+OBSERVATION_GROUPS = ("robot", "sensor")
 
 
 def get_nested(obs: dict, name: str) -> Any:
@@ -45,17 +48,34 @@ class ObservationManager(ManagerBase[ObservationCfg]):
     kind = "observation"
     cfg_type = ObservationCfg
     min_argc = 2
+    modes = ("add", "modify")
 
-    def _check(self, func: Any, cfg: ObservationCfg, where: str) -> None:
-        # not ``is MISSING``: configs are deep-copied, which copies the sentinel too
-        if not isinstance(cfg.name, str) or not cfg.name:
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """A known ``mode`` and a ``name`` (``a/b/c``, no empty level)."""
+        cls.check_mode(checked.cfg.mode, checked.path)
+        name = checked.cfg.name  # not ``is MISSING``: a deep-copied config holds a copy of the sentinel
+        if not isinstance(name, str) or not name.strip() or any(not part for part in name.split("/")):
             raise ConfigError(
-                join_path(where, "name"), "an observation functor needs a 'name' (e.g. 'object/cube_pose')"
+                join_path(checked.path, "name"),
+                f"an observation functor needs a 'name' such as 'object/cube_pose', got {describe(name)}",
             )
-        if cfg.mode not in ("add", "modify"):
-            raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'modify', got {cfg.mode!r}")
-        super()._check(func, cfg, where)
-        check_param_types(func, cfg.params, where, self.min_argc)
+
+    @classmethod
+    def check_entries(cls, checked: dict[str, CheckedFunctor], path: str) -> None:
+        """An ``add`` observation must not replace a whole group: a built-in one (``robot``,
+        ``sensor``) or a group other observations are added under (``object`` when another
+        entry adds ``object/cube_pose``)."""
+        added = {key: c.cfg.name for key, c in checked.items() if c.cfg.mode == "add"}
+        for entry, obs_name in added.items():
+            inner = sorted(other for key, other in added.items() if key != entry and other.startswith(obs_name + "/"))
+            if obs_name in OBSERVATION_GROUPS or inner:
+                users = f" (it holds {', '.join(map(repr, inner))})" if inner else " (filled by the env)"
+                raise ConfigError(
+                    join_path(path, entry, "name"),
+                    f"observation name {obs_name!r} is an observation group{users}; adding it would replace the "
+                    f"whole group. Name a member instead, e.g. '{obs_name}/<name>'",
+                )
 
     def compute(self, obs: dict) -> dict:
         """Apply every functor to ``obs`` (in place) and return it.

@@ -21,7 +21,13 @@ param name                                             rule
 ``*_prob``, ``prob``, ``probability``                  a number in ``[0, 1]``
 any number, anywhere in the params                     not NaN
 a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: or ``None``)
+``folder_path``, ``texture_path``                      an asset name or path ``get_data_path`` finds
 =====================================================  ==========================================
+
+The signature rules (:func:`check_signature`, :func:`check_param_types`) and the entity
+params (:func:`entity_params`: a param annotated ``SceneEntityCfg``, ``Optional`` of it or a
+sequence of it; an unannotated or ``Any`` one named ``entity_cfg`` or ``*_entity_cfg``) read
+the functor's signature after its ``min_argc`` positional arguments.
 
 Example:
     >>> check_named_params({"mass_range": [2.0, 1.0]}, "env.events.m", "randomize_rigid_object_mass")
@@ -34,14 +40,26 @@ from __future__ import annotations
 
 import inspect
 import math
-from typing import Any, Optional
+import re
+from typing import Any, Iterable, Optional
 
 import numpy as np
 
-from embodichain_core.config.checks import check_number, check_range
+from embodichain_core.config.checks import check_number, check_range, describe
 from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.utils.suggest import did_you_mean
 
-__all__ = ["check_named_params", "check_param_types", "range_bounds", "MAX_RANGE_MAGNITUDE"]
+__all__ = [
+    "check_named_params",
+    "check_param_types",
+    "check_signature",
+    "check_entity_params",
+    "check_data_path",
+    "entity_params",
+    "range_bounds",
+    "MAX_RANGE_MAGNITUDE",
+    "DATA_PATH_PARAMS",
+]
 
 #: Largest magnitude of a ``*_range`` bound (metres, degrees, kg, intensities alike).
 MAX_RANGE_MAGNITUDE = 1.0e6
@@ -163,17 +181,47 @@ def _annotation_name(annotation: Any) -> tuple[str, bool]:
     return text, False
 
 
-def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None:
-    """Params annotated ``bool``, ``int``, ``float`` or ``str`` (or ``Optional`` of one)
-    in the functor's signature must have that type (``"yes"`` is not a bool)."""
+def functor_params(func: Any, min_argc: Optional[int]) -> Optional[list[inspect.Parameter]]:
+    """The params of ``func`` after its ``min_argc`` positional arguments (a class: its
+    ``__call__``); ``None`` when the signature cannot be read or ``min_argc`` is ``None``
+    (the params go to a class's constructor)."""
+    if min_argc is None:
+        return None
     target = func.__call__ if inspect.isclass(func) else func
     try:
         sig = inspect.signature(target)
     except (TypeError, ValueError):
+        return None
+    return [p for p in sig.parameters.values() if p.name != "self"][min_argc:]
+
+
+def _name(func: Any) -> str:
+    return getattr(func, "__name__", repr(func))
+
+
+def check_signature(func: Any, params: dict, min_argc: int, path: str) -> None:
+    """Unknown params and missing required params are errors naming the functor."""
+    args = functor_params(func, min_argc)
+    if args is None:
         return
-    args = [p for p in sig.parameters.values() if p.name != "self"][min_argc:]
-    name = getattr(func, "__name__", repr(func))
-    for param in args:
+    named = [p for p in args if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    if not any(p.kind is p.VAR_KEYWORD for p in args):
+        allowed = {p.name for p in named}
+        for key in params:
+            if key not in allowed:
+                raise ConfigError(
+                    join_path(path, "params", key),
+                    f"functor {_name(func)!r} has no parameter {key!r}.{did_you_mean(key, allowed)}",
+                )
+    missing = [p.name for p in named if p.default is p.empty and p.name not in params]
+    if missing:
+        raise ConfigError(join_path(path, "params"), f"functor {_name(func)!r} needs parameter(s) {missing}")
+
+
+def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None:
+    """Params annotated ``bool``, ``int``, ``float`` or ``str`` (or ``Optional`` of one)
+    in the functor's signature must have that type (``"yes"`` is not a bool)."""
+    for param in functor_params(func, min_argc) or []:
         if param.name not in params or param.annotation is param.empty:
             continue
         kind, optional = _annotation_name(param.annotation)
@@ -184,5 +232,91 @@ def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None
         if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
             raise ConfigError(
                 join_path(path, "params", param.name),
-                f"functor {name!r}: expected {text}, got {type(value).__name__} {value!r}",
+                f"functor {_name(func)!r}: expected {text}, got {type(value).__name__} {value!r}",
             )
+
+
+_ENTITY = re.compile(r"\bSceneEntityCfg\b")
+_SEQUENCE = re.compile(r"\b(Sequence|List|list|Tuple|tuple|Iterable)\[")
+
+
+def _entity_kind(param: inspect.Parameter) -> Optional[str]:
+    """``"one"``/``"many"`` for a param naming one entity or a sequence of them, else ``None``."""
+    annotation = param.annotation
+    text = "" if annotation is param.empty else annotation if isinstance(annotation, str) else str(annotation)
+    if text.replace("typing.", "") in ("", "Any"):  # not saying: the naming convention decides
+        return "one" if _conventional(param.name) else None
+    if not _ENTITY.search(text):
+        return None
+    return "many" if _SEQUENCE.search(text) else "one"
+
+
+def _conventional(name: str) -> bool:
+    return name == "entity_cfg" or name.endswith("_entity_cfg")
+
+
+def entity_params(func: Any, min_argc: Optional[int], keys: Iterable[str] = ()) -> dict[str, bool]:
+    """The params of ``func`` naming scene entities -> whether each takes a sequence of them.
+
+    A param annotated ``SceneEntityCfg`` (bare, ``Optional`` or a ``Sequence``/``List`` of
+    it) names entities; so does an unannotated (or ``Any``) one named ``entity_cfg`` or
+    ``*_entity_cfg``. Without a readable signature (or for its ``**kwargs``), the given
+    ``keys`` that follow that naming convention.
+    """
+    args = functor_params(func, min_argc)
+    found = {}
+    for param in args or []:
+        kind = None if param.kind is param.VAR_KEYWORD else _entity_kind(param)
+        if kind is not None:
+            found[param.name] = kind == "many"
+    if args is None or any(p.kind is p.VAR_KEYWORD for p in args):
+        named = {p.name for p in args or []}
+        found.update({k: False for k in keys if k not in named and _conventional(k)})
+    return found
+
+
+def check_entity_params(params: dict, entities: dict[str, bool], path: str, uids: Optional[list[str]]) -> None:
+    """Each entity param (see :func:`entity_params`) is ``None`` (not given), a
+    ``SceneEntityCfg`` or ``{"uid": ...}`` (a list of them where it takes a sequence) naming
+    a uid of ``uids`` (not checked when ``uids`` is ``None``)."""
+    from embodichain_core.managers.cfg import SceneEntityCfg
+
+    for key, many in entities.items():
+        value, where = params.get(key), join_path(path, key)
+        if many and isinstance(value, (list, tuple)):
+            items = [(f"{where}[{i}]", item) for i, item in enumerate(value)]
+        else:
+            items = [(where, value)]
+        for at, item in items:
+            if item is None:
+                continue
+            if isinstance(item, SceneEntityCfg):
+                uid = item.uid
+            elif isinstance(item, dict):
+                uid = item.get("uid")
+            else:
+                raise ConfigError(at, f"expected an entity such as {{'uid': 'cube'}}, got {describe(item)}")
+            if not isinstance(uid, str) or not uid:
+                raise ConfigError(join_path(at, "uid"), f"expected the uid of a scene entity, got {describe(uid)}")
+            if uids is not None and uid not in uids:
+                raise ConfigError(join_path(at, "uid"), f"no entity {uid!r} in the scene.{did_you_mean(uid, uids)}")
+
+
+#: Params naming asset data (``get_data_path`` names or paths) that must exist.
+DATA_PATH_PARAMS = ("folder_path", "texture_path")
+
+
+def check_data_path(value: Any, path: str, functor: str = "") -> None:
+    """An asset name or path that ``get_data_path`` resolves (a glob pattern is left to
+    its functor)."""
+    from embodichain_core.sim.data import get_data_path
+
+    lead = f"functor {functor!r}: " if functor else ""
+    if not isinstance(value, str) or not value.strip():
+        raise ConfigError(path, f"{lead}expected an asset name or path, got {describe(value)}")
+    if any(char in value for char in "*?["):
+        return
+    try:
+        get_data_path(value)
+    except FileNotFoundError as err:
+        raise ConfigError(path, lead + str(err).strip("\"'")) from None

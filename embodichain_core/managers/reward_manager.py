@@ -6,9 +6,10 @@ from typing import Any, Optional
 
 import torch
 
-from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.config.checks import check_number
+from embodichain_core.config.errors import join_path
 from embodichain_core.managers.cfg import RewardCfg
-from embodichain_core.managers.manager_base import ManagerBase, tag_functor_error
+from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase, tag_functor_error
 
 
 class RewardManager(ManagerBase[RewardCfg]):
@@ -18,11 +19,13 @@ class RewardManager(ManagerBase[RewardCfg]):
     kind = "reward"
     cfg_type = RewardCfg
     min_argc = 4
+    modes = ("add", "replace")
 
-    def _check(self, func: Any, cfg: RewardCfg, where: str) -> None:
-        if cfg.mode not in ("add", "replace"):
-            raise ConfigError(join_path(where, "mode"), f"mode must be 'add' or 'replace', got {cfg.mode!r}")
-        super()._check(func, cfg, where)
+    @classmethod
+    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+        """A known ``mode`` and a finite ``weight``."""
+        cls.check_mode(checked.cfg.mode, checked.path)
+        check_number(checked.cfg.weight, join_path(checked.path, "weight"))
 
     def compute(self, obs: Any, action: Any, info: dict, base: Optional[torch.Tensor]) -> tuple[torch.Tensor, dict]:
         """Return ``(total, {term: unweighted value})`` starting from the task's ``base``

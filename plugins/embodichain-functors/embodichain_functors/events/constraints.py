@@ -10,6 +10,7 @@ import torch
 
 from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.utils.math import quat_conjugate, quat_mul, quat_rotate
+from embodichain_core.managers.cfg import SceneEntityCfg
 
 from embodichain_functors._common import ParamError, env_ids_of, validated
 from embodichain_functors._functor import CheckedFunctor
@@ -109,8 +110,8 @@ class create_rigid_constraint(CheckedFunctor):
         self,
         env: Any,
         env_ids: Any,
-        obj_a_cfg: Any,
-        obj_b_cfg: Any,
+        obj_a_cfg: SceneEntityCfg,
+        obj_b_cfg: SceneEntityCfg,
         name: str,
         local_frame_a: Optional[Sequence[float]] = None,
         local_frame_b: Optional[Sequence[float]] = None,

@@ -14,6 +14,7 @@ from typing import Any, Sequence
 
 import torch
 
+from embodichain_core.managers.cfg import SceneEntityCfg
 from embodichain_core.managers.manager_base import resolve_func
 from embodichain_core.sim.entities.robot import Robot
 
@@ -60,7 +61,11 @@ def get_pose(env: Any, entity_cfg: Any, return_name: bool = False, to_matrix: bo
     entity = env.scene[_uid(entity_cfg)]
     name = _uid(entity_cfg)
     if isinstance(entity, Robot):
-        parts = getattr(entity_cfg, "control_parts", None)
+        parts = (
+            entity_cfg.get("control_parts")
+            if isinstance(entity_cfg, dict)
+            else getattr(entity_cfg, "control_parts", None)
+        )
         part = default_part(env, entity, parts if isinstance(parts, str) else (parts or [None])[0])
         pose, name = eef_pose(entity, part), part or name
         pose = pose if to_matrix else torch.cat((pose[:, :3, 3], _quat(pose)), -1)
@@ -135,7 +140,12 @@ class prepare_extra_attr(CheckedFunctor):
         if callable(method):
             return method(**kwargs)
         fn = resolve_func(func, "event", f"{type(self).__name__}.attrs")
-        return fn(env, env_ids, env.scene[uid] if "entity_cfg" not in spec else spec["entity_cfg"], **kwargs)
+        if "entity_cfg" not in spec:
+            return fn(env, env_ids, env.scene[uid], **kwargs)
+        entity_cfg = spec["entity_cfg"]  # nested in the params: a mapping stays one until here
+        if isinstance(entity_cfg, dict):
+            entity_cfg = SceneEntityCfg.from_dict(entity_cfg).resolve(env.scene)
+        return fn(env, env_ids, entity_cfg, **kwargs)
 
     def __call__(self, env: Any, env_ids: Any, attrs: Sequence[dict]) -> None:
         ids = env_ids_of(env, env_ids)

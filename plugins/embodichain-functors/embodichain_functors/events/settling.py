@@ -11,6 +11,7 @@ from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.entities.rigid_object import RigidObject
 from embodichain_core.sim.entities.robot import Robot
+from embodichain_core.managers.cfg import SceneEntityCfg
 
 from embodichain_functors._common import ParamError, check_positive, env_ids_of, validated
 from embodichain_functors._sim import step_envs
@@ -91,7 +92,7 @@ def _check(
 def wait_for_dynamic_objects_to_settle(
     env: Any,
     env_ids: Any,
-    entity_cfgs: Optional[Sequence[Any]] = None,
+    entity_cfgs: Optional[Sequence[SceneEntityCfg]] = None,
     linear_velocity_threshold: float = 0.03,
     angular_velocity_threshold: float = 0.2,
     min_steps: int = 10,

@@ -9,6 +9,7 @@ import torch
 
 from embodichain_core.sim.entities.robot import Robot
 from embodichain_core.utils.math import quat_to_matrix
+from embodichain_core.managers.cfg import SceneEntityCfg
 
 from embodichain_functors._common import ParamError, check_positive, validated
 from embodichain_functors._functor import CheckedFunctor
@@ -240,7 +241,7 @@ def reaching_behind_object(
     obs: Any,
     action: Any,
     info: dict,
-    object_cfg: Any,
+    object_cfg: SceneEntityCfg,
     target_pose_key: str = "goal_pose",
     behind_offset: float = 0.015,
     height_offset: float = 0.015,
