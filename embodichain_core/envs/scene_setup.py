@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import inspect
-from typing import Any, Optional
+from typing import Any, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.managers.manager_base import CheckedFunctor
@@ -70,7 +70,7 @@ def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, CheckedFunctor]) 
             hook(checked.cfg, scene)
 
 
-def filter_functors(cfg: Any, functors: dict[str, Optional[dict[str, CheckedFunctor]]]) -> dict:
+def filter_functors(cfg: Any, functors: Mapping[str, Optional[dict[str, CheckedFunctor]]]) -> dict:
     """The checked sections (``check_sections``) the env builds: ``events`` without the
     visual randomization when ``cfg.filter_visual_rand``; ``dataset`` ``None`` when
     ``cfg.filter_dataset_saving``."""

@@ -290,6 +290,7 @@ def check_entity_params(params: dict, entities: dict[str, bool], path: str, uids
         for at, item in items:
             if item is None:
                 continue
+            uid: Any
             if isinstance(item, SceneEntityCfg):
                 uid = item.uid
             elif isinstance(item, dict):

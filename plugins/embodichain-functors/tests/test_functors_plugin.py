@@ -3,6 +3,7 @@ the generated catalogue, JSON configs naming functors, per-env reproducible draw
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import inspect
 from pathlib import Path
@@ -80,6 +81,18 @@ def test_visual_randomization_names() -> None:
     assert all(is_visual_randomization(n) for n in visual)
     assert not is_visual_randomization("set_rigid_object_visual_material")
     assert not is_visual_randomization("randomize_rigid_object_mass")
+
+
+def test_functors_declare_the_visual_category_they_are_registered_with() -> None:
+    """A functor named by import path is filtered by ``filter_visual_rand`` through its own
+    ``embodichain_category``: it says what its registration says."""
+    for name, target, _kind, category, _description in FUNCTORS:
+        module, _, attr = target.partition(":")
+        declared = getattr(getattr(importlib.import_module(module), attr), "embodichain_category", None)
+        if name.startswith("randomize_") and category == "randomization.visual":
+            assert declared == category, f"{name} does not declare embodichain_category = {category!r}"
+        else:
+            assert declared in (None, category), f"{name} declares {declared!r}, registered as {category!r}"
 
 
 GYM_CONFIG = {
