@@ -68,11 +68,8 @@ class PluginInfo:
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
-    """pluggy manager owning the registries its plugins fill.
-
-    Functions named ``embodichain_register*`` are hook implementations even without
-    ``@hookimpl``, so a misspelled hook name is caught as an unknown hook.
-    """
+    """pluggy manager owning the registries its plugins fill. Functions named
+    ``embodichain_register*`` are hooks even without ``@hookimpl``, so a misspelled one is caught."""
 
     def __init__(self) -> None:
         super().__init__(PROJECT_NAME)
@@ -124,12 +121,8 @@ def get_plugin_manager() -> EmbodichainPluginManager:
 
 
 def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozenset()) -> EmbodichainPluginManager:
-    """Load the built-ins and the installed plugins once; later calls are no-ops.
-
-    Args:
-        entry_points: also load the ``"embodichain"`` entry points (the default).
-        exclude: plugin names not to load.
-    """
+    """Load the built-ins and (with ``entry_points``) the installed plugins but ``exclude``,
+    once; later calls are no-ops."""
     pm = get_plugin_manager()
     with pm.lock:
         if pm.loaded:
@@ -161,11 +154,8 @@ def _iter_entry_points() -> list[Any]:
 
 
 def named_entry_points() -> list[tuple[str, Any]]:
-    """``(plugin name, entry point)`` sorted by plugin name: the load order.
-
-    A plugin is named after its distribution (PEP 503-normalized; an entry point without
-    one keeps its own name); a distribution's further entry points are ``<dist>.<name>``.
-    """
+    """``(plugin name, entry point)`` in load order: a plugin is named after its distribution
+    (PEP 503-normalized), a distribution's further entry points ``<dist>.<entry point>``."""
     eps = _iter_entry_points()
     norm = {id(ep): re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps}
     named = []
@@ -212,12 +202,8 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
 
 
 def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
-    """Check plugin ``name``'s hooks, run them into staging registries, merge on success.
-
-    Raises:
-        pluggy.PluginValidationError: the plugin implements an unknown hook.
-        Exception: whatever a hook raised; nothing of the plugin is registered then.
-    """
+    """Check plugin ``name``'s hooks (``PluginValidationError`` for an unknown one), run them
+    into staging registries and merge those when all succeeded; returns the names per kind."""
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
         if not caller.has_spec():
@@ -239,17 +225,9 @@ def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
 
 
 def register_plugin(obj: Any, name: str | None = None) -> str:
-    """Register a plugin object or module at runtime and run its register hooks.
-
-    Unlike an entry point, a failure raises (and leaves nothing registered).
-
-    Args:
-        obj: a module, class or instance with ``embodichain_register_*`` functions.
-        name: plugin name; defaults to the module or class name.
-
-    Returns:
-        The plugin name.
-    """
+    """Register a plugin (a module, class or instance) at runtime under ``name`` (default: the
+    module or class name) and run its hooks; returns the name. Unlike an entry point, a
+    failure raises (and leaves nothing registered)."""
     pm = load_plugins()
     with pm.lock:
         if name is None:
@@ -287,13 +265,7 @@ def isolated_plugins(
 ) -> Iterator[EmbodichainPluginManager]:
     """Swap in a fresh manager with only the built-ins (and, with ``load_entry_points``, the
     installed plugins but ``exclude``); on exit, restore the previous manager and every
-    gymnasium id the block's plugins wrote.
-
-    Example:
-        >>> with isolated_plugins() as pm:  # doctest: +SKIP
-        ...     register_plugin(MyPlugin())
-        ...     assert "my_functor" in pm.registry("functors")
-    """
+    gymnasium id the block's plugins wrote."""
     global _PM
     with _GLOBAL_LOCK:
         saved, _PM = _PM, EmbodichainPluginManager()
@@ -302,14 +274,8 @@ def isolated_plugins(
     finally:
         with _GLOBAL_LOCK:
             pm, _PM = _PM, saved
-        if pm is not None and pm.gym_saved:
-            import gymnasium
-
-            for gym_id, spec in pm.gym_saved.items():
-                if spec is None:
-                    gymnasium.registry.pop(gym_id, None)
-                else:
-                    gymnasium.registry[gym_id] = spec
+        if pm is not None:
+            sync_gym(pm, release=True)
 
 
 def _ambiguous_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
@@ -321,12 +287,11 @@ def _ambiguous_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any)
 def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) -> Any:
     from embodichain_core.gym_vector import BatchedEnvSpec, make_vec_env
 
+    target: Any = functools.partial(_ambiguous_task, pm.registries["tasks"], gym_id)
+    vector, kwargs = target, {}
     if len(entries) == 1:
         target, kwargs = entries[0].target, dict(entries[0].meta["kwargs"])
-        vector: Any = functools.partial(make_vec_env, target)
-    else:
-        target, kwargs = functools.partial(_ambiguous_task, pm.registries["tasks"], gym_id), {}
-        vector = target
+        vector = functools.partial(make_vec_env, target)
     spec = BatchedEnvSpec(
         gym_id,
         entry_point=target,
@@ -339,43 +304,41 @@ def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) 
     return spec
 
 
-def sync_gym(pm: EmbodichainPluginManager) -> None:
-    """Make gymnasium's registry show ``pm``'s tasks: every ``<plugin>/<id>`` and every bare
-    id (an ambiguous one raises when made). An id gymnasium has from outside the plugins is
-    left as it is (a :class:`NameClashWarning` unless it has the same entry point)."""
-    tasks = pm.registries["tasks"]
-    wanted: dict[str, list[Entry]] = {}
-    for entry in tasks.ordered_entries():
+def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
+    """Make gymnasium's registry show ``pm``'s tasks (none with ``release``): every
+    ``<plugin>/<id>`` and every bare id (an ambiguous one raises when made). An id this
+    manager no longer provides gets back what it had before. An id gymnasium has from
+    outside the plugins is left as it is (a :class:`NameClashWarning` unless it has the same
+    entry point)."""
+    tasks, wanted = pm.registries["tasks"], {}
+    for entry in [] if release else tasks.ordered_entries():
         wanted[tasks.qualified_name(entry)] = [entry]
         wanted.setdefault(entry.name, []).append(entry)
     if not wanted and not pm.gym_saved:
-        return  # gymnasium is not imported by a manager without tasks
+        return  # a manager without tasks does not import gymnasium
     import gymnasium
 
-    for gym_id, old in pm.gym_saved.items():
-        if gym_id not in wanted and gymnasium.registry.get(gym_id) is not old:
-            if old is None:
-                gymnasium.registry.pop(gym_id, None)
-            else:
-                gymnasium.registry[gym_id] = old
+    for gym_id in [g for g in pm.gym_saved if g not in wanted]:
+        old = pm.gym_saved.pop(gym_id)
+        if old is None:
+            gymnasium.registry.pop(gym_id, None)
+        else:
+            gymnasium.registry[gym_id] = old
     for gym_id, entries in wanted.items():
         current = gymnasium.registry.get(gym_id)
-        if gym_id not in pm.gym_saved:
-            if current is not None and not getattr(current, "embodichain_task", False):
-                key = f"{gym_id}={[e.target for e in entries]}"
-                if key not in pm.gym_foreign:
-                    pm.gym_foreign.add(key)
-                    _report_foreign(tasks, gym_id, current, entries)
-                continue
-            pm.gym_saved[gym_id] = current
+        if gym_id not in pm.gym_saved and current is not None and not getattr(current, "embodichain_task", False):
+            _report_foreign(pm, gym_id, current.entry_point, entries)
+            continue
+        pm.gym_saved.setdefault(gym_id, current)
         gymnasium.registry[gym_id] = _task_spec(pm, gym_id, entries)
 
 
-def _report_foreign(tasks: Registry, gym_id: str, existing: Any, entries: list[Entry]) -> None:
-    theirs = describe_target(existing.entry_point)
-    if len(entries) == 1 and theirs == entries[0].target_repr:
-        return  # the same class, registered by its own module: keep gymnasium's spec
-    ids = ", ".join(repr(tasks.qualified_name(e)) for e in entries)
+def _report_foreign(pm: EmbodichainPluginManager, gym_id: str, theirs: Any, entries: list[Entry]) -> None:
+    theirs, ours = describe_target(theirs), [e.target_repr for e in entries]
+    if ours == [theirs] or f"{gym_id}={ours}" in pm.gym_foreign:
+        return  # the same class, registered by its own module; or reported already
+    pm.gym_foreign.add(f"{gym_id}={ours}")
+    ids = ", ".join(repr(pm.registries["tasks"].qualified_name(e)) for e in entries)
     warnings.warn(
         f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins (entry point "
         f"{theirs!r}); it is left as it is. Use {ids} for the plugin task{'s' if len(entries) > 1 else ''}.",
