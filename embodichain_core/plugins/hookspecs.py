@@ -1,19 +1,7 @@
-"""Hook specifications of the embodichain plugin host, and the typed register objects.
-
-Every hook receives a ``register`` object and returns nothing (the style of tox 4 and
-``llm``); the register object records who registered what, so every entry keeps its
-qualified name ``<plugin>/<name>``. Targets given as ``"module:attr"`` strings are
-imported on first use, which keeps ``import embodichain_core`` and plugin loading cheap.
-
-Example:
-    >>> from embodichain_core.plugins import hookimpl
-    >>> @hookimpl
-    ... def embodichain_register_functors(register):
-    ...     register("randomize_light", "my_pkg.events:randomize_light",
-    ...              kind="event", category="randomization.visual")
-
-:data:`KINDS` is the one table of registry kinds: hook, register object, message noun
-and lookup key of each, in the order the hooks are called.
+"""The hooks of the plugin host, the typed ``register`` objects they receive, and
+:data:`KINDS`, the one table of registry kinds (hook, register object, message noun, lookup
+key), in the order the hooks are called. A hook records what its plugin provides and
+returns nothing; ``"module:attr"`` targets are imported on first use.
 """
 
 from __future__ import annotations
@@ -67,7 +55,6 @@ class RobotRegister(BaseRegister):
     """``register(name, cfg_class)``: lookups ignore case and a trailing ``Cfg``."""
 
     def __call__(self, name: str, cfg_class: Any) -> Entry:
-        """Register a robot config class (or ``"module:Class"``) as ``name``."""
         return self._add(name, cfg_class)
 
 
@@ -75,7 +62,6 @@ class SolverRegister(BaseRegister):
     """``register(name, solver_class, description="")``: lookups ignore case and a trailing ``Cfg``."""
 
     def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
-        """Register a solver class (or ``"module:Class"``) as ``name`` (a ``class_type``)."""
         return self._add(name, solver_class, {"description": description})
 
 
@@ -83,7 +69,6 @@ class SensorRegister(BaseRegister):
     """``register(sensor_type, cfg_class, sensor_class)``; ``entry.resolve_meta("sensor_class")``."""
 
     def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> Entry:
-        """Register a sensor; the entry's target is the config class."""
         if is_lazy_target(sensor_class):
             check_target_string(sensor_class, f"sensor {sensor_type!r} from {self.provider!r}")
         return self._add(sensor_type, cfg_class, {"sensor_class": sensor_class})
@@ -93,7 +78,6 @@ class AssetRegister(BaseRegister):
     """``register(name, root)``: a data root directory or a zero-argument callable."""
 
     def __call__(self, name: str, root: Any) -> Entry:
-        """Register a data root (``str``/``os.PathLike``, or a callable returning one)."""
         if not (isinstance(root, (str, os.PathLike)) or callable(root)):
             raise TypeError(
                 f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
@@ -114,7 +98,6 @@ class TaskRegister(BaseRegister):
         config: Any = None,
         description: str = "",
     ) -> Entry:
-        """Register a task (see :func:`embodichain_register_tasks`)."""
         if not is_lazy_target(entry_point):
             raise ValueError(
                 f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string, got {entry_point!r}"
@@ -128,7 +111,6 @@ class CommandRegister(BaseRegister):
     """``register(name, target, help="")``: ``target(argv: list[str]) -> int``."""
 
     def __call__(self, name: str, target: Any, help: str = "") -> Entry:  # noqa: A002
-        """Register a CLI subcommand (``"module:function"`` keeps ``--help`` fast)."""
         return self._add(name, target, {"help": help})
 
 
