@@ -14,14 +14,13 @@ from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import FunctorCfg
 from embodichain_core.managers.functor import Functor
+from embodichain_core.managers.entity_params import check_entity_params, entity_params
 from embodichain_core.managers.param_rules import (
     DATA_PATH_PARAMS,
     check_data_path,
-    check_entity_params,
     check_named_params,
     check_param_types,
     check_signature,
-    entity_params,
 )
 from embodichain_core.managers.resolution import iter_section, resolve_entities, resolve_func, resolve_functor
 from embodichain_core.utils.configclass import MISSING

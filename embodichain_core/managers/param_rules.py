@@ -24,10 +24,9 @@ a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: 
 ``folder_path``, ``texture_path``                      an asset name or path ``get_data_path`` finds
 =====================================================  ==========================================
 
-The signature rules (:func:`check_signature`, :func:`check_param_types`) and the entity
-params (:func:`entity_params`: a param annotated ``SceneEntityCfg``, ``Optional`` of it or a
-sequence of it; an unannotated or ``Any`` one named ``entity_cfg`` or ``*_entity_cfg``) read
-the functor's signature after its ``min_argc`` positional arguments.
+The signature rules (:func:`check_signature`, :func:`check_param_types`) read the functor's
+signature after its ``min_argc`` positional arguments; the params naming scene entities are
+found there too (:mod:`.entity_params`).
 
 Example:
     >>> check_named_params({"mass_range": [2.0, 1.0]}, "env.events.m", "randomize_rigid_object_mass")
@@ -40,8 +39,7 @@ from __future__ import annotations
 
 import inspect
 import math
-import re
-from typing import Any, Iterable, Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -53,9 +51,8 @@ __all__ = [
     "check_named_params",
     "check_param_types",
     "check_signature",
-    "check_entity_params",
     "check_data_path",
-    "entity_params",
+    "functor_params",
     "range_bounds",
     "MAX_RANGE_MAGNITUDE",
     "DATA_PATH_PARAMS",
@@ -234,73 +231,6 @@ def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None
                 join_path(path, "params", param.name),
                 f"functor {_name(func)!r}: expected {text}, got {type(value).__name__} {value!r}",
             )
-
-
-_ENTITY = re.compile(r"\bSceneEntityCfg\b")
-_SEQUENCE = re.compile(r"\b(Sequence|List|list|Tuple|tuple|Iterable)\[")
-
-
-def _entity_kind(param: inspect.Parameter) -> Optional[str]:
-    """``"one"``/``"many"`` for a param naming one entity or a sequence of them, else ``None``."""
-    annotation = param.annotation
-    text = "" if annotation is param.empty else annotation if isinstance(annotation, str) else str(annotation)
-    if text.replace("typing.", "") in ("", "Any"):  # not saying: the naming convention decides
-        return "one" if _conventional(param.name) else None
-    if not _ENTITY.search(text):
-        return None
-    return "many" if _SEQUENCE.search(text) else "one"
-
-
-def _conventional(name: str) -> bool:
-    return name == "entity_cfg" or name.endswith("_entity_cfg")
-
-
-def entity_params(func: Any, min_argc: Optional[int], keys: Iterable[str] = ()) -> dict[str, bool]:
-    """The params of ``func`` naming scene entities -> whether each takes a sequence of them.
-
-    A param annotated ``SceneEntityCfg`` (bare, ``Optional`` or a ``Sequence``/``List`` of
-    it) names entities; so does an unannotated (or ``Any``) one named ``entity_cfg`` or
-    ``*_entity_cfg``. Without a readable signature (or for its ``**kwargs``), the given
-    ``keys`` that follow that naming convention.
-    """
-    args = functor_params(func, min_argc)
-    found = {}
-    for param in args or []:
-        kind = None if param.kind is param.VAR_KEYWORD else _entity_kind(param)
-        if kind is not None:
-            found[param.name] = kind == "many"
-    if args is None or any(p.kind is p.VAR_KEYWORD for p in args):
-        named = {p.name for p in args or []}
-        found.update({k: False for k in keys if k not in named and _conventional(k)})
-    return found
-
-
-def check_entity_params(params: dict, entities: dict[str, bool], path: str, uids: Optional[list[str]]) -> None:
-    """Each entity param (see :func:`entity_params`) is ``None`` (not given), a
-    ``SceneEntityCfg`` or ``{"uid": ...}`` (a list of them where it takes a sequence) naming
-    a uid of ``uids`` (not checked when ``uids`` is ``None``)."""
-    from embodichain_core.managers.cfg import SceneEntityCfg
-
-    for key, many in entities.items():
-        value, where = params.get(key), join_path(path, key)
-        if many and isinstance(value, (list, tuple)):
-            items = [(f"{where}[{i}]", item) for i, item in enumerate(value)]
-        else:
-            items = [(where, value)]
-        for at, item in items:
-            if item is None:
-                continue
-            uid: Any
-            if isinstance(item, SceneEntityCfg):
-                uid = item.uid
-            elif isinstance(item, dict):
-                uid = item.get("uid")
-            else:
-                raise ConfigError(at, f"expected an entity such as {{'uid': 'cube'}}, got {describe(item)}")
-            if not isinstance(uid, str) or not uid:
-                raise ConfigError(join_path(at, "uid"), f"expected the uid of a scene entity, got {describe(uid)}")
-            if uids is not None and uid not in uids:
-                raise ConfigError(join_path(at, "uid"), f"no entity {uid!r} in the scene.{did_you_mean(uid, uids)}")
 
 
 #: Params naming asset data (``get_data_path`` names or paths) that must exist.

@@ -97,7 +97,7 @@ def _from_registry(name: str, kind: str, path: str) -> Any:
 
 
 def resolve_entities(params: dict, scene: Any, path: str, entities: dict[str, bool]) -> dict:
-    """``params`` with the entity params (see :func:`~.param_rules.entity_params`) as
+    """``params`` with the entity params (see :func:`~.entity_params.entity_params`) as
     resolved ``SceneEntityCfg`` (a ``{"uid": ...}`` mapping becomes one), and every
     ``SceneEntityCfg`` found anywhere else in the params resolved too."""
     out = {}
