@@ -1,9 +1,12 @@
 """The plugin templates and ``embodichain new``.
 
-Each template is baked into ``tmp_path``, the baked package is pip-installed (editable) into
-this environment, its own tests run in a subprocess, and a fresh interpreter discovers it
-through its entry point (``gym.make`` for the task). Bad names fail before anything is
-written. The packages are uninstalled afterwards, also when a test fails.
+Each template is baked into ``tmp_path``, the baked package is pip-installed into a folder of
+``tmp_path`` only (``pip install --target``), its own tests run in a subprocess with that folder
+on ``PYTHONPATH``, and such a fresh interpreter discovers it through its entry point
+(``gym.make`` for the task). The environment running the tests never sees the baked packages:
+neither this interpreter nor another process of the environment (``embodichain list tasks`` run
+meanwhile), which the tests check while and after the packages are installed. Bad names fail
+before anything is written.
 """
 
 from __future__ import annotations
@@ -36,23 +39,48 @@ def run(args: list[str], cwd: Path | None = None, timeout: float = 300, **env_va
     return out
 
 
+#: Distribution-name prefixes of every package these tests bake.
+BAKED_PREFIXES = ("embodichain-tmpl-", "embodichain-randomize-tmpl-")
+
+
+def baked_distributions(names: list[str]) -> list[str]:
+    """The names in ``names`` of packages these tests bake."""
+    return sorted(n for n in names if n.lower().startswith(BAKED_PREFIXES))
+
+
+def assert_environment_untouched() -> None:
+    """No baked package is visible to this interpreter or to a fresh one of this environment."""
+    importlib.invalidate_caches()
+    here = baked_distributions([d.metadata["Name"] or "" for d in importlib.metadata.distributions()])
+    assert here == [], f"baked packages visible to the test process: {here}"
+    code = "import importlib.metadata as m; print(*(d.metadata['Name'] for d in m.distributions()))"
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    fresh = baked_distributions(out.stdout.split())
+    assert fresh == [], f"baked packages installed into the environment {sys.prefix}: {fresh}"
+
+
 @contextmanager
-def installed(*package_dirs: Path) -> Iterator[None]:
-    """pip-install the baked packages (editable, no deps) for the block; uninstall them after.
+def installed(site: Path, *package_dirs: Path) -> Iterator[dict[str, str]]:
+    """pip-install the baked packages (no deps) into the folder ``site`` only, for the block.
 
     A baked package's directory is named after its distribution.
+
+    Yields:
+        The environment variables under which a subprocess sees the packages (``PYTHONPATH``).
     """
-    dists = [d.name for d in package_dirs]
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
-    editable = [arg for d in package_dirs for arg in ("-e", str(d))]
+    run([*pip, "install", "--no-deps", "--no-build-isolation", "--target", str(site), *map(str, package_dirs)])
+    found = baked_distributions([p.name.split("-")[0].replace("_", "-") for p in site.glob("*.dist-info")])
+    assert found == sorted(d.name for d in package_dirs), f"not installed into {site}: {found}"
+    paths = [str(site), *([os.environ["PYTHONPATH"]] if os.environ.get("PYTHONPATH") else [])]
     try:
-        run([*pip, "install", "--no-deps", "--no-build-isolation", *editable])
-        yield
+        assert_environment_untouched()
+        yield {"PYTHONPATH": os.pathsep.join(paths)}
     finally:
-        subprocess.run([*pip, "uninstall", "-y", *dists], capture_output=True, timeout=300)
-    for dist in dists:
-        with pytest.raises(importlib.metadata.PackageNotFoundError):
-            importlib.metadata.distribution(dist)
+        shutil.rmtree(site, ignore_errors=True)
+    assert_environment_untouched()
 
 
 def new(*argv: str) -> int:
@@ -266,8 +294,10 @@ def test_wheel_carries_every_template_file(tmp_path: Path) -> None:
 def test_task_template_bakes_installs_tests_and_gym_makes(tmp_path: Path) -> None:
     assert new("task", TASK_NAME, "--no-input", "-o", str(tmp_path), "--max-episode-steps", "40") == 0
     package = tmp_path / TASK_DIST
-    with installed(package):
-        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package)
+    with installed(tmp_path / "site", package) as env:
+        run(
+            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package, **env
+        )
         code = (
             "import sys, gymnasium as gym, torch\n"
             "import embodichain_core\n"
@@ -281,14 +311,14 @@ def test_task_template_bakes_installs_tests_and_gym_makes(tmp_path: Path) -> Non
             "print(row['provider'], type(env).__name__, env.max_episode_steps, tuple(reward.shape),\n"
             "      tuple(obs['object']['cube_pos'].shape))\n"
         )
-        out = run([sys.executable, "-c", code], cwd=tmp_path)
+        out = run([sys.executable, "-c", code], cwd=tmp_path, **env)
         assert out.stdout.split() == [TASK_DIST, "TmplReachEnv", "40", "(2,)", "(2,", "3)"]
         cheap = (
             "import sys, embodichain_tmpl_reach.plugin\n"
             "heavy = {'torch', 'mujoco', 'embodichain_tmpl_reach.task'} & set(sys.modules)\n"
             "assert not heavy, f'the plugin module imports {heavy}'\n"
         )
-        run([sys.executable, "-c", cheap], cwd=tmp_path, EMBODICHAIN_BLOCK_PLUGINS="*")
+        run([sys.executable, "-c", cheap], cwd=tmp_path, EMBODICHAIN_BLOCK_PLUGINS="*", **env)
 
 
 def bake_functor(kind: str, output_dir: Path) -> Path:
@@ -300,8 +330,10 @@ def bake_functor(kind: str, output_dir: Path) -> Path:
 def test_functor_template_bakes_installs_tests_and_registers(tmp_path: Path) -> None:
     package = bake_functor("randomization", tmp_path)
     assert package.name == "embodichain-randomize-tmpl-randomization"
-    with installed(package):
-        run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package)
+    with installed(tmp_path / "site", package) as env:
+        run(
+            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(package / "tests")], cwd=package, **env
+        )
         code = (
             "import sys\n"
             "from embodichain_core.plugins import functor_registry\n"
@@ -310,7 +342,7 @@ def test_functor_template_bakes_installs_tests_and_registers(tmp_path: Path) -> 
             "assert callable(entry.resolve())\n"
             "print(entry.meta['kind'], entry.meta['category'], entry.provider)\n"
         )
-        out = run([sys.executable, "-c", code], cwd=tmp_path).stdout.split()
+        out = run([sys.executable, "-c", code], cwd=tmp_path, **env).stdout.split()
     assert out == ["event", "randomization.physics", "embodichain-randomize-tmpl-randomization"]
 
 
