@@ -42,7 +42,7 @@ def pack_u16(values: np.ndarray) -> np.ndarray:
 
 def _as_uint8_hwc(image: Any) -> np.ndarray:
     """An image item (float ``(..., 3, H, W)`` in [0, 1], a tensor, or uint8 ``(..., H, W, 3)``) as uint8 HWC."""
-    arr = np.asarray(image.numpy() if hasattr(image, "numpy") else image)
+    arr = np.asarray(image.detach().cpu().numpy() if hasattr(image, "detach") else image)  # a tensor on any device
     if arr.dtype != np.uint8:
         arr = np.rint(np.clip(arr, 0.0, 1.0) * 255.0).astype(np.uint8)
         if arr.shape[-1] != 3 and arr.shape[-3] == 3:  # channels first, as LeRobotDataset returns

@@ -23,7 +23,7 @@ _MIN_TILE = 96
 
 def _to_hwc_uint8(value: Any) -> np.ndarray:
     """A camera item (``(C, H, W)`` float in [0, 1]) or a depth map as ``(H, W, 3)`` uint8."""
-    arr = np.asarray(value.numpy() if hasattr(value, "numpy") else value)
+    arr = np.asarray(value.detach().cpu().numpy() if hasattr(value, "detach") else value)  # a tensor on any device
     if arr.ndim == 3 and arr.shape[0] in (1, 3) and arr.shape[-1] not in (1, 3):
         arr = arr.transpose(1, 2, 0)
     if arr.ndim == 2:

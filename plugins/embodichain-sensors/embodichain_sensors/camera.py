@@ -27,6 +27,7 @@ Example:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any, Optional
 
@@ -79,6 +80,7 @@ class Camera(BaseSensor):
         self.views = self._make_views()
         self._renderer: Optional[SensorRenderer] = None
         self._pool: Optional[RenderPool] = None
+        self._threaded = False  # the GL backend hands contexts between threads (set by bind)
         self._warp: Optional[WarpCameraRenderer] = None
         self._path = f"sensor {self.uid!r}"
         self._ids: Optional[EntityIds] = None
@@ -134,12 +136,13 @@ class Camera(BaseSensor):
         chosen = choose_renderer(self.scene.sim_cfg, getattr(self.cfg, "renderer", None), self.uid, self._path)
         threads = int(getattr(self.cfg, "render_threads", 1) or 1)
         backend = gl_backend()
-        if chosen == "opengl" and threads > 1 and self.num_envs > 1 and backend not in THREADED_BACKENDS:
-            raise ConfigError(
-                f"{self._path}.render_threads",
-                f"sensor {self.uid!r}: {threads} render threads need MUJOCO_GL "
-                f"{' or '.join(THREADED_BACKENDS)} (an OpenGL context handed between threads), "
-                f"not {backend!r}; set render_threads: 1",
+        self._threaded = backend in THREADED_BACKENDS
+        if chosen == "opengl" and threads > 1 and self.num_envs > 1 and not self._threaded:
+            warnings.warn(
+                f"{self._path}.render_threads = {threads}: rendering on one thread, since MUJOCO_GL "
+                f"{backend!r} cannot hand an OpenGL context between threads (use "
+                f"{' or '.join(THREADED_BACKENDS)} for parallel rendering)",
+                stacklevel=2,
             )
         return chosen
 
@@ -204,7 +207,7 @@ class Camera(BaseSensor):
     def _render_pool(self) -> Optional[RenderPool]:
         """The pool of ``render_threads`` renderers (``None``: one renderer, this thread)."""
         threads = min(int(getattr(self.cfg, "render_threads", 1) or 1), self.num_envs)
-        if threads <= 1:
+        if threads <= 1 or not self._threaded:
             return None
         if self._pool is None:
             self._pool = RenderPool(self._new_renderer, threads)
@@ -295,7 +298,7 @@ class Camera(BaseSensor):
 
     def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
         """Set the pose in the parent frame: ``(n, 7)`` (xyz, wxyz) or ``(n, 4, 4)``."""
-        ids = env_index(env_ids, self.num_envs).numpy()
+        ids = env_index(env_ids, self.num_envs).cpu().numpy()
         p = np.asarray(pose.detach().cpu() if isinstance(pose, torch.Tensor) else pose, dtype=np.float64)
         if p.shape[-2:] == (4, 4):
             pos, rot = p[..., :3, 3], p[..., :3, :3]
@@ -305,7 +308,7 @@ class Camera(BaseSensor):
 
     def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
         """Point the camera from ``eye`` at ``target`` (parent frame), for ``env_ids``."""
-        ids = env_index(env_ids, self.num_envs).numpy()
+        ids = env_index(env_ids, self.num_envs).cpu().numpy()
         eye, target = (
             np.broadcast_to(np.asarray(eye, float), (len(ids), 3)),
             np.broadcast_to(np.asarray(target, float), (len(ids), 3)),
@@ -320,7 +323,7 @@ class Camera(BaseSensor):
 
     def set_intrinsics(self, intrinsics: Any, env_ids: Any = None) -> None:
         """Set ``(fx, fy, cx, cy)`` (or ``(n, 3, 3)`` matrices) for ``env_ids``."""
-        _set_intrinsics(self.views[0], intrinsics, env_index(env_ids, self.num_envs).numpy())
+        _set_intrinsics(self.views[0], intrinsics, env_index(env_ids, self.num_envs).cpu().numpy())
 
     # -- ids and lifecycle ------------------------------------------------------------------------
     @property

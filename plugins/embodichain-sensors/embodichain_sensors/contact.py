@@ -75,9 +75,9 @@ class ContactSensor(BaseSensor):
                 f"{did_you_mean(filt.articulation_uid, arts)}"
             )
         if not filt.link_name_list:
-            return art.body_ids.numpy()
+            return art.body_ids.cpu().numpy()
         ids, _ = art.find_bodies(list(filt.link_name_list))
-        return art.body_ids[ids].numpy()
+        return art.body_ids[ids].cpu().numpy()
 
     @staticmethod
     def _body_name(model: mujoco.MjModel, body: int) -> str:

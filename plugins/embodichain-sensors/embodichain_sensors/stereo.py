@@ -76,7 +76,7 @@ class StereoCamera(Camera):
         self, intrinsics: Any, intrinsics_right: Optional[Any] = None, env_ids: Any = None
     ) -> None:
         """Set the left (and right; default: the same) intrinsics for ``env_ids``."""
-        ids = env_index(env_ids, self.num_envs).numpy()
+        ids = env_index(env_ids, self.num_envs).cpu().numpy()
         _set_intrinsics(self.views[0], intrinsics, ids)
         _set_intrinsics(self.views[1], intrinsics if intrinsics_right is None else intrinsics_right, ids)
 
