@@ -33,6 +33,7 @@ from embodichain_core.plugins import (
     register_plugin,
     unregister_plugin,
 )
+from embodichain_core.envs import EmbodiedEnv
 from embodichain_core.testing.pytest_plugin import plugin_manager  # noqa: F401  (fixture)
 
 REPO = Path(__file__).resolve().parents[1]
@@ -363,3 +364,39 @@ def test_plugin_modules_import_cheaply() -> None:
     env = {**os.environ, "EMBODICHAIN_BLOCK_PLUGINS": "*", "PYTHONPATH": str(REPO)}
     result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
+
+
+class ShimFirst(EmbodiedEnv):
+    """A module-level env class: gymnasium imports tasks by ``"module:Class"``."""
+
+
+class ShimSecond(EmbodiedEnv):
+    pass
+
+
+def test_register_env_runs_the_tasks_hook(plugin_manager: Any) -> None:  # noqa: F811
+    import gymnasium
+
+    from embodichain_core.envs import register_env
+    from embodichain_core.plugins import task_episode_limit
+
+    register_env("EcShimTask-v0", max_episode_steps=7)(ShimFirst)
+    entry = plugin_manager.registry("tasks").entry("EcShimTask-v0")
+    assert entry.provider == ShimFirst.__module__  # the module is the provider, as a plugin would be
+    assert entry.target == f"{ShimFirst.__module__}:ShimFirst"
+    assert gymnasium.registry["EcShimTask-v0"].entry_point == entry.target
+    assert gymnasium.registry["EcShimTask-v0"].kwargs == {}  # no hidden keyword: the limit is the registry's
+    assert task_episode_limit(ShimFirst) == 7
+    assert task_episode_limit(ShimSecond) is None
+    with pytest.warns(UserWarning, match="already registered by .*ShimFirst; keeping it"):
+        register_env("EcShimTask-v0")(ShimSecond)
+    assert plugin_manager.registry("tasks").entry("EcShimTask-v0").target.endswith("ShimFirst")
+    register_env("EcShimTask-v0", override=True)(ShimSecond)
+    assert gymnasium.registry["EcShimTask-v0"].entry_point.endswith("ShimSecond")
+    assert task_episode_limit(ShimFirst) is None
+
+    class Local(EmbodiedEnv):
+        pass
+
+    with pytest.raises(TypeError, match="defined inside a function"):
+        register_env("EcShimLocal-v0")(Local)

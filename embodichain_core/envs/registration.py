@@ -72,7 +72,11 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
 
     pm = load_plugins()
     name, target = cls.__module__, f"{cls.__module__}:{cls.__qualname__}"
-    others = [e for e in pm.registry("tasks").ordered_entries() if e.name == uid and e.provider != name]
+    others = [
+        e
+        for e in pm.registry("tasks").ordered_entries()
+        if e.name == uid and e.provider not in (name, f"{name}.register_env")
+    ]
     if others:
         if all(e.target != target for e in others):
             providers = ", ".join(sorted({e.provider for e in others}))
@@ -82,6 +86,11 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
                 stacklevel=3,
             )
         return
+    if "<locals>" in cls.__qualname__:
+        raise TypeError(
+            f"register_env({uid!r}): {cls.__qualname__} is defined inside a function; gymnasium imports a "
+            f"task by 'module:Class', so define the class at the top level of its module"
+        )
     if pm.get_plugin(name) is not None and not isinstance(pm.get_plugin(name), _ModuleTasks):
         name += ".register_env"  # the module is a plugin of its own
     plugin = pm.get_plugin(name) or _ModuleTasks()
