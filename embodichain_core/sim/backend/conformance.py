@@ -61,13 +61,17 @@ def check_views(factory: Factory) -> None:
     assert views["qpos"].device == sim.device
     attribute = getattr(sim, "qpos")  # noqa: B009 (sim.qpos: named views are not protocol members)
     assert attribute is views["qpos"], "sim.qpos and sim.view('qpos') differ"
+    arrays = dict(sim.arrays) if sim.capabilities.host_arrays else {}
     sim.step(2)
     sim.step(1, env_ids=[1])
     sim.reset([0])
+    sim.declare_per_env(["geom_friction"])
     sim.set_model_field("body_mass", [2], box, 3.0)
     sim.forward()
     for name, view in views.items():
         assert sim.view(name) is view, f"the view of {name!r} was replaced"
+    for name, array in arrays.items():
+        assert sim.arrays[name] is array, f"the numpy view of {name!r} was replaced"
     assert set(DERIVED_FIELDS) >= {"xpos", "xquat", "qfrc_actuator", "sensordata"}
 
 

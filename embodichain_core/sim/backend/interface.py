@@ -102,7 +102,7 @@ class SimBackend(Protocol):
 
     @property
     def arrays(self) -> Mapping[str, np.ndarray]:
-        """Numpy views of :data:`STATE_FIELDS`, by name (a backend may rebind the mapping)."""
+        """Numpy views of :data:`STATE_FIELDS`, by name (persistent, like the tensor views)."""
         ...
 
     # -- stepping and state -------------------------------------------------------------------
