@@ -307,6 +307,10 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
         result = measure(args, workdir)
     info["loadavg_after"] = os.getloadavg()
     summary = {threads: summarize(rs) for threads, rs in result["rounds"].items()}
+    first = next(iter(result["rounds"].values()))
+    for threads, rs in result["rounds"].items():  # paired: rounds next to each other share the load
+        paired = [r["env_steps_per_s"] / f["env_steps_per_s"] for r, f in zip(rs, first)]
+        summary[threads]["speedup_over_first"] = median(paired)
     payload = {"settings": vars(args), "summary": summary, **result, "machine": info}
     print()
     for threads, row in summary.items():
@@ -314,7 +318,8 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
             f"render_threads {threads}: main job recorded {row['env_steps_per_s']:.1f} env-steps/s; bare "
             f"mujoco.Renderer limit {row['limit_steps_per_s']:.1f} env-steps/s; ratio {row['ratio']:.2f} "
             f"(spread {row['ratio_spread']:.2f}; target >= 0.8: {'met' if row['meets_target'] else 'not met'}); "
-            f"CPU-time ratio {row['cpu_ratio']:.2f}"
+            f"CPU-time ratio {row['cpu_ratio']:.2f}; env-steps/s x{row['speedup_over_first']:.2f} of the first "
+            "contender's (paired rounds)"
         )
     if result["breakdown_ms_per_env_step"]:
         print(f"\nprofiled round (render_threads 1), {args.clock} ms per env step:")

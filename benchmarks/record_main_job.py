@@ -182,7 +182,7 @@ def measure_depth_masks(episodes: int, workdir: str) -> dict[str, Any]:
         "--out",
         os.path.join(workdir, "preview"),
     ]
-    record = {
+    record: dict[str, Any] = {
         "case": "main_job_depth_masks",
         "episodes": episodes,
         "bytes_without": _size(plain),
