@@ -4,13 +4,19 @@ Every mutation (see ``config_mutations.py``) goes through the normal path of a g
 config, ``load_gym_config`` then ``gymnasium.make``, with the standard plugins. A
 mutation either builds (only the documented valid values) or fails with a
 ``ConfigError`` naming the key path; any other exception, or a nonsense value
-that builds, fails the test. Most mutations fail before MuJoCo compiles anything,
-so the whole corpus runs by default (about 15 s); the ``slow`` variant applies
-two rejected mutations at once (a fixed pairing) and needs an error naming one.
+that builds, fails the test. The mutated configs record in the test process
+(``params.writer_process: false``): a writer child costs seconds to start and stop
+per build, and the corpus is about the config, not the recording (the unmutated main
+job builds with its writer child). Every rejected mutation fails before or while
+MuJoCo compiles and runs by default (about 10 s); an accepted one builds the whole W1
+scene: a fixed sample of them runs by default, all of them in the ``slow`` test
+(``.ci/run``), as does the ``slow`` variant that applies two rejected mutations at
+once (a fixed pairing) and needs an error naming one.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from pathlib import Path
@@ -27,13 +33,24 @@ from embodichain_core.config.loader import load_gym_config
 MAIN_JOB = Path(embodichain_tasks.__file__).parent / "configs" / "main_job.json"
 CORPUS = mutations()
 REJECTED = [m for m in CORPUS if m.expect == "error"]
+ACCEPTED = [m for m in CORPUS if m.expect == "ok"]
+#: Every fourth accepted mutation (the corpus is ordered by config path, so the sample spans it).
+ACCEPTED_SAMPLE = ACCEPTED[::4]
 
 
 @pytest.fixture(scope="module")
-def base_config(tmp_path_factory: pytest.TempPathFactory) -> dict:
+def main_job(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """The main job's config, recording (if ever) into a temporary folder."""
     data = json.loads(MAIN_JOB.read_text())
     data["env"]["dataset"]["lerobot"]["params"]["save_path"] = str(tmp_path_factory.mktemp("fuzz_datasets"))
+    return data
+
+
+@pytest.fixture(scope="module")
+def base_config(main_job: dict) -> dict:
+    """What the mutations change: the main job's config, its recorder writing in this process."""
+    data = copy.deepcopy(main_job)
+    data["env"]["dataset"]["lerobot"]["params"]["writer_process"] = False
     return data
 
 
@@ -96,12 +113,24 @@ def test_corpus_is_large_and_deterministic() -> None:
     } <= kinds
 
 
-def test_unmutated_main_job_builds(base_config: dict) -> None:
+def test_unmutated_main_job_builds(main_job: dict, base_config: dict) -> None:
+    assert build(main_job) is None
     assert build(base_config) is None
 
 
 def test_mutations_fail_with_a_config_error_naming_the_key(base_config: dict) -> None:
-    _check_all(base_config, CORPUS)
+    _check_all(base_config, REJECTED)
+
+
+def test_a_sample_of_valid_values_builds(base_config: dict) -> None:
+    assert 4 <= len(ACCEPTED_SAMPLE) < len(ACCEPTED)
+    _check_all(base_config, ACCEPTED_SAMPLE)
+
+
+@pytest.mark.slow
+def test_every_valid_value_builds(base_config: dict) -> None:
+    assert len(ACCEPTED) >= 30
+    _check_all(base_config, ACCEPTED)
 
 
 def _pairs() -> list[tuple[Mutation, Mutation]]:
