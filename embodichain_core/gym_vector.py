@@ -32,16 +32,18 @@ from gymnasium.envs.registration import EnvSpec
 __all__ = ["make_vec_env", "UnbatchedEnv", "BatchedEnvSpec", "SingleEnvEntryPoint", "batched_spec"]
 
 
-def make_vec_env(cls_path: str, num_envs: int = 1, **kwargs: Any) -> Any:
-    """Build the env class at ``"module:Class"`` with ``num_envs``.
+def make_vec_env(cls_path: str | type, num_envs: int = 1, **kwargs: Any) -> Any:
+    """Build the env class at ``"module:Class"`` (or the class itself) with ``num_envs``.
 
     The env is already batched, so it is its own vector env (``gym.make_vec(id,
     num_envs=N, vectorization_mode="vector_entry_point")``).
     """
-    module, _, attr = cls_path.partition(":")
-    cls: Any = importlib.import_module(module)
-    for part in attr.split("."):
-        cls = getattr(cls, part)
+    cls: Any = cls_path
+    if isinstance(cls_path, str):
+        module, _, attr = cls_path.partition(":")
+        cls = importlib.import_module(module)
+        for part in attr.split("."):
+            cls = getattr(cls, part)
     kwargs.pop("vectorization_mode", None)
     kwargs.pop("vector_kwargs", None)
     return cls(num_envs=num_envs, **kwargs)

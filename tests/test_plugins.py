@@ -383,16 +383,17 @@ def test_register_env_runs_the_tasks_hook(plugin_manager: Any) -> None:  # noqa:
     register_env("EcShimTask-v0", max_episode_steps=7)(ShimFirst)
     entry = plugin_manager.registry("tasks").entry("EcShimTask-v0")
     assert entry.provider == ShimFirst.__module__  # the module is the provider, as a plugin would be
-    assert entry.target == f"{ShimFirst.__module__}:ShimFirst"
+    assert entry.target is ShimFirst  # the class itself: its module need not be importable by name
+    assert entry.target_repr == f"{ShimFirst.__module__}:ShimFirst"
     assert gymnasium.registry["EcShimTask-v0"].entry_point == entry.target
     assert gymnasium.registry["EcShimTask-v0"].kwargs == {}  # no hidden keyword: the limit is the registry's
     assert task_episode_limit(ShimFirst) == 7
     assert task_episode_limit(ShimSecond) is None
     with pytest.warns(UserWarning, match="already registered by .*ShimFirst; keeping it"):
         register_env("EcShimTask-v0")(ShimSecond)
-    assert plugin_manager.registry("tasks").entry("EcShimTask-v0").target.endswith("ShimFirst")
+    assert plugin_manager.registry("tasks").entry("EcShimTask-v0").target is ShimFirst
     register_env("EcShimTask-v0", override=True)(ShimSecond)
-    assert gymnasium.registry["EcShimTask-v0"].entry_point.endswith("ShimSecond")
+    assert gymnasium.registry["EcShimTask-v0"].entry_point is ShimSecond
     assert task_episode_limit(ShimFirst) is None
 
     class Local(EmbodiedEnv):

@@ -95,7 +95,7 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
     aid = torch.as_tensor(env.active_joint_ids, dtype=torch.long)
     # addresses, drive targets and fast paths of the active joints, resolved once
     env._robot_io = RobotIO(env.sim, env.robot, env.active_joint_ids, env.num_envs)
-    limits = env.robot.get_qpos_limits()[0, aid].numpy()
+    limits = env.robot.get_qpos_limits()[0, aid].cpu().numpy()  # the sim device may be a GPU
     env.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
     return functors
 

@@ -29,7 +29,7 @@ class _ModuleTasks:
     """The runtime plugin of one module's ``register_env`` calls."""
 
     def __init__(self) -> None:
-        self.tasks: dict[str, tuple[str, Optional[int], dict[str, Any]]] = {}
+        self.tasks: dict[str, tuple[type, Optional[int], dict[str, Any]]] = {}
 
     @hookimpl
     def embodichain_register_tasks(self, register: Any) -> None:
@@ -71,6 +71,8 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
     from embodichain_core.plugins import load_plugins, register_plugin, unregister_plugin
 
     pm = load_plugins()
+    # the class itself is the target: its module may not be importable by name (a test file
+    # in a folder with a hyphen, a script run as __main__); ``target`` is how it is shown
     name, target = cls.__module__, f"{cls.__module__}:{cls.__qualname__}"
     others = [
         e
@@ -78,7 +80,7 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
         if e.name == uid and e.provider not in (name, f"{name}.register_env")
     ]
     if others:
-        if all(e.target != target for e in others):
+        if all(e.target_repr != target for e in others):
             providers = ", ".join(sorted({e.provider for e in others}))
             warnings.warn(
                 f"env id {uid!r} is provided by installed plugins ({providers}); register_env keeps theirs and "
@@ -95,17 +97,22 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
         name += ".register_env"  # the module is a plugin of its own
     plugin = pm.get_plugin(name) or _ModuleTasks()
     old = plugin.tasks.get(uid)
-    if old is not None and old[0] != target and not override:
+    if old is not None and _shown(old[0]) != target and not override:
         warnings.warn(
-            f"env id {uid!r} is already registered by {old[0]}; keeping it (pass override=True to replace it)",
+            f"env id {uid!r} is already registered by {_shown(old[0])}; keeping it (pass override=True to replace it)",
             stacklevel=3,
         )
         return
     foreign = gymnasium.registry.get(uid)
     if foreign is not None and not getattr(foreign, "embodichain_task", False) and override:
         del gymnasium.registry[uid]
-    plugin.tasks[uid] = (target, limit, kwargs)
+    plugin.tasks[uid] = (cls, limit, kwargs)
     if pm.get_plugin(name) is not None:
         unregister_plugin(name)
     register_plugin(plugin, name=name)
     REGISTERED_ENVS[uid] = cls
+
+
+def _shown(cls: type) -> str:
+    """``"module:Class"``: how a registered class is named in messages."""
+    return f"{cls.__module__}:{cls.__qualname__}"

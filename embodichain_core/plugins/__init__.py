@@ -175,6 +175,6 @@ def task_episode_limit(env_cls: type) -> int | None:
     """The ``max_episode_steps`` registered with the tasks whose entry point is ``env_cls``
     (``None`` when none gives one, or when they disagree)."""
     target = f"{env_cls.__module__}:{env_cls.__qualname__}"
-    limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target == target}
+    limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target_repr == target}
     limits.discard(None)
     return limits.pop() if len(limits) == 1 else None

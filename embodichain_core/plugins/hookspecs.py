@@ -86,21 +86,23 @@ class AssetRegister(BaseRegister):
 
 
 class TaskRegister(BaseRegister):
-    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``."""
+    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``;
+    ``entry_point`` is a ``"module:Class"`` string (imported when the task is made) or the class."""
 
     def __call__(
         self,
         task_id: str,
-        entry_point: str,
+        entry_point: str | type,
         *,
         max_episode_steps: int | None = None,
         kwargs: dict[str, Any] | None = None,
         config: Any = None,
         description: str = "",
     ) -> Entry:
-        if not is_lazy_target(entry_point):
+        if not (is_lazy_target(entry_point) or isinstance(entry_point, type)):
             raise ValueError(
-                f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string, got {entry_point!r}"
+                f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string or the env "
+                f"class, got {entry_point!r}"
             )
         limit = None if max_episode_steps is None else int(max_episode_steps)
         meta = {"max_episode_steps": limit, "kwargs": dict(kwargs or {}), "config": config, "description": description}
