@@ -90,7 +90,8 @@ if [ -n "$TORCH_INDEX_URL" ]; then
   torch_index=(--index-url "$TORCH_INDEX_URL")
 fi
 $PIP install -q ${torch_index[@]+"${torch_index[@]}"} "torch==$TORCH_VERSION" "torchvision==$TORCHVISION_VERSION"
-# The core with its test extra and the `new` extra (cookiecutter, for `embodichain new`).
+# The core with its test extra (pytest, pytest-xdist for `make test`'s workers, sybil, ruff, mypy,
+# mkdocs) and the `new` extra (cookiecutter, for `embodichain new`).
 args=(-e ".[test,new]")
 for p in plugins/*/; do
   [ -f "$p/pyproject.toml" ] && args+=(-e "$p")
