@@ -205,7 +205,8 @@ def breakdown(stats: pstats.Stats, total_s: float, env_steps: int) -> dict[str, 
         "segmentation_pass": _time(stats, "render_segmentation", "embodichain_sensors"),
     }
     render = _time(stats, "render", "embodichain_sensors/renderer.py")
-    parts["depth_linearization"] = max(0.0, render - parts["rasterization"] - parts["read_back"])
+    # the rest of SensorRenderer.render: the depth linearization when depth is on, the call itself
+    parts["render_call_rest"] = max(0.0, render - parts["rasterization"] - parts["read_back"])
     view = _time(stats, "_render_view", "embodichain_sensors/camera.py")
     parts["conversion"] = (
         max(0.0, view - render - parts["segmentation_pass"])
