@@ -8,7 +8,9 @@ It holds what ``mujoco.Renderer`` holds (a GL context, an ``MjrContext``, an
   principal point and the clipping planes are exact for any model;
 * colour and depth come from one render (``mjr_readPixels`` reads both);
 * segmentation is a second render with ``mjRND_SEGMENT | mjRND_IDCOLOR``;
-* fast settings by default: no shadows, no reflections, no MSAA.
+* fast settings by default: no shadows, no reflections, no MSAA;
+* its GL context can be handed to another thread (:meth:`SensorRenderer.release_current`,
+  then :meth:`SensorRenderer.current` there): the render pool of ``render_threads`` does.
 
 Its GL objects are freed in its own GL context, by :meth:`close` or when it is
 garbage-collected: OpenGL object names are per context and every context numbers
