@@ -210,6 +210,9 @@ class Camera(BaseSensor):
         threads = min(int(getattr(self.cfg, "render_threads", 1) or 1), self.num_envs)
         if threads <= 1 or not self._threaded:
             return None
+        if self._pool is not None and self._pool.threads != threads:  # render_threads changed
+            self._pool.close()
+            self._pool = None
         if self._pool is None:
             self._pool = RenderPool(self._new_renderer, threads)
         return self._pool

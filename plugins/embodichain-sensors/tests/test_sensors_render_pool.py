@@ -53,11 +53,16 @@ def test_threads_render_the_same_images_as_one_context(scene_factory):
     assert torch.equal(cam.get_data()["color_right"], serial["color_right"])
 
 
-def test_threads_are_capped_at_the_env_count(scene_factory):
-    _, (cam,) = scene_factory(stereo(render_threads=4), robot=True, num_envs=2)
+def test_threads_are_capped_at_the_env_count_and_follow_the_config(scene_factory):
+    _, (cam,) = scene_factory(stereo(render_threads=4), robot=True, num_envs=3)
     cam.update()
     assert cam._pool is not None
+    assert cam._pool.threads == 3
+    first = cam.get_data()["color"].clone()
+    cam.cfg.render_threads = 2
+    cam.update()
     assert cam._pool.threads == 2
+    assert torch.equal(cam.get_data()["color"], first)
 
 
 def test_a_failing_job_is_raised_after_every_job_stopped(scene_factory):
