@@ -123,7 +123,7 @@ class action_smoothness_penalty(CheckedFunctor):
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
         self._prev: Optional[torch.Tensor] = None
-        self._valid = torch.zeros(env.num_envs, dtype=torch.bool)
+        self._valid = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
 
     def reset(self, env_ids: Optional[torch.Tensor] = None) -> None:
         """Forget the previous action of ``env_ids`` (all when ``None``)."""
@@ -135,6 +135,7 @@ class action_smoothness_penalty(CheckedFunctor):
             return torch.zeros(env.num_envs)
         if self._prev is None or self._prev.shape != current.shape:
             self._prev, self._valid = current.clone(), torch.zeros_like(self._valid)
-        out = torch.where(self._valid, -(current - self._prev).norm(dim=-1), torch.zeros(env.num_envs))
+        zero = torch.zeros(env.num_envs, device=current.device)
+        out = torch.where(self._valid.to(current.device), -(current - self._prev).norm(dim=-1), zero)
         self._prev, self._valid = current.clone(), torch.ones_like(self._valid)
         return out
