@@ -14,7 +14,7 @@ The row is used only while it stays right:
   reads (:data:`RESET_MODEL_FIELDS`) holds per-env values;
 * those model fields and what every state-only entity declares its reset reads
   (``Entity.initial_state()``) are unchanged since the row was saved (compared by
-  value on every use, a few microseconds; an in-place edit counts too); anything
+  value on every use, so an in-place edit counts too); anything
   else drops the row, and the slow reset runs and saves a new one.
 """
 

@@ -3,7 +3,7 @@
 Randomizing a dynamic object's mass or centre of mass on every reset must update
 the constants MuJoCo derives from them (``body_invweight0``, ``dof_M0``,
 ``body_subtreemass``, bounding volumes...). ``mj_setConst`` recomputes them for the
-*whole* model, robot included (12 us per env for a 7-DoF arm scene). For a body
+*whole* model, robot included. For a body
 that hangs directly off the world on a free joint, with nothing attached to it,
 they follow from that body's own inertia in closed form, which this module
 evaluates for every env at once in numpy (:class:`FreeBodyConstants`). At the
