@@ -25,7 +25,9 @@ documented ones.
 
 from __future__ import annotations
 
+import ctypes
 import doctest
+import gc
 import os
 import re
 import shutil
@@ -259,6 +261,24 @@ pytest_collect_file = (
         teardown=teardown_page,
     ).pytest()
 )
+
+
+#: glibc, whose ``malloc_trim`` hands freed heap pages back to the system (None elsewhere).
+_LIBC = ctypes.CDLL(None) if sys.platform.startswith("linux") else None
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_memory_after_each_file() -> Iterable[None]:
+    """After each test file (docs page): collect garbage and return the freed heap to the system.
+
+    A test process runs many files; without this its resident memory only grows (freed memory
+    stays in the allocator's arenas), about 30% above what the files need at once.
+    """
+    yield
+    gc.collect()
+    trim = getattr(_LIBC, "malloc_trim", None)
+    if trim is not None:
+        trim(0)
 
 
 @pytest.hookimpl(tryfirst=True)
