@@ -22,12 +22,12 @@ run: $(STAMP)
 	$(VENV)/bin/embodichain run-env --gym_config $(MAIN_JOB) --headless
 
 # Both runs spread their test files over TEST_WORKERS processes (pytest-xdist; "auto": one per
-# core; 0: a single process). A test file (a docs page) runs whole in one process, in order, so
-# its module fixtures are built once. The docs harness runs in its own session (conftest.py,
-# docs/contributing.md): every shell and Python block of README.md and docs/*.md, in fast mode;
-# the blocks marked slow run in .ci/run.
+# core, at most 4, as each process grows to 2-4 GB; 0: a single process). A test file (a docs
+# page) runs whole in one process, in order, so its module fixtures are built once. The docs
+# harness runs in its own session (conftest.py, docs/contributing.md): every shell and Python
+# block of README.md and docs/*.md, in fast mode; the blocks marked slow run in .ci/run.
 TEST_WORKERS ?= auto
-XDIST := -n $(TEST_WORKERS) --dist loadfile
+XDIST := -n $(TEST_WORKERS) --maxprocesses 4 --dist loadfile
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" $(XDIST) tests $(wildcard plugins/*/tests)
 	$(PY) -m pytest -q -m "not slow" $(XDIST) README.md docs
