@@ -264,6 +264,17 @@ pytest_collect_file = (
 
 
 #: glibc, whose ``malloc_trim`` hands freed heap pages back to the system (None elsewhere).
+def pytest_configure(config: pytest.Config) -> None:
+    """Ctrl-C raises ``KeyboardInterrupt`` in the test process and its children, however the
+    suite was started: a shell's background job (``make test &``, ``nohup``) starts with
+    SIGINT ignored, and an ignored signal stays ignored across exec, so the Ctrl-C tests of
+    the recorders and of ``generate`` would otherwise see nothing."""
+    import signal
+
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 _LIBC = ctypes.CDLL(None) if sys.platform.startswith("linux") else None
 
 
