@@ -65,7 +65,7 @@ from embodichain_core.sim.shapes import CubeCfg  # noqa: E402
 
 DEFAULT_OUT = os.path.join("benchmarks", "results", "env_throughput.json")
 TARGET_RATIO_AT_64 = 0.7
-#: Issue 16's targets (num_envs -> ratio), checked against both baselines in the summary.
+#: The step-overhead targets (num_envs -> ratio), checked against both baselines in the summary.
 STEP_OVERHEAD_TARGETS = {1: 0.6, 16: 0.8, 64: 0.9}
 TABLE_TOP = 0.32
 CUBE = 0.05
