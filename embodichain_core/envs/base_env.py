@@ -117,7 +117,6 @@ class BaseEnv(TaskApi, gym.Env):
         self._seed_rng(self.cfg.seed)
         self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
         self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
-        self._elapsed_np = self._elapsed_steps.numpy()  # same memory (EmbodiedEnv's counters)
         # the dones ask the task for truncations only when it overrides check_truncated (the default has none)
         self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
 

@@ -126,7 +126,7 @@ class EmbodiedEnv(BaseEnv):
         # 4. interval events
         self.event_manager.apply("interval")
         # 5. counters: this step counts from here on
-        self._elapsed_np += 1
+        self._elapsed_steps += 1
         # 6. observations
         obs = self.get_obs()
         # 7. task state and info
@@ -184,10 +184,10 @@ class EmbodiedEnv(BaseEnv):
         if self._pending_env_keys:  # read by a functor, stored by no event: task code must have set them
             check_after_first_reset(self, self._pending_env_keys)
             self._pending_env_keys = []
-        # 8. counters (through their numpy views: a torch index write costs several times more)
-        rows = ids.cpu().numpy()
-        self._elapsed_np[rows] = 0
-        self._episode_success.numpy()[rows] = False
+        # 8. counters
+        rows = ids.cpu()
+        self._elapsed_steps[rows] = 0
+        self._episode_success[rows] = False
         # 9. observation, info, first-frame recording
         obs = self.get_obs()
         info = self.get_info()
