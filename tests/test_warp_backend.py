@@ -68,6 +68,18 @@ def test_a_saved_state_row_is_refused_and_changes_nothing() -> None:
     assert np.allclose(sim.qpos[0].numpy(), sim.model.qpos0)
 
 
+def test_a_step_runs_the_constants_that_model_writes_made_due() -> None:
+    """``set_const`` runs before the next step (not only before a host copy), once, for the writes."""
+    sim = make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
+    box = sim.model.body("box").id
+    shared = sim.model.body_subtreemass[box]
+    sim.set_model_field("body_mass", [1], box, 2.5)
+    assert np.allclose(sim.model_field("body_subtreemass")[:, box], [shared, shared])  # deferred
+    sim.step(1)
+    subtree = sim.model_field("body_subtreemass")[:, box]
+    assert np.allclose(subtree, [shared, 2.5]), subtree
+
+
 def test_a_failed_graph_capture_falls_back_to_direct_launches(monkeypatch: Any) -> None:
     sim = make_warp_sim(mujoco.MjModel.from_xml_string(conformance.SCENE), 2)
     assert sim.graphs.enabled  # Warp records launches on its CPU device too

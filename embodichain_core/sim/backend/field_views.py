@@ -1,26 +1,30 @@
 """Field access by name, shared by the backends: ``sim.qpos``, ``sim.view("xpos")``.
 
-A backend keeps its persistent views in ``self._views`` (name -> tensor) and sets
-``self._maybe_dirty`` when envs await their lazy forward; reading a derived field runs
-that forward first (:meth:`_forward_dirty`), reading a state field does not.
+:class:`FieldViews` is the one base class of both backends: its behaviour (the lookup)
+is the same for each, and each backend supplies what it reads: the persistent views in
+``self._views`` (name -> tensor, set in its constructor), ``self._maybe_dirty`` (set
+while envs await their lazy forward) and the forward itself (:meth:`_forward_dirty`,
+abstract). Reading a derived field runs that forward first; reading a state field does not.
 """
 
 from __future__ import annotations
+
+from abc import ABC, abstractmethod
 
 import torch
 
 from embodichain_core.sim.backend.interface import STATE_FIELDS
 
 
-class FieldViews:
-    """Mixin: ``sim.<field>`` and :meth:`view` over the backend's persistent views."""
+class FieldViews(ABC):
+    """Base of the backends: ``sim.<field>`` and :meth:`view` over their persistent views."""
 
     _views: dict[str, torch.Tensor]
     _maybe_dirty: bool
 
+    @abstractmethod
     def _forward_dirty(self) -> None:
-        """Run the lazy forward of the dirty envs (each backend implements it)."""
-        raise NotImplementedError(f"{type(self).__name__} must implement _forward_dirty")
+        """Run the lazy forward of the dirty envs and clear ``_maybe_dirty``."""
 
     def __getattr__(self, name: str) -> torch.Tensor:
         views = self.__dict__.get("_views")

@@ -2,12 +2,16 @@
 
 A field written per env is first *expanded*: its shared ``(1, ...)`` MuJoCo Warp array is
 replaced by a ``(num_envs, ...)`` one (with the fields ``set_const`` derives from it,
-:func:`~embodichain_core.sim.backend.warp_fields.derived_outputs`), and the step's CUDA
-graphs are dropped so that the next step captures the new arrays. Declare the fields at
-setup (:meth:`WarpModelFields.declare_per_env`) to keep that off the episode loop.
-Writes go in place through a torch view of the array; the constants they feed are
-recomputed once, by ``mujoco_warp.set_const`` over every world, before the next step,
-forward or host copy (the groups of every write since the last one, together).
+:func:`~embodichain_core.sim.backend.warp_fields.derived_outputs`), and the step's graphs
+are dropped so that the next step captures the new arrays. Declare the fields at setup
+(:meth:`WarpModelFields.declare_per_env`) to keep that off the episode loop. Writes go in
+place through a torch view of the array; the constants they feed are recomputed once, by
+``mujoco_warp.set_const`` over every world, before the next step, forward or host copy
+(the groups of every write since the last one, together).
+
+The backend owns one :class:`WarpModelFields` (``sim.fields``) and forwards the model-field
+methods of the interface to it; the fields object reads the backend's MuJoCo Warp model and
+data, and clears its graphs, through the references it is given at construction.
 """
 
 from __future__ import annotations
@@ -25,29 +29,34 @@ from embodichain_core.sim.backend.warp_fields import ALL, const_groups, derived_
 
 
 class WarpModelFields:
-    """Mixin of :class:`WarpSim` (which provides ``model``, ``num_envs``, ``wp``, ``mjw``,
-    ``wp_model``, ``wp_data``, ``wp_device``, ``device`` and ``graphs``)."""
+    """The model fields of ``num_envs`` MuJoCo Warp worlds: which hold per-env values, and
+    the constants due after writes.
 
-    model: mujoco.MjModel
-    num_envs: int
-    wp: Any
-    mjw: Any
-    wp_model: Any
-    wp_data: Any
-    wp_device: str
-    graphs: StepGraphs
+    Args:
+        model: the host ``MjModel`` template (shared values, shapes).
+        wp: the ``warp`` module.
+        mjw: the ``mujoco_warp`` module.
+        wp_model, wp_data: the worlds' MuJoCo Warp model and data (``wp_model``'s arrays are
+            replaced in place when a field is expanded).
+        graphs: the backend's step graphs (cleared when an array is replaced).
+    """
 
-    def _init_fields(self) -> None:
+    def __init__(self, model: mujoco.MjModel, wp: Any, mjw: Any, wp_model: Any, wp_data: Any, graphs: StepGraphs):
+        self.model = model
+        self.num_envs = int(wp_data.nworld)
+        self._wp, self._mjw = wp, mjw
+        self._wp_model, self._wp_data = wp_model, wp_data
+        self._graphs = graphs
         self._expanded: set[str] = set()
-        self._field_views: dict[str, torch.Tensor] = {}
+        self._views: dict[str, torch.Tensor] = {}
         self._host: dict[str, np.ndarray] = {}  # visual fields MuJoCo Warp does not hold
         self._const_groups = 0
 
     # -- arrays ----------------------------------------------------------------------------------
     def _owner(self, name: str) -> tuple[Any, str]:
         if name.startswith("opt."):
-            return self.wp_model.opt, name[4:]
-        return self.wp_model, name
+            return self._wp_model.opt, name[4:]
+        return self._wp_model, name
 
     def _template(self, name: str) -> np.ndarray:
         if name.startswith("opt."):
@@ -62,23 +71,23 @@ class WarpModelFields:
             return
         if arr.shape[0] != self.num_envs:
             rows = np.repeat(arr.numpy()[:1], self.num_envs, axis=0)
-            new = self.wp.array(rows, dtype=arr.dtype, device=self.wp_device)
+            new = self._wp.array(rows, dtype=arr.dtype, device=self._graphs.device)
             new._is_batched = True
             setattr(obj, attr, new)
-            self.graphs.clear()
+            self._graphs.clear()
         self._expanded.add(name)
-        self._field_views.pop(name, None)
+        self._views.pop(name, None)
 
     def _view(self, name: str) -> torch.Tensor:
         """``(num_envs, ...)`` torch view of an expanded field, shaped as in ``MjModel``."""
-        view = self._field_views.get(name)
+        view = self._views.get(name)
         if view is None:
             obj, attr = self._owner(name)
-            view = self.wp.to_torch(getattr(obj, attr))
+            view = self._wp.to_torch(getattr(obj, attr))
             shape = (self.num_envs,) + self._template(name).shape
             if view.numel() == int(np.prod(shape)):
                 view = view.view(shape)
-            self._field_views[name] = view
+            self._views[name] = view
         return view
 
     # -- the interface ---------------------------------------------------------------------------
@@ -95,6 +104,12 @@ class WarpModelFields:
             if kind == "world":
                 for field in (name,) + derived_outputs(name):
                     self._expand(field)
+
+    @property
+    def host_fields(self) -> list[str]:
+        """The fields holding per-env values on the host only (visual fields MuJoCo Warp
+        does not hold: the CPU renderer reads them, MuJoCo Warp's renderer does not), sorted."""
+        return sorted(self._host)
 
     def is_per_env(self, name: str) -> bool:
         """Whether ``name`` holds per-env values (expanded, or a host-side visual field)."""
@@ -148,8 +163,9 @@ class WarpModelFields:
         self.set_model_field("body_inertia", rows, bodies, inertia, set_const=False)
         self.set_model_field("body_mass", rows, bodies, mass)
 
-    def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
-        """Schedule the recompute of the constants of ``fields`` (all groups if unknown)."""
+    def mark_const_dirty(self, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
+        """Schedule the recompute of the constants of ``fields`` (``(name, index)`` pairs;
+        every group if unknown), for every world."""
         if fields is None:
             self._const_groups |= ALL
             return
@@ -162,8 +178,8 @@ class WarpModelFields:
         if not self._const_groups:
             return
         groups, self._const_groups = self._const_groups, 0
-        with self.wp.ScopedDevice(self.wp_device):
-            self.mjw.set_const(self.wp_model, self.wp_data, groups=self.mjw.SetConstGroup(groups))
+        with self._wp.ScopedDevice(self._graphs.device):
+            self._mjw.set_const(self._wp_model, self._wp_data, groups=self._mjw.SetConstGroup(groups))
 
     # -- host copies -----------------------------------------------------------------------------
     def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:

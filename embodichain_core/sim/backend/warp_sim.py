@@ -14,7 +14,9 @@ so entities, managers, functors and tasks run on it unchanged. What differs from
   views are current as after ``mujoco.batch``'s ``stage=VEL`` step, but acceleration
   sensors read zero.
 * **Resets** through ``reset_data`` with a per-world mask; **per-env model fields** only
-  those MuJoCo Warp batches (:mod:`.warp_fields`, :mod:`.warp_model`).
+  those MuJoCo Warp batches (:mod:`.warp_fields`), held by the
+  :class:`~embodichain_core.sim.backend.warp_model.WarpModelFields` the backend owns
+  (``sim.fields``).
 * **Graphs**: the step, the refresh and the reset are captured once and replayed
   (:mod:`.warp_device`): CUDA graphs on a GPU (untested: no GPU was lent to this work),
   Warp's recorded launches on the CPU (7x faster than launching from Python there).
@@ -24,7 +26,7 @@ from __future__ import annotations
 
 import copy
 import warnings
-from typing import Any, Optional
+from typing import Any, Iterable, Optional
 
 import mujoco
 import numpy as np
@@ -40,22 +42,10 @@ from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
 
 _AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
 #: State (and acceleration-level outputs) a subset step puts back for the envs outside the subset.
-_KEPT = (
-    "qpos",
-    "qvel",
-    "act",
-    "qacc_warmstart",
-    "time",
-    "history",
-    "plastic",
-    "qacc",
-    "qfrc_actuator",
-    "actuator_force",
-    "cfrc_ext",
-)
+_KEPT = "qpos qvel act qacc_warmstart time history plastic qacc qfrc_actuator actuator_force cfrc_ext".split()
 
 
-class WarpSim(FieldViews, WarpModelFields):
+class WarpSim(FieldViews):
     """``num_envs`` MuJoCo Warp worlds of one compiled model.
 
     Args:
@@ -103,8 +93,9 @@ class WarpSim(FieldViews, WarpModelFields):
             deterministic=on_cpu,
         )
         self.graphs = StepGraphs(self.wp, self.wp_device)
-        self._init_fields()
         self._make(nconmax, njmax)
+        self.fields = WarpModelFields(self.model, self.wp, self.mjw, self.wp_model, self.wp_data, self.graphs)
+        """The model fields' per-env values and the constants due (:mod:`.warp_model`)."""
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False
         self._pending_failed: list[int] = []
@@ -253,6 +244,39 @@ class WarpSim(FieldViews, WarpModelFields):
     def error(self, env_id: int) -> str:
         """Why env ``env_id`` last failed ('' if it did not)."""
         return self._errors.get(int(env_id), "")
+
+    # -- model fields: the interface's methods, answered by :attr:`fields` ------------------------
+    def declare_per_env(self, names: Iterable[str]) -> None:
+        """Expand ``names`` per world now, before graph capture (:class:`WarpModelFields`)."""
+        self.fields.declare_per_env(names)
+
+    def is_per_env(self, name: str) -> bool:
+        """Whether ``name`` holds per-env values."""
+        return self.fields.is_per_env(name)
+
+    def model_field(self, name: str) -> np.ndarray:
+        """Read-only ``(num_envs, ...)`` values of model field ``name``."""
+        return self.fields.model_field(name)
+
+    def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
+        """Write ``values`` into ``name[index]`` of each env (ConfigError where MuJoCo Warp cannot)."""
+        self.fields.set_model_field(name, env_ids, index, values, set_const)
+
+    def set_body_masses(self, env_ids: Any, bodies: Any, mass: Any) -> None:
+        """Masses ``(n, k)`` of ``bodies``; their inertias scale along (one recompute)."""
+        self.fields.set_body_masses(env_ids, bodies, mass)
+
+    def mark_const_dirty(self, env_ids: Any = None, fields: Optional[Iterable[tuple[str, Any]]] = None) -> None:
+        """Schedule the recompute of the constants of ``fields`` (all groups if unknown)."""
+        self.fields.mark_const_dirty(fields)
+
+    def flush_const(self) -> None:
+        """Run the scheduled constant recomputes now (over every world)."""
+        self.fields.flush_const()
+
+    def get_model(self, env_id: int, model: Optional[mujoco.MjModel] = None) -> mujoco.MjModel:
+        """Env ``env_id``'s model on the host: the template with its per-env rows."""
+        return self.fields.get_model(env_id, model)
 
     def get_data(self, env_id: int, data: Optional[mujoco.MjData] = None) -> mujoco.MjData:
         """Env ``env_id``'s ``MjData`` on the host (float64 copy; derived fields current)."""

@@ -131,7 +131,7 @@ class WarpCameraRenderer:
     # -- inputs ---------------------------------------------------------------------------------
     def check_supported(self) -> None:
         """Raise :class:`ConfigError` for per-env visual fields the ray tracer would not show."""
-        host = sorted(getattr(self.sim, "_host", {}) or {})
+        host = self.sim.fields.host_fields
         if host:
             raise ConfigError(
                 self.where,
