@@ -105,7 +105,8 @@ class WarpSim(FieldViews):
 
     # -- construction ------------------------------------------------------------------------------
     def _make(self, nconmax: Optional[int], njmax: Optional[int]) -> None:
-        mjm = self._host_model = _warp_ready(self.model)
+        mjm = self.host_model = _warp_ready(self.model)
+        """The host model MuJoCo Warp was given (``model`` with autoreset cleared)."""
         data = mujoco.MjData(mjm)
         mujoco.mj_forward(mjm, data)
         self.nconmax = nconmax = int(nconmax or max(48, 2 * data.ncon + 2 * mjm.nbody))
@@ -283,8 +284,8 @@ class WarpSim(FieldViews):
         self.flush_const()
         if self._maybe_dirty:
             self._forward_dirty()
-        data = mujoco.MjData(self._host_model) if data is None else data
-        self.mjw.get_data_into(data, self._host_model, self.wp_data, int(env_id))
+        data = mujoco.MjData(self.host_model) if data is None else data
+        self.mjw.get_data_into(data, self.host_model, self.wp_data, int(env_id))
         if data.ncon:  # MuJoCo Warp fills contact.geom only; contact sensors read geom1/geom2
             data.contact.geom1[:] = data.contact.geom[:, 0]
             data.contact.geom2[:] = data.contact.geom[:, 1]

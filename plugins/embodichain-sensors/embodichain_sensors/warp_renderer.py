@@ -107,7 +107,7 @@ class WarpCameraRenderer:
         wp, mjw = sim.wp, sim.mjw
         with wp.ScopedDevice(sim.wp_device):
             self.rc = mjw.create_render_context(
-                sim._host_model,
+                sim.host_model,
                 nworld=sim.num_envs,
                 cam_res=(self.width, self.height),
                 render_rgb=bool(wants["color"]),
