@@ -1,16 +1,5 @@
-"""The embodichain plugin host: hooks, registries and the plugin manager.
-
-Plugin authors need :data:`hookimpl` (and the register objects' types for annotations);
-the env and CLI use the registry accessors below, which load the installed plugins on
-first use. Every accessor takes a bare name (``"randomize_light"``) or a qualified one
-(``"embodichain-functors/randomize_light"``); a bare name several plugins register
-raises :class:`AmbiguousNameError`, naming the qualified names to use.
-
-Example:
-    >>> from embodichain_core.plugins import functor_registry
-    >>> fn = functor_registry().get("randomize_light")  # doctest: +SKIP
-    >>> fn = functor_registry().get("embodichain-functors/randomize_light")  # doctest: +SKIP
-"""
+"""The embodichain plugin host (docs/plugins.md): :data:`hookimpl` for plugin authors, and
+registry accessors (loading the plugins on first use) taking a bare or qualified name."""
 
 from __future__ import annotations
 
@@ -145,8 +134,7 @@ def get_asset_root(name: str) -> Path:
 
 
 def asset_roots() -> dict[str, Path]:
-    """Every registered data root by name; a name several plugins register appears once
-    per plugin, under its qualified name ``<plugin>/<name>``."""
+    """Every registered data root by name (a clashing name once per plugin, qualified)."""
     registry = asset_registry()
     clashing = registry.clashes()
     names = [registry.qualified_name(e) if e.name in clashing else e.name for e in registry.entries()]
@@ -154,9 +142,8 @@ def asset_roots() -> dict[str, Path]:
 
 
 def is_visual_randomization(name: str) -> bool:
-    """True for functors ``filter_visual_rand`` removes: ``randomize_*`` names whose category
-    is ``"randomization.visual"``. Unknown and ambiguous names are not visual (an ambiguous
-    name fails when the functor is resolved)."""
+    """True for a ``randomize_*`` functor of category ``"randomization.visual"`` (an ambiguous
+    name is not; it fails when resolved)."""
     try:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
@@ -172,8 +159,7 @@ def name_clashes(provider: str | None = None) -> list[NameClash]:
 
 
 def task_episode_limit(env_cls: type) -> int | None:
-    """The ``max_episode_steps`` registered with the tasks whose entry point is ``env_cls``
-    (``None`` when none gives one, or when they disagree)."""
+    """The ``max_episode_steps`` the tasks of ``env_cls`` register (``None``: none, or they differ)."""
     target = f"{env_cls.__module__}:{env_cls.__qualname__}"
     limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target_repr == target}
     limits.discard(None)

@@ -1,8 +1,5 @@
-"""The hooks of the plugin host, the typed ``register`` objects they receive, and
-:data:`KINDS`, the one table of registry kinds (hook, register object, message noun, lookup
-key), in the order the hooks are called. A hook records what its plugin provides and
-returns nothing; ``"module:attr"`` targets are imported on first use.
-"""
+"""The hooks (documented in docs/plugins.md), the ``register`` objects they receive and
+:data:`KINDS`, the one table of registry kinds."""
 
 from __future__ import annotations
 
@@ -33,17 +30,11 @@ class BaseRegister:
     def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None) -> Entry:
         return self.registry.add(name, target, self.provider, meta, lazy=lazy)
 
-    def __repr__(self) -> str:
-        return f"<{type(self).__name__} {self.registry.kind} for {self.provider!r}>"
-
 
 class FunctorRegister(BaseRegister):
     """``register(name, target, *, kind, category="", description="")``."""
 
     def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
-        """Register a functor: ``target`` is a callable/class or ``"module:attr"``; ``kind`` one
-        of :data:`FUNCTOR_KINDS`; ``category`` free text; ``description`` defaults to the
-        target's first docstring line."""
         if kind not in FUNCTOR_KINDS:
             raise ValueError(
                 f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
@@ -86,8 +77,7 @@ class AssetRegister(BaseRegister):
 
 
 class TaskRegister(BaseRegister):
-    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``;
-    ``entry_point`` is a ``"module:Class"`` string (imported when the task is made) or the class."""
+    """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``."""
 
     def __call__(
         self,
@@ -151,52 +141,34 @@ def new_registries() -> dict[str, Registry]:
 
 @hookspec
 def embodichain_register_functors(register: FunctorRegister) -> None:
-    """Register manager functors: ``register(name, target, *, kind, category="", description="")``.
-
-    ``kind`` is one of :data:`FUNCTOR_KINDS`; ``filter_visual_rand`` drops the functors of
-    the category ``"randomization.visual"`` whose name starts with ``randomize_``.
-    """
+    """Register manager functors."""
 
 
 @hookspec
 def embodichain_register_robots(register: RobotRegister) -> None:
-    """Register robot config classes by ``class_type``/``robot_type``: ``register(name, cfg_class)``."""
+    """Register robot config classes by ``class_type``/``robot_type``."""
 
 
 @hookspec
 def embodichain_register_solvers(register: SolverRegister) -> None:
-    """Register kinematics solvers by ``solver_cfg.<part>.class_type``: ``register(name, solver_class)``.
-
-    The class provides ``from_config(cfg: dict, robot, part: str) -> solver`` (``cfg`` is the
-    part's mapping; a bad value raises ``ConfigError`` keyed relative to the part); the solver
-    has ``joint_ids``, ``root_link_name``, ``get_fk`` and ``get_ik``.
-    """
+    """Register kinematics solvers by ``solver_cfg.<part>.class_type``."""
 
 
 @hookspec
 def embodichain_register_sensors(register: SensorRegister) -> None:
-    """Register sensors by ``sensor_type``: ``register(sensor_type, cfg_class, sensor_class)``."""
+    """Register sensors by ``sensor_type``."""
 
 
 @hookspec
 def embodichain_register_assets(register: AssetRegister) -> None:
-    """Register data roots searched by ``get_data_path``: ``register(name, root)``, a directory
-    or a zero-argument callable returning one (called on first use)."""
+    """Register data roots searched by ``get_data_path``."""
 
 
 @hookspec
 def embodichain_register_tasks(register: TaskRegister) -> None:
-    """Register gym tasks (each goes into gymnasium's registry too): ``register(task_id,
-    "module:Class", *, max_episode_steps=None, kwargs=None, config=None, description="")``.
-
-    ``max_episode_steps`` is the task's episode limit: the env uses it when its config leaves
-    ``max_episode_steps`` at the class default (never gymnasium's ``TimeLimit``); ``config`` is
-    the default gym config ``embodichain run-env <id>`` runs.
-    """
+    """Register gym tasks (each goes into gymnasium's registry too)."""
 
 
 @hookspec
 def embodichain_register_commands(register: CommandRegister) -> None:
-    """Register ``embodichain`` subcommands: ``register(name, target, help="")``; ``target`` (a
-    ``"module:function"`` string, imported when the command runs) takes ``argv`` and returns
-    an exit code."""
+    """Register ``embodichain`` subcommands."""

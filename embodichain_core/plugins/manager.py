@@ -1,12 +1,7 @@
-"""The plugin host: loads plugins, fills the registries, mirrors the tasks into gymnasium.
-
-``load_plugins()`` (lazy, idempotent) registers the core's commands, then the entry points
-of the group ``"embodichain"`` sorted by plugin name (the distribution's, PEP 503-normalized).
-Each plugin's hooks write into staging registries, merged when all of them succeed: a plugin
-that fails (import error, unknown hook, bad signature, a hook raising) contributes nothing, is
-reported in one line as a :class:`PluginLoadWarning` and leaves the others loaded.
-``EMBODICHAIN_BLOCK_PLUGINS=a,b`` skips plugins (``*``: every entry point);
-``EMBODICHAIN_TRACE_PLUGINS=1`` traces hook calls to stderr.
+"""The plugin host: loads the core's and the installed plugins (entry point group
+``"embodichain"``, sorted by plugin name), fills the registries, mirrors the tasks into
+gymnasium. Each plugin's hooks write into staging registries merged on success: a plugin
+that fails contributes nothing and is reported in one line (:class:`PluginLoadWarning`).
 """
 
 from __future__ import annotations
@@ -48,9 +43,7 @@ class NameClashWarning(UserWarning):
 
 @dataclass
 class PluginInfo:
-    """What ``list_plugins()`` reports about one plugin: its ``status`` (``"loaded"``,
-    ``"failed"`` or ``"blocked"``), the ``error`` traceback of a failure, the names it
-    ``registered`` per kind, and where it comes from."""
+    """One plugin as ``list_plugins()`` reports it; ``status``: loaded, failed or blocked."""
 
     name: str
     version: str = ""
@@ -68,8 +61,8 @@ class PluginInfo:
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
-    """pluggy manager owning the registries its plugins fill. Functions named
-    ``embodichain_register*`` are hooks even without ``@hookimpl``, so a misspelled one is caught."""
+    """pluggy manager owning the registries; any ``embodichain_register*`` function is a hook
+    (with or without ``@hookimpl``), so a misspelled one is caught."""
 
     def __init__(self) -> None:
         super().__init__(PROJECT_NAME)
@@ -85,10 +78,8 @@ class EmbodichainPluginManager(pluggy.PluginManager):
 
     def parse_hookimpl_opts(self, plugin: Any, name: str) -> Any:
         opts = super().parse_hookimpl_opts(plugin, name)
-        if opts is None and name.startswith("embodichain_register"):
-            static = inspect.getattr_static(plugin, name, None)
-            if inspect.isfunction(static) or isinstance(static, (staticmethod, classmethod, types.MethodType)):
-                return {}
+        if opts is None and name.startswith("embodichain_register") and inspect.isroutine(getattr(plugin, name)):
+            return {}
         return opts
 
     def registry(self, kind: str) -> Registry:
@@ -96,10 +87,6 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         if kind not in self.registries:
             raise ValueError(f"unknown registry kind {kind!r}.{did_you_mean(kind, list(KINDS))}")
         return self.registries[kind]
-
-    def failed(self) -> list[tuple[str, str]]:
-        """``(name, traceback)`` of every plugin that failed to load."""
-        return [(i.name, i.error) for i in self.infos.values() if i.status == "failed"]
 
     def name_clashes(self, provider: str | None = None) -> list[NameClash]:
         """Bare names several plugins register, by kind then name (only ``provider``'s when given)."""
@@ -121,8 +108,7 @@ def get_plugin_manager() -> EmbodichainPluginManager:
 
 
 def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozenset()) -> EmbodichainPluginManager:
-    """Load the built-ins and (with ``entry_points``) the installed plugins but ``exclude``,
-    once; later calls are no-ops."""
+    """Load the built-ins and (with ``entry_points``) the installed plugins but ``exclude``, once."""
     pm = get_plugin_manager()
     with pm.lock:
         if pm.loaded:
@@ -147,15 +133,15 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
 
 
 def _iter_entry_points() -> list[Any]:
-    """Every ``"embodichain"`` entry point, duplicates of a name included (test seam)."""
+    """Every ``"embodichain"`` entry point (a test seam)."""
     import importlib.metadata
 
     return list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
 
 
 def named_entry_points() -> list[tuple[str, Any]]:
-    """``(plugin name, entry point)`` in load order: a plugin is named after its distribution
-    (PEP 503-normalized), a distribution's further entry points ``<dist>.<entry point>``."""
+    """``(plugin name, entry point)`` in load order: the distribution's (PEP 503-normalized)
+    name, ``<dist>.<entry point>`` for a distribution with several."""
     eps = _iter_entry_points()
     norm = {id(ep): re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps}
     named = []
@@ -187,7 +173,7 @@ def _register_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str]
 
 
 def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
-    """Mark ``info`` failed and warn in one line (the traceback is one request away)."""
+    """Mark ``info`` failed and warn in one line."""
     info.status, info.error, info.registered = "failed", traceback.format_exc(), {}
     if pm.get_plugin(info.name) is not None:
         pm.unregister(name=info.name)
@@ -202,8 +188,8 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
 
 
 def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
-    """Check plugin ``name``'s hooks (``PluginValidationError`` for an unknown one), run them
-    into staging registries and merge those when all succeeded; returns the names per kind."""
+    """Run plugin ``name``'s hooks into staging registries, merged when all succeed; returns the
+    names per kind. ``PluginValidationError`` for an unknown hook."""
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
         if not caller.has_spec():
@@ -225,9 +211,8 @@ def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
 
 
 def register_plugin(obj: Any, name: str | None = None) -> str:
-    """Register a plugin (a module, class or instance) at runtime under ``name`` (default: the
-    module or class name) and run its hooks; returns the name. Unlike an entry point, a
-    failure raises (and leaves nothing registered)."""
+    """Register a plugin (module, class or instance) at runtime and run its hooks; returns its
+    name. A failure raises and leaves nothing registered."""
     pm = load_plugins()
     with pm.lock:
         if name is None:
@@ -263,9 +248,8 @@ def unregister_plugin(name: str) -> None:
 def isolated_plugins(
     *, load_entry_points: bool = False, exclude: Iterable[str] = ()
 ) -> Iterator[EmbodichainPluginManager]:
-    """Swap in a fresh manager with only the built-ins (and, with ``load_entry_points``, the
-    installed plugins but ``exclude``); on exit, restore the previous manager and every
-    gymnasium id the block's plugins wrote."""
+    """A fresh manager with the built-ins (and the installed plugins but ``exclude``); on exit the
+    previous manager and the gymnasium ids it wrote are restored."""
     global _PM
     with _GLOBAL_LOCK:
         saved, _PM = _PM, EmbodichainPluginManager()
@@ -305,11 +289,8 @@ def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) 
 
 
 def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
-    """Make gymnasium's registry show ``pm``'s tasks (none with ``release``): every
-    ``<plugin>/<id>`` and every bare id (an ambiguous one raises when made). An id this
-    manager no longer provides gets back what it had before. An id gymnasium has from
-    outside the plugins is left as it is (a :class:`NameClashWarning` unless it has the same
-    entry point)."""
+    """Make gymnasium's registry show ``pm``'s tasks (none with ``release``) by qualified and
+    bare id; an id gymnasium has from elsewhere is left as it is (a :class:`NameClashWarning`)."""
     tasks, wanted = pm.registries["tasks"], {}
     for entry in [] if release else tasks.ordered_entries():
         wanted[tasks.qualified_name(entry)] = [entry]
@@ -354,7 +335,7 @@ def list_plugins() -> list[PluginInfo]:
 
 def failed_plugins() -> list[tuple[str, str]]:
     """``(name, traceback)`` of the plugins that failed to load."""
-    return load_plugins().failed()
+    return [(i.name, i.error) for i in load_plugins().infos.values() if i.status == "failed"]
 
 
 def known_providers() -> set[str]:
@@ -363,15 +344,5 @@ def known_providers() -> set[str]:
 
 
 def get_registry(kind: str) -> Registry:
-    """The registry of ``kind`` (loads plugins first): one of :data:`~embodichain_core.plugins.hookspecs.KINDS`."""
+    """The registry of ``kind`` (loads plugins first)."""
     return load_plugins().registry(kind)
-
-
-def is_qualified_name(name: Any) -> bool:
-    """True for ``"<plugin>/<name>"`` whose prefix is a known plugin's (qualified) name."""
-    if not isinstance(name, str) or "/" not in name:
-        return False
-    from embodichain_core.plugins.registry import namespace
-
-    prefix = name.partition("/")[0]
-    return any(prefix in (p, namespace(p)) for p in known_providers())

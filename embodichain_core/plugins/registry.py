@@ -1,9 +1,6 @@
-"""Registries of what plugins provide: entries owned by their plugin, and the lookup errors.
-
-Two plugins may register one name: both entries stay, each reachable by its qualified name
-``<plugin>/<name>`` (for a task, its gymnasium id); the bare name is then ambiguous
-(:class:`AmbiguousNameError` names the qualified names). ``:`` only separates a Python
-import path: a ``"module:attr"`` target is imported on first :meth:`Registry.get`.
+"""Registries of what plugins provide, and the lookup errors. Two plugins may register one
+name: each entry stays reachable as ``<plugin>/<name>`` and the bare name is ambiguous.
+``:`` only separates a lazy ``"module:attr"`` target, imported on first use.
 """
 
 from __future__ import annotations
@@ -32,8 +29,7 @@ class DuplicateRegistrationError(RegistryError, ValueError):
 
 
 class AmbiguousNameError(RegistryError, LookupError, ValueError):
-    """A name that does not say which plugin's entry it means: ``providers`` (sorted) and, in
-    their order, the qualified names to write instead (``choices``)."""
+    """A bare name several plugins provide: ``providers`` and the qualified ``choices``."""
 
     def __init__(self, message: str, name: str, providers: Sequence[str], choices: Sequence[str]):
         super().__init__(message)
@@ -58,7 +54,7 @@ def join_names(items: Sequence[str], word: str = "and") -> str:
 
 
 def namespace(provider: str) -> str:
-    """The prefix of ``provider``'s qualified names (a gymnasium namespace: ``[\\w-]``)."""
+    """The prefix of ``provider``'s qualified names (a valid gymnasium namespace)."""
     return re.sub(r"[^\w-]+", "-", provider).strip("-") or "plugin"
 
 
@@ -101,14 +97,12 @@ _UNSET: Any = object()
 
 
 class Entry:
-    """One registration: ``name`` -> ``target`` (an object, or a lazy ``"module:attr"``
-    string) provided by the plugin ``provider``, with the kind's ``meta`` data."""
+    """``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``."""
 
-    def __init__(self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None):
-        self.name, self.target, self.provider = name, target, provider
+    def __init__(self, name: str, target: Any, provider: str, meta: dict | None, lazy: bool | None, noun: str):
+        self.name, self.target, self.provider, self.noun = name, target, provider, noun
         self.meta: dict[str, Any] = dict(meta or {})
         self.lazy = is_lazy_target(target) if lazy is None else lazy
-        self.noun = "entry"
         self._value = _UNSET if self.lazy else target
 
     @property
@@ -152,22 +146,13 @@ class Entry:
             text = first_doc_line(self._value)
         return str(text)
 
-    def same_as(self, other: Entry) -> bool:
-        """Same provider, target and meta (a harmless re-registration)."""
-        return (self.provider, self.target_repr, repr(self.meta)) == (
-            other.provider,
-            other.target_repr,
-            repr(other.meta),
-        )
-
     def __repr__(self) -> str:
         return f"Entry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
 
 
 @dataclass(frozen=True)
 class NameClash:
-    """One bare name registered by several plugins: ``providers`` and, in their order,
-    the ``qualified`` names that reach each one."""
+    """A bare name several plugins register: its ``providers`` and ``qualified`` names."""
 
     kind: str
     name: str
@@ -181,13 +166,7 @@ class NameClash:
 
 
 class Registry:
-    """Names -> :class:`Entry` of one kind, owned by their providers (see the module doc).
-
-    Args:
-        kind: registry kind (``"functors"``, ``"robots"`` ...).
-        noun: singular word used in messages (default: ``kind`` without the ``s``).
-        key: maps a name to its lookup key (default: exact names).
-    """
+    """Names -> :class:`Entry` of one ``kind``; ``key`` maps a name to its lookup key."""
 
     def __init__(self, kind: str, *, noun: str | None = None, key: Callable[[str], str] | None = None):
         self.kind = kind
@@ -199,15 +178,13 @@ class Registry:
     def add(
         self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None
     ) -> Entry:
-        """Add an entry (an identical one again is a no-op); ``ValueError`` for a name with
-        ``/`` or ``:`` or a malformed lazy target."""
+        """Add an entry (an identical one again is a no-op)."""
         if not isinstance(name, str) or not name or SEPARATOR in name or ":" in name:
             raise ValueError(
                 f"{self.noun} {name!r} from {provider!r}: names are non-empty strings without '/' or ':' "
                 f"('/' separates the plugin in qualified names, ':' an import path)"
             )
-        entry = Entry(name, target, provider, meta, lazy=lazy)
-        entry.noun = self.noun
+        entry = Entry(name, target, provider, meta, lazy, self.noun)
         if entry.lazy:
             check_target_string(target, f"{self.noun} {name!r} from {provider!r}")
         return self.merge(entry)
@@ -215,7 +192,7 @@ class Registry:
     def merge(self, entry: Entry) -> Entry:
         """Store a checked entry (see :meth:`add`); returns the stored one."""
         old = self._entries.get((entry.provider, self._key(entry.name)))
-        if old is not None and not old.same_as(entry):
+        if old is not None and (old.target_repr, repr(old.meta)) != (entry.target_repr, repr(entry.meta)):
             raise DuplicateRegistrationError(
                 f"{self.noun} {entry.name!r} is registered twice by {entry.provider!r} "
                 f"(with {old.target_repr!r} and {entry.target_repr!r}); one provider cannot register a name twice"
@@ -230,7 +207,7 @@ class Registry:
         return found
 
     def find_own(self, provider: str, name: str) -> Entry | None:
-        """``provider``'s entry named ``name`` (bare), or ``None``; never ambiguous."""
+        """``provider``'s entry named ``name`` (bare), or ``None``."""
         return self._entries.get((provider, self._key(name)))
 
     def providers(self) -> list[str]:
@@ -252,8 +229,8 @@ class Registry:
         return (providers[prefix], bare) if found and bare and prefix in providers else None
 
     def find(self, name: str) -> Entry | None:
-        """The entry for ``name`` (bare or qualified), or ``None``. :class:`AmbiguousNameError`
-        for a bare name several plugins provide, or a qualified name spelled with ``:``."""
+        """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
+        for a bare name several plugins provide or a qualified name spelled with ``:``."""
         if not isinstance(name, str):
             return None
         split = self._split(name)
@@ -373,6 +350,3 @@ class Registry:
 
     def __len__(self) -> int:
         return len(self._entries)
-
-    def __repr__(self) -> str:
-        return f"<Registry {self.kind}: {len(self)} entries>"
