@@ -3,6 +3,7 @@ registry accessors (loading the plugins on first use) taking a bare or qualified
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +29,7 @@ from embodichain_core.plugins.manager import (
     register_plugin,
     unregister_plugin,
 )
-from embodichain_core.plugins.registry import AmbiguousNameError, NameClash, Registry
+from embodichain_core.plugins.registry import AmbiguousNameError, NameClash
 
 __all__ = [
     "hookimpl",
@@ -68,39 +69,17 @@ __all__ = [
 ]
 
 
-def functor_registry() -> Registry:
-    """Functors by name; entry meta: ``kind``, ``category``, ``description``."""
-    return get_registry("functors")
-
-
-def robot_registry() -> Registry:
-    """Robot config classes; lookups ignore case and a trailing ``Cfg``."""
-    return get_registry("robots")
-
-
-def solver_registry() -> Registry:
-    """Kinematics solver classes by ``class_type``; lookups ignore case and a trailing ``Cfg``."""
-    return get_registry("solvers")
-
-
-def sensor_registry() -> Registry:
-    """Sensor config classes by ``sensor_type``; meta ``sensor_class``."""
-    return get_registry("sensors")
-
-
-def asset_registry() -> Registry:
-    """Data roots (paths or zero-arg callables) by name."""
-    return get_registry("assets")
-
-
-def task_registry() -> Registry:
-    """Tasks by gym id; meta ``max_episode_steps``, ``kwargs``, ``config``, ``description``."""
-    return get_registry("tasks")
-
-
-def command_registry() -> Registry:
-    """``embodichain`` subcommands; meta ``help``."""
-    return get_registry("commands")
+# Each accessor returns the registry of one kind (loading the plugins first). Entry meta:
+# functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
+# ``max_episode_steps``/``kwargs``/``config``/``description``; commands ``help``. Robot,
+# solver and sensor lookups ignore case and a trailing ``Cfg``.
+functor_registry = partial(get_registry, "functors")
+robot_registry = partial(get_registry, "robots")
+solver_registry = partial(get_registry, "solvers")
+sensor_registry = partial(get_registry, "sensors")
+asset_registry = partial(get_registry, "assets")
+task_registry = partial(get_registry, "tasks")
+command_registry = partial(get_registry, "commands")
 
 
 def get_functor(name: str) -> Any:
