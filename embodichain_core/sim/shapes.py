@@ -114,4 +114,3 @@ class CapsuleCfg(ShapeCfg):
     shape_type: str = "Capsule"
     radius: float = 0.05
     height: float = 0.1
-
