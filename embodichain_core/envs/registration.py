@@ -20,6 +20,7 @@ import warnings
 from typing import Any, Callable, Optional
 
 from embodichain_core.plugins.hookspecs import hookimpl
+from embodichain_core.plugins.registry import describe_target
 
 #: Task id -> the class ``register_env`` registered under it.
 REGISTERED_ENVS: dict[str, type] = {}
@@ -73,7 +74,7 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
     pm = load_plugins()
     # the class itself is the target: its module may not be importable by name (a test file
     # in a folder with a hyphen, a script run as __main__); ``target`` is how it is shown
-    name, target = cls.__module__, f"{cls.__module__}:{cls.__qualname__}"
+    name, target = cls.__module__, describe_target(cls)
     others = [
         e
         for e in pm.registry("tasks").ordered_entries()
@@ -90,16 +91,17 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
         return
     if "<locals>" in cls.__qualname__:
         raise TypeError(
-            f"register_env({uid!r}): {cls.__qualname__} is defined inside a function; gymnasium imports a "
-            f"task by 'module:Class', so define the class at the top level of its module"
+            f"register_env({uid!r}): {cls.__qualname__} is defined inside a function; other processes (Ray "
+            f"workers, dataset replay) find a task by 'module:Class', so define the class at the top level of "
+            f"its module"
         )
     if pm.get_plugin(name) is not None and not isinstance(pm.get_plugin(name), _ModuleTasks):
         name += ".register_env"  # the module is a plugin of its own
     plugin = pm.get_plugin(name) or _ModuleTasks()
     old = plugin.tasks.get(uid)
-    if old is not None and _shown(old[0]) != target and not override:
+    if old is not None and describe_target(old[0]) != target and not override:
         warnings.warn(
-            f"env id {uid!r} is already registered by {_shown(old[0])}; keeping it (pass override=True to replace it)",
+            f"env id {uid!r} is already registered by {describe_target(old[0])}; keeping it (pass override=True to replace it)",
             stacklevel=3,
         )
         return
@@ -111,8 +113,3 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
         unregister_plugin(name)
     register_plugin(plugin, name=name)
     REGISTERED_ENVS[uid] = cls
-
-
-def _shown(cls: type) -> str:
-    """``"module:Class"``: how a registered class is named in messages."""
-    return f"{cls.__module__}:{cls.__qualname__}"

@@ -29,7 +29,7 @@ from embodichain_core.plugins.manager import (
     register_plugin,
     unregister_plugin,
 )
-from embodichain_core.plugins.registry import AmbiguousNameError, NameClash
+from embodichain_core.plugins.registry import AmbiguousNameError, NameClash, describe_target
 
 __all__ = [
     "hookimpl",
@@ -139,7 +139,7 @@ def name_clashes(provider: str | None = None) -> list[NameClash]:
 
 def task_episode_limit(env_cls: type) -> int | None:
     """The ``max_episode_steps`` the tasks of ``env_cls`` register (``None``: none, or they differ)."""
-    target = f"{env_cls.__module__}:{env_cls.__qualname__}"
+    target = describe_target(env_cls)
     limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target_repr == target}
     limits.discard(None)
     return limits.pop() if len(limits) == 1 else None

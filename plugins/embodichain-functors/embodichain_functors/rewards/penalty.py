@@ -132,10 +132,10 @@ class action_smoothness_penalty(CheckedFunctor):
     def __call__(self, env: Any, obs: Any, action: Any, info: dict) -> torch.Tensor:
         current = _flat(action)
         if current is None or current.shape[0] != env.num_envs:
-            return torch.zeros(env.num_envs)
+            return torch.zeros(env.num_envs, device=env.device)
         if self._prev is None or self._prev.shape != current.shape:
             self._prev, self._valid = current.clone(), torch.zeros_like(self._valid)
         zero = torch.zeros(env.num_envs, device=current.device)
-        out = torch.where(self._valid.to(current.device), -(current - self._prev).norm(dim=-1), zero)
+        out = torch.where(self._valid, -(current - self._prev).norm(dim=-1), zero)
         self._prev, self._valid = current.clone(), torch.ones_like(self._valid)
         return out
