@@ -14,6 +14,7 @@ from embodichain_core.managers.dataset_manager import DatasetManager
 from embodichain_core.managers.event_manager import EventManager
 from embodichain_core.managers.functor import ActionTerm, DatasetFunctor, Functor
 from embodichain_core.managers.observation_manager import ObservationManager
+from embodichain_core.managers.param_rules import DataPath
 from embodichain_core.managers.reward_manager import RewardManager
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "DatasetFunctor",
     "DatasetFunctorCfg",
     "DatasetManager",
+    "DataPath",
     "EventCfg",
     "EventManager",
     "Functor",

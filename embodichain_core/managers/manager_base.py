@@ -16,8 +16,7 @@ from embodichain_core.managers.cfg import FunctorCfg
 from embodichain_core.managers.functor import Functor
 from embodichain_core.managers.entity_params import check_entity_params, entity_params
 from embodichain_core.managers.param_rules import (
-    DATA_PATH_PARAMS,
-    check_data_path,
+    check_data_paths,
     check_named_params,
     check_param_types,
     check_signature,
@@ -205,9 +204,7 @@ class ManagerBase(Generic[CfgT]):
             check_signature(func, params, cls.min_argc, where)
             check_param_types(func, params, where, cls.min_argc)
         check_named_params(params, where, label)
-        for key in DATA_PATH_PARAMS:
-            if params.get(key) is not None:
-                check_data_path(params[key], join_path(where, "params", key), label)
+        check_data_paths(func, params, where, cls.min_argc)
         entities = entity_params(func, cls.min_argc, params)
         check_entity_params(params, entities, join_path(where, "params"), uids)
         return CheckedFunctor(name, where, fcfg, func, entry, entities)

@@ -21,12 +21,13 @@ param name                                             rule
 ``*_prob``, ``prob``, ``probability``                  a number in ``[0, 1]``
 any number, anywhere in the params                     not NaN
 a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: or ``None``)
-``folder_path``, ``texture_path``                      an asset name or path ``get_data_path`` finds
+a param annotated :data:`DataPath` (``Optional``, or    an asset name or path ``get_data_path`` finds
+a list of them)
 =====================================================  ==========================================
 
-The signature rules (:func:`check_signature`, :func:`check_param_types`) read the functor's
-signature after its ``min_argc`` positional arguments; the params naming scene entities are
-found there too (:mod:`.entity_params`).
+The signature rules (:func:`check_signature`, :func:`check_param_types`,
+:func:`check_data_paths`) read the functor's signature after its ``min_argc`` positional
+arguments; the params naming scene entities are found there too (:mod:`.entity_params`).
 
 Example:
     >>> check_named_params({"mass_range": [2.0, 1.0]}, "env.events.m", "randomize_rigid_object_mass")
@@ -39,7 +40,8 @@ from __future__ import annotations
 
 import inspect
 import math
-from typing import Any, Optional
+import re
+from typing import Any, NewType, Optional
 
 import numpy as np
 
@@ -52,10 +54,12 @@ __all__ = [
     "check_param_types",
     "check_signature",
     "check_data_path",
+    "check_data_paths",
+    "data_path_params",
     "functor_params",
     "range_bounds",
+    "DataPath",
     "MAX_RANGE_MAGNITUDE",
-    "DATA_PATH_PARAMS",
 ]
 
 #: Largest magnitude of a ``*_range`` bound (metres, degrees, kg, intensities alike).
@@ -222,6 +226,7 @@ def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None
         if param.name not in params or param.annotation is param.empty:
             continue
         kind, optional = _annotation_name(param.annotation)
+        kind = "str" if kind.rsplit(".", 1)[-1] == "DataPath" else kind  # a DataPath is a str
         value = params[param.name]
         if kind not in _SIMPLE_TYPES or (value is None and optional):
             continue
@@ -233,8 +238,45 @@ def check_param_types(func: Any, params: dict, path: str, min_argc: int) -> None
             )
 
 
-#: Params naming asset data (``get_data_path`` names or paths) that must exist.
-DATA_PATH_PARAMS = ("folder_path", "texture_path")
+#: The annotation of a functor param naming asset data: a ``get_data_path`` name or a path.
+#: The manager checks that it exists when the config is validated (a glob pattern is left to
+#: the functor) and passes the string as given; so does ``Optional[DataPath]`` (``None``: not
+#: given) and a list of them (each item). An unannotated param is passed as given, unchecked.
+DataPath = NewType("DataPath", str)
+
+_DATA_PATH = re.compile(r"\bDataPath\b")
+_SEQUENCE = re.compile(r"\b(Sequence|List|list|Tuple|tuple|Iterable)\[")
+
+
+def data_path_params(func: Any, min_argc: Optional[int]) -> dict[str, bool]:
+    """The params of ``func`` annotated :data:`DataPath` -> whether each takes a list of them.
+
+    Example:
+        >>> def load(env, env_ids, textures: DataPath, meshes: list[DataPath], folder_path=None): ...
+        >>> data_path_params(load, 2)
+        {'textures': False, 'meshes': True}
+    """
+    found = {}
+    for param in functor_params(func, min_argc) or []:
+        annotation = param.annotation
+        if annotation is param.empty or param.kind is param.VAR_KEYWORD:
+            continue
+        text = annotation if isinstance(annotation, str) else str(annotation)
+        if _DATA_PATH.search(text):
+            found[param.name] = bool(_SEQUENCE.search(text))
+    return found
+
+
+def check_data_paths(func: Any, params: dict, path: str, min_argc: Optional[int]) -> None:
+    """Every param of ``params`` that ``func`` annotates :data:`DataPath` (see
+    :func:`data_path_params`) names existing asset data (``None``: not given)."""
+    label = _name(func)
+    for key, many in data_path_params(func, min_argc).items():
+        value, where = params.get(key), join_path(path, "params", key)
+        items = list(enumerate(value)) if many and isinstance(value, (list, tuple)) else [(None, value)]
+        for i, item in items:
+            if item is not None:
+                check_data_path(item, where if i is None else f"{where}[{i}]", label)
 
 
 def check_data_path(value: Any, path: str, functor: str = "") -> None:

@@ -8,7 +8,8 @@ import torch
 from functors_testlib import apply, event, field
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.managers import ActionTermCfg, ObservationCfg
+from embodichain_core.managers import ActionTermCfg, EventCfg, EventManager, ObservationCfg
+from embodichain_core.managers.param_rules import data_path_params
 from embodichain_core.managers import SceneEntityCfg as E
 from embodichain_core.sim.cfg import RigidObjectCfg, RigidObjectGroupCfg
 from embodichain_core.sim.shapes import CubeCfg
@@ -145,3 +146,17 @@ def test_group_material_lands_on_every_member(build) -> None:
     assert torch.allclose(rgba[2], torch.tensor([0.1, 0.6, 0.1, 1.0]).expand(2, 4).to(rgba.dtype), atol=1e-6)
     assert (metallic[2] == 0.5).all()
     assert not torch.allclose(rgba[0], rgba[2])
+
+
+@pytest.mark.parametrize(
+    "func, param", [(events.replace_assets_from_group, "folder_path"), (rand.randomize_visual_material, "texture_path")]
+)
+def test_folders_are_data_paths_checked_with_the_config(func, param) -> None:
+    """The standard functors annotate their folders ``DataPath``: a missing one is an error
+    when the section is validated, before any scene is built."""
+    assert data_path_params(func, 2) == {param: False}
+    section = {"ev": EventCfg(func=func, mode="reset", params={"entity_cfg": {"uid": "cube"}, param: "NoSuch/none"})}
+    with pytest.raises(ConfigError) as err:
+        EventManager.validate_section(None, section)
+    assert err.value.path == f"env.events.ev.params.{param}"
+    assert func.__name__ in err.value.reason

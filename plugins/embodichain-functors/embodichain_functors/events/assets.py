@@ -9,7 +9,7 @@ from typing import Any, Sequence
 import mujoco
 import torch
 
-from embodichain_core.managers.cfg import SceneEntityCfg
+from embodichain_core.managers import DataPath, SceneEntityCfg
 from embodichain_core.sim.data import get_data_path
 from embodichain_core.sim.entities.group import RigidObjectGroup
 from embodichain_core.sim.scene_build.mesh import MESH_SUFFIXES
@@ -101,7 +101,7 @@ class replace_assets_from_group(CheckedFunctor):
             raise ParamError(type(self).__name__, "folder_path", f"must be a string, got {folder_path!r}")
         mesh_files(folder_path, type(self).__name__)
 
-    def __call__(self, env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, folder_path: str) -> None:
+    def __call__(self, env: Any, env_ids: Any, entity_cfg: SceneEntityCfg, folder_path: DataPath) -> None:
         ids = env_ids_of(env, env_ids)
         pick = randint(env, ids, len(self.files))
         for k, path in enumerate(self.files):

@@ -16,6 +16,7 @@ from typing import Any, Optional
 import mujoco
 import numpy as np
 
+from embodichain_core.managers import DataPath
 from embodichain_core.sim.scene_build.builder import GROUND_UID
 from embodichain_core.sim.data import get_data_path
 from embodichain_core.sim.entities.articulation import Articulation
@@ -202,7 +203,7 @@ class randomize_visual_material(CheckedFunctor):
         env_ids: Any,
         entity_cfg: Any,
         random_texture_prob: float = 0.5,
-        texture_path: Optional[str] = None,
+        texture_path: Optional[DataPath] = None,
         base_color_range: Any = None,
         metallic_range: Any = None,
         roughness_range: Any = None,
