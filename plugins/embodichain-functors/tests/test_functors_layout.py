@@ -82,6 +82,23 @@ def test_anchor_height_moves_anchor_and_everything_on_it(build) -> None:
     assert torch.equal(table[others(IDS)], table0[others(IDS)])
 
 
+def test_floating_anchor_is_placed_from_its_edited_init_root_pose(build) -> None:
+    """A floating-base anchor's height is its ``init_root_pose``'s (edited in place) plus the draw."""
+    box = ArticulationCfg(
+        uid="box",
+        fix_base=False,
+        init_pos=(0.0, -0.5, 0.1),
+        mjcf='<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .05" mass="1"/></body></worldbody></mujoco>',
+    )
+    env = build(
+        articulation=[box],
+        events=event(rand.randomize_anchor_height, anchor_uid="box", height_delta_candidates=[0.2], include_groups=[]),
+    )
+    env.scene["box"].init_root_pose[2] = 0.4
+    ids = apply(env, IDS)
+    assert torch.allclose(env.scene["box"].get_local_pose()[ids, 2], torch.full((2,), 0.6), atol=1e-5)
+
+
 def test_anchor_height_candidates(build) -> None:
     env = build(events=event(rand.randomize_anchor_height, anchor_uid="table", height_delta_candidates=[-0.1, 0.2]))
     apply(env, [0, 1, 2, 3])

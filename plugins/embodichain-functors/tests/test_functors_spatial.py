@@ -164,8 +164,9 @@ def test_fixed_base_root_pose_moves_the_robot_per_env(build) -> None:
     assert not torch.allclose(hand[0, :3], hand[1, :3])  # the whole arm moved in env 0
 
 
-def test_floating_root_pose(build) -> None:
-    drawer = ArticulationCfg(
+def floating_box() -> ArticulationCfg:
+    """A floating-base articulation ``box`` at (0, -0.5, 0.1)."""
+    return ArticulationCfg(
         uid="box",
         fix_base=False,
         init_pos=(0.0, -0.5, 0.1),
@@ -175,8 +176,11 @@ def test_floating_root_pose(build) -> None:
             "</body></body></worldbody></mujoco>"
         ),
     )
+
+
+def test_floating_root_pose(build) -> None:
     env = build(
-        articulation=[drawer],
+        articulation=[floating_box()],
         events=event(
             rand.randomize_articulation_root_pose, entity_cfg=E(uid="box"), position_range=[[0, 0, 0.2], [0, 0, 0.3]]
         ),
@@ -185,6 +189,22 @@ def test_floating_root_pose(build) -> None:
     root = env.scene["box"].get_local_pose()
     assert ((root[ids, 2] >= 0.3 - 1e-5) & (root[ids, 2] <= 0.4 + 1e-5)).all()
     assert torch.allclose(root[others(IDS), 2], torch.full((2,), 0.1))
+
+
+def test_floating_root_pose_draws_around_the_edited_init_root_pose(build) -> None:
+    """An edited ``init_root_pose`` (what the articulation resets to) is the draws' centre."""
+    env = build(
+        articulation=[floating_box()],
+        events=event(
+            rand.randomize_articulation_root_pose, entity_cfg=E(uid="box"), position_range=[[0, 0, 0.2], [0, 0, 0.3]]
+        ),
+    )
+    box = env.scene["box"]
+    box.init_root_pose[:3] = torch.tensor([0.7, 0.2, 0.5], dtype=box.init_root_pose.dtype)  # in place
+    ids = apply(env, IDS)
+    root = box.get_local_pose()
+    assert torch.allclose(root[ids, :2], torch.tensor([0.7, 0.2]).expand(2, 2), atol=1e-5)
+    assert ((root[ids, 2] >= 0.7 - 1e-5) & (root[ids, 2] <= 0.8 + 1e-5)).all()
 
 
 def test_target_pose_created_and_written_per_env(build) -> None:

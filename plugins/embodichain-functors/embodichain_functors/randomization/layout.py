@@ -188,7 +188,7 @@ class randomize_anchor_height(CheckedFunctor):
     ) -> None:
         if art.is_floating:
             pose = art.get_local_pose()[ids].to(torch.float64)
-            pose[:, 2] = (float(art.scene.model.qpos0[art.root_qpos_adr + 2]) if absolute else pose[:, 2]) + dz
+            pose[:, 2] = (float(art.init_root_pose[2]) if absolute else pose[:, 2]) + dz
             art.set_local_pose(pose, ids)
             return
         body = art.root_body_id

@@ -262,10 +262,11 @@ def _check_root(
 
 
 def _initial_root_pose(art: Articulation) -> torch.Tensor:
-    model = art.scene.model
+    """(7,) float64 CPU: a floating base's ``init_root_pose`` (edits to it are honoured), a
+    fixed base's configured body pose."""
     if art.is_floating:
-        return torch.as_tensor(model.qpos0[art.root_qpos_adr : art.root_qpos_adr + 7], dtype=torch.float64)
-    body = art.root_body_id
+        return art.init_root_pose.to(device="cpu", dtype=torch.float64)
+    model, body = art.scene.model, art.root_body_id
     return torch.as_tensor(list(model.body_pos[body]) + list(model.body_quat[body]), dtype=torch.float64)
 
 
