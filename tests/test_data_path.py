@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import os
-import sys
 import types
 from typing import Callable
 
 import pytest
 
 from embodichain_core.plugins import manager as plugin_manager
-from embodichain_core.plugins import registry as plugin_registry
 from embodichain_core.plugins.hookspecs import AssetRegister
 from embodichain_core.plugins.registry import Registry
 from embodichain_core.sim import data
@@ -33,10 +31,8 @@ def roots(tmp_path, monkeypatch):
     monkeypatch.setattr(data, "_runtime_roots", [])
     registry = Registry("assets", noun="asset root")
     calls: list[int] = []
-    monkeypatch.setattr(plugin_manager, "load_plugins", lambda **kw: calls.append(1))
-    fake_get = lambda kind: registry if kind == "assets" else pytest.fail(kind)  # noqa: E731
-    monkeypatch.setattr(plugin_manager, "get_registry", fake_get)
-    monkeypatch.setattr(plugin_registry, "get_registry", fake_get, raising=False)
+    fake_get = lambda kind: calls.append(1) or registry if kind == "assets" else pytest.fail(kind)  # noqa: E731
+    monkeypatch.setattr(plugin_manager, "get_registry", fake_get)  # the real one loads the plugins first
     return types.SimpleNamespace(env=env_root, tmp=tmp_path, registry=registry, load_calls=calls)
 
 
@@ -93,7 +89,7 @@ def test_plugin_roots_in_registration_order_and_callable_targets(roots):
     assert get_data_path("Only/second.obj") == str(second / "Only" / "second.obj")
     assert data_roots()[-2:] == [str(first), str(second)]
     assert calls == [1], "a callable root is called once"
-    assert roots.load_calls, "load_plugins() must be called before the registry is read"
+    assert roots.load_calls, "the registry is read through get_registry, which loads the plugins"
 
 
 def test_folder_keeps_trailing_slash(roots):
@@ -122,14 +118,6 @@ def test_not_found_lists_roots_and_closest_names(roots):
     with pytest.raises(DataPathNotFoundError) as err:
         get_data_path("TableWare/tableware/forks/")
     assert "'TableWare/tableware/fork/'" in str(err.value)
-
-
-def test_missing_plugin_modules_are_tolerated(roots, monkeypatch):
-    monkeypatch.setitem(sys.modules, "embodichain_core.plugins", None)
-    _plugin_root(roots, "never-read", str(roots.tmp))
-    expected = _touch(roots.env / "x.ply")
-    assert get_data_path("x.ply") == expected
-    assert data_roots() == [str(roots.env)]
 
 
 def test_default_root_when_env_unset(roots, monkeypatch):

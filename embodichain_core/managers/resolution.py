@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib
 from typing import Any, Iterator
 
 from embodichain_core.config.errors import ConfigError, join_path
@@ -60,20 +59,18 @@ def resolve_functor(func: Any, kind: str, path: str) -> tuple[Any, Any]:
         if not callable(func):
             raise ConfigError(f"{path}.func", f"{func!r} is not callable")
         return func, None
-    from embodichain_core.plugins.manager import known_providers
+    from embodichain_core.plugins import list_plugins
+    from embodichain_core.plugins.registry import import_target
 
     if ":" not in func:
         entry = _from_registry(func, kind, path)
         return entry.resolve(), entry
     module, _, attr = func.partition(":")
     try:
-        obj = importlib.import_module(module)
-        for part in attr.split("."):
-            obj = getattr(obj, part)
-        return obj, None
+        return import_target(func), None
     except (ImportError, AttributeError) as err:
         hint = f" ({module!r} is a plugin: its functor {attr!r} is written {module + '/' + attr!r})"
-        hint = hint if module in known_providers() else ""
+        hint = hint if module in {p.name for p in list_plugins()} else ""
         raise ConfigError(f"{path}.func", f"cannot import {func!r}: {err}{hint}") from err
 
 

@@ -1,5 +1,6 @@
 """The embodichain plugin host (docs/plugins.md): :data:`hookimpl` for plugin authors, and
-registry accessors (loading the plugins on first use) taking a bare or qualified name."""
+registry accessors (loading the plugins on first use) taking a bare or qualified name.
+The names imported here with ``as`` are its public API."""
 
 from __future__ import annotations
 
@@ -7,67 +8,28 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from embodichain_core.plugins import manager
-from embodichain_core.plugins.hookspecs import (
-    VISUAL_RANDOMIZATION,
-    FunctorRegister,
-    RobotRegister,
-    SensorRegister,
-    TaskRegister,
-    hookimpl,
-)
-from embodichain_core.plugins.manager import (
-    CORE_PLUGIN_NAME,
-    NameClashWarning,
-    PluginLoadWarning,
-    failed_plugins,
-    get_plugin_manager,
-    get_registry,
-    isolated_plugins,
-    list_plugins,
-    load_plugins,
-    register_plugin,
-    unregister_plugin,
-)
-from embodichain_core.plugins.registry import AmbiguousNameError, NameClash, describe_target
-
-__all__ = [
-    "hookimpl",
-    "FunctorRegister",
-    "RobotRegister",
-    "SensorRegister",
-    "TaskRegister",
-    "AmbiguousNameError",
-    "NameClashWarning",
-    "PluginLoadWarning",
-    "CORE_PLUGIN_NAME",
-    "manager",
-    "get_plugin_manager",
-    "load_plugins",
-    "register_plugin",
-    "unregister_plugin",
-    "isolated_plugins",
-    "list_plugins",
-    "failed_plugins",
-    "name_clashes",
-    "get_registry",
-    "functor_registry",
-    "robot_registry",
-    "solver_registry",
-    "sensor_registry",
-    "asset_registry",
-    "task_registry",
-    "command_registry",
-    "get_functor",
-    "get_robot_cfg_class",
-    "get_solver_class",
-    "get_sensor_classes",
-    "get_asset_root",
-    "asset_roots",
-    "is_visual_randomization",
-    "task_episode_limit",
-]
-
+from embodichain_core.plugins import manager as manager
+from embodichain_core.plugins.hookspecs import VISUAL_RANDOMIZATION as VISUAL_RANDOMIZATION
+from embodichain_core.plugins.hookspecs import FunctorRegister as FunctorRegister
+from embodichain_core.plugins.hookspecs import RobotRegister as RobotRegister
+from embodichain_core.plugins.hookspecs import SensorRegister as SensorRegister
+from embodichain_core.plugins.hookspecs import TaskRegister as TaskRegister
+from embodichain_core.plugins.hookspecs import hookimpl as hookimpl
+from embodichain_core.plugins.manager import CORE_PLUGIN_NAME as CORE_PLUGIN_NAME
+from embodichain_core.plugins.manager import NameClash as NameClash
+from embodichain_core.plugins.manager import NameClashWarning as NameClashWarning
+from embodichain_core.plugins.manager import PluginLoadWarning as PluginLoadWarning
+from embodichain_core.plugins.manager import failed_plugins as failed_plugins
+from embodichain_core.plugins.manager import get_plugin_manager as get_plugin_manager
+from embodichain_core.plugins.manager import get_registry as get_registry
+from embodichain_core.plugins.manager import isolated_plugins as isolated_plugins
+from embodichain_core.plugins.manager import list_plugins as list_plugins
+from embodichain_core.plugins.manager import load_plugins as load_plugins
+from embodichain_core.plugins.manager import register_plugin as register_plugin
+from embodichain_core.plugins.manager import unregister_plugin as unregister_plugin
+from embodichain_core.plugins.registry import AmbiguousNameError as AmbiguousNameError
+from embodichain_core.plugins.registry import Entry
+from embodichain_core.plugins.registry import describe_target as describe_target
 
 # Each accessor returns the registry of one kind (loading the plugins first). Entry meta:
 # functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
@@ -103,12 +65,15 @@ def get_sensor_classes(sensor_type: str) -> tuple[Any, Any]:
     return entry.resolve(), entry.resolve_meta("sensor_class")
 
 
-def get_asset_root(name: str) -> Path:
-    """The data root registered as ``name`` (a callable root is called once)."""
-    entry = asset_registry().entry(name)
+def get_asset_root(name: str | Entry) -> Path:
+    """The data root registered as ``name`` (or by an ``assets`` entry); a callable root is called once."""
+    entry = name if isinstance(name, Entry) else asset_registry().entry(name)
     if "root_path" not in entry.meta:
         root = entry.resolve()
-        entry.meta["root_path"] = Path(root() if callable(root) else root)
+        root = root() if callable(root) else root
+        if not root:
+            raise TypeError(f"asset root {entry.name!r} from {entry.provider!r} is {root!r}, not a directory")
+        entry.meta["root_path"] = Path(root)
     return entry.meta["root_path"]
 
 
@@ -116,8 +81,7 @@ def asset_roots() -> dict[str, Path]:
     """Every registered data root by name (a clashing name once per plugin, qualified)."""
     registry = asset_registry()
     clashing = registry.clashes()
-    names = [registry.qualified_name(e) if e.name in clashing else e.name for e in registry.entries()]
-    return {name: get_asset_root(name) for name in names}
+    return {registry.qualified_name(e) if e.name in clashing else e.name: get_asset_root(e) for e in registry.entries()}
 
 
 def is_visual_randomization(name: str) -> bool:
@@ -127,9 +91,7 @@ def is_visual_randomization(name: str) -> bool:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
         return False
-    return (
-        entry is not None and entry.name.startswith("randomize_") and entry.meta.get("category") == VISUAL_RANDOMIZATION
-    )
+    return entry is not None and entry.name.startswith("randomize_") and entry.meta["category"] == VISUAL_RANDOMIZATION
 
 
 def name_clashes(provider: str | None = None) -> list[NameClash]:
@@ -140,6 +102,6 @@ def name_clashes(provider: str | None = None) -> list[NameClash]:
 def task_episode_limit(env_cls: type) -> int | None:
     """The ``max_episode_steps`` the tasks of ``env_cls`` register (``None``: none, or they differ)."""
     target = describe_target(env_cls)
-    limits = {e.meta.get("max_episode_steps") for e in task_registry().ordered_entries() if e.target_repr == target}
+    limits = {e.meta["max_episode_steps"] for e in task_registry().entries() if e.target_repr == target}
     limits.discard(None)
     return limits.pop() if len(limits) == 1 else None

@@ -1,11 +1,10 @@
-"""The hooks (documented in docs/plugins.md), the ``register`` objects they receive and
-:data:`KINDS`, the one table of registry kinds."""
+"""The hooks (documented in docs/plugins.md) and the ``register`` objects they receive; each
+register class names its registry kind, and :data:`KINDS` lists them in hook-call order."""
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, ClassVar
 
 import pluggy
 
@@ -21,8 +20,20 @@ FUNCTOR_KINDS = ("event", "observation", "reward", "action", "dataset")
 VISUAL_RANDOMIZATION = "randomization.visual"
 
 
+def class_name_key(name: str) -> str:
+    """Case-insensitive key that also accepts a trailing ``Cfg`` (``DexforceW1Cfg``)."""
+    key = name.lower()
+    return key[:-3] if key.endswith("cfg") and len(key) > 3 else key
+
+
 class BaseRegister:
-    """Registers into ``registry`` on behalf of the plugin ``provider``."""
+    """Registers into ``registry`` on behalf of the plugin ``provider``. Subclasses name their
+    registry ``kind`` (hook ``embodichain_register_<kind>``) and its message ``noun``; with
+    ``class_names``, lookups ignore case and a trailing ``Cfg`` (:func:`class_name_key`)."""
+
+    kind: ClassVar[str]
+    noun: ClassVar[str]
+    class_names: ClassVar[bool] = False
 
     def __init__(self, registry: Registry, provider: str):
         self.registry, self.provider = registry, provider
@@ -31,42 +42,19 @@ class BaseRegister:
         return self.registry.add(name, target, self.provider, meta, lazy=lazy)
 
 
-class FunctorRegister(BaseRegister):
-    """``register(name, target, *, kind, category="", description="")``."""
+class CommandRegister(BaseRegister):
+    """``register(name, target, help="")``: ``target(argv: list[str]) -> int``."""
 
-    def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
-        if kind not in FUNCTOR_KINDS:
-            raise ValueError(
-                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
-            )
-        return self._add(name, target, {"kind": kind, "category": category, "description": description})
+    kind, noun = "commands", "command"
 
-
-class RobotRegister(BaseRegister):
-    """``register(name, cfg_class)``: lookups ignore case and a trailing ``Cfg``."""
-
-    def __call__(self, name: str, cfg_class: Any) -> Entry:
-        return self._add(name, cfg_class)
-
-
-class SolverRegister(BaseRegister):
-    """``register(name, solver_class, description="")``: lookups ignore case and a trailing ``Cfg``."""
-
-    def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
-        return self._add(name, solver_class, {"description": description})
-
-
-class SensorRegister(BaseRegister):
-    """``register(sensor_type, cfg_class, sensor_class)``; ``entry.resolve_meta("sensor_class")``."""
-
-    def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> Entry:
-        if is_lazy_target(sensor_class):
-            check_target_string(sensor_class, f"sensor {sensor_type!r} from {self.provider!r}")
-        return self._add(sensor_type, cfg_class, {"sensor_class": sensor_class})
+    def __call__(self, name: str, target: Any, help: str = "") -> Entry:  # noqa: A002
+        return self._add(name, target, {"help": help})
 
 
 class AssetRegister(BaseRegister):
     """``register(name, root)``: a data root directory or a zero-argument callable."""
+
+    kind, noun = "assets", "asset root"
 
     def __call__(self, name: str, root: Any) -> Entry:
         if not (isinstance(root, (str, os.PathLike)) or callable(root)):
@@ -76,8 +64,52 @@ class AssetRegister(BaseRegister):
         return self._add(name, root, lazy=False)
 
 
+class RobotRegister(BaseRegister):
+    """``register(name, cfg_class)``: lookups ignore case and a trailing ``Cfg``."""
+
+    kind, noun, class_names = "robots", "robot", True
+
+    def __call__(self, name: str, cfg_class: Any) -> Entry:
+        return self._add(name, cfg_class)
+
+
+class SolverRegister(BaseRegister):
+    """``register(name, solver_class, description="")``: lookups ignore case and a trailing ``Cfg``."""
+
+    kind, noun, class_names = "solvers", "solver", True
+
+    def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
+        return self._add(name, solver_class, {"description": description})
+
+
+class SensorRegister(BaseRegister):
+    """``register(sensor_type, cfg_class, sensor_class)``; ``entry.resolve_meta("sensor_class")``."""
+
+    kind, noun, class_names = "sensors", "sensor", True
+
+    def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> Entry:
+        if is_lazy_target(sensor_class):
+            check_target_string(sensor_class, f"sensor {sensor_type!r} from {self.provider!r}")
+        return self._add(sensor_type, cfg_class, {"sensor_class": sensor_class})
+
+
+class FunctorRegister(BaseRegister):
+    """``register(name, target, *, kind, category="", description="")``."""
+
+    kind, noun = "functors", "functor"
+
+    def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
+        if kind not in FUNCTOR_KINDS:
+            raise ValueError(
+                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
+            )
+        return self._add(name, target, {"kind": kind, "category": category, "description": description})
+
+
 class TaskRegister(BaseRegister):
     """``register(task_id, entry_point, *, max_episode_steps=None, kwargs=None, config=None, description="")``."""
+
+    kind, noun = "tasks", "task"
 
     def __call__(
         self,
@@ -99,44 +131,29 @@ class TaskRegister(BaseRegister):
         return self._add(task_id, entry_point, meta)
 
 
-class CommandRegister(BaseRegister):
-    """``register(name, target, help="")``: ``target(argv: list[str]) -> int``."""
-
-    def __call__(self, name: str, target: Any, help: str = "") -> Entry:  # noqa: A002
-        return self._add(name, target, {"help": help})
-
-
-def class_name_key(name: str) -> str:
-    """Case-insensitive key that also accepts a trailing ``Cfg`` (``DexforceW1Cfg``)."""
-    key = name.lower()
-    return key[:-3] if key.endswith("cfg") and len(key) > 3 else key
-
-
-@dataclass(frozen=True)
-class Kind:
-    """One registry kind: its hook, register object, message noun and lookup key."""
-
-    hook: str
-    register: type[BaseRegister]
-    noun: str
-    key: Callable[[str], str] | None = None
-
-
-#: Every registry kind, in the order the hooks are called.
-KINDS: dict[str, Kind] = {
-    "commands": Kind("embodichain_register_commands", CommandRegister, "command"),
-    "assets": Kind("embodichain_register_assets", AssetRegister, "asset root"),
-    "robots": Kind("embodichain_register_robots", RobotRegister, "robot", class_name_key),
-    "solvers": Kind("embodichain_register_solvers", SolverRegister, "solver", class_name_key),
-    "sensors": Kind("embodichain_register_sensors", SensorRegister, "sensor", class_name_key),
-    "functors": Kind("embodichain_register_functors", FunctorRegister, "functor"),
-    "tasks": Kind("embodichain_register_tasks", TaskRegister, "task"),
+#: kind -> register class, in the order the hooks are called.
+KINDS: dict[str, type[BaseRegister]] = {
+    r.kind: r
+    for r in (
+        CommandRegister,
+        AssetRegister,
+        RobotRegister,
+        SolverRegister,
+        SensorRegister,
+        FunctorRegister,
+        TaskRegister,
+    )
 }
+
+
+def hook_name(kind: str) -> str:
+    """The hook filling the registry of ``kind`` (``"embodichain_register_functors"``)."""
+    return f"embodichain_register_{kind}"
 
 
 def new_registries() -> dict[str, Registry]:
     """A fresh, empty registry of every kind."""
-    return {kind: Registry(kind, noun=k.noun, key=k.key) for kind, k in KINDS.items()}
+    return {k: Registry(k, noun=r.noun, key=class_name_key if r.class_names else None) for k, r in KINDS.items()}
 
 
 @hookspec

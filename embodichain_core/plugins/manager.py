@@ -1,5 +1,5 @@
 """The plugin host: loads the core's and the installed plugins (entry point group
-``"embodichain"``, sorted by plugin name), fills the registries, mirrors the tasks into
+``"embodichain"``, sorted by plugin name), fills the registries, writes the tasks into
 gymnasium. Each plugin's hooks write into staging registries merged on success: a plugin
 that fails contributes nothing and is reported in one line (:class:`PluginLoadWarning`).
 """
@@ -22,8 +22,8 @@ from typing import Any, Iterable, Iterator
 import pluggy
 
 from embodichain_core.plugins import hookspecs
-from embodichain_core.plugins.hookspecs import KINDS, PROJECT_NAME, new_registries
-from embodichain_core.plugins.registry import Entry, NameClash, Registry, describe_target
+from embodichain_core.plugins.hookspecs import KINDS, PROJECT_NAME, hook_name, new_registries
+from embodichain_core.plugins.registry import Entry, Registry, describe_target, join_names
 from embodichain_core.utils.suggest import did_you_mean
 
 ENTRY_POINT_GROUP = "embodichain"
@@ -56,8 +56,21 @@ class PluginInfo:
     @property
     def error_summary(self) -> str:
         """The last non-empty line of the traceback (``"ImportError: ..."``)."""
-        lines = [line.strip() for line in self.error.splitlines() if line.strip()]
-        return lines[-1] if lines else ""
+        return next((line.strip() for line in reversed(self.error.splitlines()) if line.strip()), "")
+
+
+@dataclass(frozen=True)
+class NameClash:
+    """A bare name several plugins register: its ``providers`` and ``qualified`` names."""
+
+    kind: str
+    name: str
+    providers: tuple[str, ...]
+    qualified: tuple[str, ...]
+
+    def __str__(self) -> str:
+        forms = join_names(self.qualified, "or")
+        return f"{self.kind.removesuffix('s')} {self.name!r} is provided by {join_names(self.providers)} (use {forms})"
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
@@ -72,8 +85,7 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         self.loaded = False
         self.lock = threading.RLock()
         self.tracing = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
-        #: gym id -> the spec it had before this manager wrote it (None: absent).
-        self.gym_saved: dict[str, Any] = {}
+        self.gym_specs: dict[str, Any] = {}  # gym id -> the spec this manager wrote
         self.gym_foreign: set[str] = set()  # ids gymnasium has from elsewhere, each reported once
 
     def parse_hookimpl_opts(self, plugin: Any, name: str) -> Any:
@@ -90,7 +102,11 @@ class EmbodichainPluginManager(pluggy.PluginManager):
 
     def name_clashes(self, provider: str | None = None) -> list[NameClash]:
         """Bare names several plugins register, by kind then name (only ``provider``'s when given)."""
-        found = [c for registry in self.registries.values() for c in registry.name_clashes()]
+        found = []
+        for kind, registry in self.registries.items():
+            for name, providers in registry.clashes().items():
+                qualified = [registry.qualified_name(registry.entry(f"{p}/{name}")) for p in providers]
+                found.append(NameClash(kind, name, tuple(providers), tuple(qualified)))
         return [c for c in found if provider is None or provider in c.providers]
 
 
@@ -121,12 +137,11 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
         pm.infos[CORE_PLUGIN_NAME] = PluginInfo(CORE_PLUGIN_NAME, __version__, module=builtin.__name__)
         if entry_points:
             _register_entry_points(pm, exclude)
-        for info in list(pm.infos.values()):
-            if info.status == "loaded":
-                try:
-                    info.registered = _activate(pm, info.name)
-                except Exception:
-                    _fail(pm, info)
+        for info in [i for i in pm.infos.values() if i.status == "loaded"]:
+            try:
+                info.registered = _activate(pm, info.name)
+            except Exception:
+                _fail(pm, info)
         pm.check_pending()
         sync_gym(pm)
     return pm
@@ -143,12 +158,11 @@ def named_entry_points() -> list[tuple[str, Any]]:
     """``(plugin name, entry point)`` in load order: the distribution's (PEP 503-normalized)
     name, ``<dist>.<entry point>`` for a distribution with several."""
     eps = _iter_entry_points()
-    norm = {id(ep): re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps}
+    dists = [re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps]
     named = []
-    for ep in eps:
-        dist, own = norm[id(ep)], re.sub(r"[-_.]+", "-", ep.name).lower()
-        alone = sum(norm[id(e)] == dist for e in eps) == 1 or own == dist
-        named.append((ep.name if not dist else dist if alone else f"{dist}.{own}", ep))
+    for ep, dist in zip(eps, dists):
+        own = re.sub(r"[-_.]+", "-", ep.name).lower()
+        named.append((ep.name if not dist else dist if dists.count(dist) == 1 or own == dist else f"{dist}.{own}", ep))
     return sorted(named, key=lambda p: (p[0], p[1].name, str(getattr(p[1], "value", ""))))
 
 
@@ -193,17 +207,17 @@ def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
         if not caller.has_spec():
-            known = [k.hook for k in KINDS.values()]
-            message = f"plugin {name!r} implements unknown hook {caller.name!r}.{did_you_mean(caller.name, known)}"
-            raise pluggy.PluginValidationError(plugin, message)
+            hint = did_you_mean(caller.name, [hook_name(kind) for kind in KINDS])
+            raise pluggy.PluginValidationError(
+                plugin, f"plugin {name!r} implements unknown hook {caller.name!r}.{hint}"
+            )
     staged = new_registries()
-    for kind, spec in KINDS.items():
-        for impl in getattr(pm.hook, spec.hook).get_hookimpls():
+    for kind, register in KINDS.items():
+        for impl in getattr(pm.hook, hook_name(kind)).get_hookimpls():
             if impl.plugin is plugin:
                 if pm.tracing:
-                    sys.stderr.write(f"embodichain plugins: {name}: {spec.hook}\n")
-                register = spec.register(staged[kind], name)
-                impl.function(*[register for _ in impl.argnames])
+                    sys.stderr.write(f"embodichain plugins: {name}: {hook_name(kind)}\n")
+                impl.function(*[register(staged[kind], name) for _ in impl.argnames])
     for kind, registry in staged.items():
         for entry in registry.ordered_entries():
             pm.registries[kind].merge(entry)
@@ -236,8 +250,7 @@ def unregister_plugin(name: str) -> None:
     pm = load_plugins()
     with pm.lock:
         for registry in pm.registries.values():
-            for entry in registry.by_provider(name):
-                registry.remove(entry.name, provider=name)
+            registry.drop(name)
         if pm.get_plugin(name) is not None:
             pm.unregister(name=name)
         pm.infos.pop(name, None)
@@ -249,7 +262,7 @@ def isolated_plugins(
     *, load_entry_points: bool = False, exclude: Iterable[str] = ()
 ) -> Iterator[EmbodichainPluginManager]:
     """A fresh manager with the built-ins (and the installed plugins but ``exclude``); on exit the
-    previous manager and the gymnasium ids it wrote are restored."""
+    previous manager is current again, with its gymnasium ids."""
     global _PM
     with _GLOBAL_LOCK:
         saved, _PM = _PM, EmbodichainPluginManager()
@@ -258,8 +271,9 @@ def isolated_plugins(
     finally:
         with _GLOBAL_LOCK:
             pm, _PM = _PM, saved
-        if pm is not None:
-            sync_gym(pm, release=True)
+        for manager, release in ((pm, True), (saved, False)):
+            if manager is not None:
+                sync_gym(manager, release=release)
 
 
 def _ambiguous_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
@@ -284,34 +298,33 @@ def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) 
         kwargs=kwargs,
         vector_entry_point=vector,
     )
-    spec.embodichain_task = True  # type: ignore[attr-defined]
+    spec.embodichain_task, spec.embodichain_entries = True, entries  # type: ignore[attr-defined]
     return spec
 
 
 def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
-    """Make gymnasium's registry show ``pm``'s tasks (none with ``release``) by qualified and
-    bare id; an id gymnasium has from elsewhere is left as it is (a :class:`NameClashWarning`)."""
+    """Make gymnasium's registry show ``pm``'s tasks (none with ``release``) by qualified and bare
+    id, removing the ids ``pm`` wrote that it no longer has; an id gymnasium has from elsewhere is
+    left as it is (a :class:`NameClashWarning`)."""
     tasks, wanted = pm.registries["tasks"], {}
     for entry in [] if release else tasks.ordered_entries():
         wanted[tasks.qualified_name(entry)] = [entry]
         wanted.setdefault(entry.name, []).append(entry)
-    if not wanted and not pm.gym_saved:
+    if not wanted and not pm.gym_specs:
         return  # a manager without tasks does not import gymnasium
     import gymnasium
 
-    for gym_id in [g for g in pm.gym_saved if g not in wanted]:
-        old = pm.gym_saved.pop(gym_id)
-        if old is None:
-            gymnasium.registry.pop(gym_id, None)
-        else:
-            gymnasium.registry[gym_id] = old
+    for gym_id in [g for g in pm.gym_specs if g not in wanted]:
+        if gymnasium.registry.get(gym_id) is pm.gym_specs.pop(gym_id):
+            del gymnasium.registry[gym_id]
     for gym_id, entries in wanted.items():
         current = gymnasium.registry.get(gym_id)
-        if gym_id not in pm.gym_saved and current is not None and not getattr(current, "embodichain_task", False):
+        if current is not None and not getattr(current, "embodichain_task", False):
             _report_foreign(pm, gym_id, current.entry_point, entries)
             continue
-        pm.gym_saved.setdefault(gym_id, current)
-        gymnasium.registry[gym_id] = _task_spec(pm, gym_id, entries)
+        if getattr(pm.gym_specs.get(gym_id), "embodichain_entries", None) != entries:
+            pm.gym_specs[gym_id] = _task_spec(pm, gym_id, entries)
+        gymnasium.registry[gym_id] = pm.gym_specs[gym_id]
 
 
 def _report_foreign(pm: EmbodichainPluginManager, gym_id: str, theirs: Any, entries: list[Entry]) -> None:
@@ -319,7 +332,7 @@ def _report_foreign(pm: EmbodichainPluginManager, gym_id: str, theirs: Any, entr
     if ours == [theirs] or f"{gym_id}={ours}" in pm.gym_foreign:
         return  # the same class, registered by its own module; or reported already
     pm.gym_foreign.add(f"{gym_id}={ours}")
-    ids = ", ".join(repr(pm.registries["tasks"].qualified_name(e)) for e in entries)
+    ids = join_names([pm.registries["tasks"].qualified_name(e) for e in entries])
     warnings.warn(
         f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins (entry point "
         f"{theirs!r}); it is left as it is. Use {ids} for the plugin task{'s' if len(entries) > 1 else ''}.",
@@ -336,11 +349,6 @@ def list_plugins() -> list[PluginInfo]:
 def failed_plugins() -> list[tuple[str, str]]:
     """``(name, traceback)`` of the plugins that failed to load."""
     return [(i.name, i.error) for i in load_plugins().infos.values() if i.status == "failed"]
-
-
-def known_providers() -> set[str]:
-    """Names of every known plugin (loaded, failed or blocked)."""
-    return set(load_plugins().infos)
 
 
 def get_registry(kind: str) -> Registry:

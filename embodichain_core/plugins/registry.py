@@ -8,7 +8,6 @@ from __future__ import annotations
 import importlib
 import inspect
 import re
-from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
 from embodichain_core.utils.suggest import closest, did_you_mean
@@ -18,9 +17,9 @@ SEPARATOR = "/"
 
 
 class RegistryError(Exception):
-    """Base class of registry errors."""
+    """Base class of registry errors (``str()`` is the message, also for the ``KeyError`` ones)."""
 
-    def __str__(self) -> str:  # KeyError would repr() the message
+    def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""
 
 
@@ -49,8 +48,9 @@ class TargetImportError(RegistryError, ImportError):
 
 
 def join_names(items: Sequence[str], word: str = "and") -> str:
-    """``"a"``, ``"a and b"``, ``"a, b and c"`` (``word`` replaces ``and``)."""
-    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} {word} {items[-1]}"
+    """``"'a'"``, ``"'a' and 'b'"``, ``"'a', 'b' and 'c'"`` (quoted; ``word`` replaces ``and``)."""
+    quoted = [repr(item) for item in items]
+    return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} {word} {quoted[-1]}"
 
 
 def namespace(provider: str) -> str:
@@ -89,33 +89,24 @@ def describe_target(target: Any) -> str:
 
 def first_doc_line(obj: Any) -> str:
     """The first non-empty docstring line of ``obj``, or ``""``."""
-    lines = [line.strip() for line in (inspect.getdoc(obj) or "").splitlines() if line.strip()]
-    return lines[0] if lines else ""
-
-
-_UNSET: Any = object()
+    return next((line.strip() for line in (inspect.getdoc(obj) or "").splitlines() if line.strip()), "")
 
 
 class Entry:
-    """``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``."""
+    """``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``;
+    ``meta`` holds the kind's extra values (a functor's ``kind``, a task's ``kwargs``, ...)."""
 
     def __init__(self, name: str, target: Any, provider: str, meta: dict | None, lazy: bool | None, noun: str):
         self.name, self.target, self.provider, self.noun = name, target, provider, noun
         self.meta: dict[str, Any] = dict(meta or {})
         self.lazy = is_lazy_target(target) if lazy is None else lazy
-        self._value = _UNSET if self.lazy else target
-
-    @property
-    def resolved(self) -> bool:
-        """Whether the target has been imported (always True for eager targets)."""
-        return self._value is not _UNSET
+        self.resolved = not self.lazy  # whether the target has been imported
+        self._value = target
 
     def resolve(self) -> Any:
         """The target object, imported on first call (:class:`TargetImportError` naming the entry)."""
-        if self._value is _UNSET:
-            self._value = self._import(self.target)
-            if "description" in self.meta and not self.meta["description"]:
-                self.meta["description"] = first_doc_line(self._value)
+        if not self.resolved:
+            self._value, self.resolved = self._import(self.target), True
         return self._value
 
     def resolve_meta(self, key: str) -> Any:
@@ -140,75 +131,141 @@ class Entry:
 
     @property
     def description(self) -> str:
-        """``meta["description"]``, else the resolved target's first docstring line."""
+        """``meta["description"]``, else the imported target's first docstring line."""
         text = self.meta.get("description") or ""
-        if not text and self.resolved and callable(self._value):
-            text = first_doc_line(self._value)
-        return str(text)
+        return str(text or (first_doc_line(self._value) if self.resolved and callable(self._value) else ""))
 
     def __repr__(self) -> str:
         return f"Entry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
-
-
-@dataclass(frozen=True)
-class NameClash:
-    """A bare name several plugins register: its ``providers`` and ``qualified`` names."""
-
-    kind: str
-    name: str
-    providers: tuple[str, ...]
-    qualified: tuple[str, ...]
-
-    def __str__(self) -> str:
-        noun = self.kind.removesuffix("s")
-        forms = join_names([repr(q) for q in self.qualified], "or")
-        return f"{noun} {self.name!r} is provided by {join_names([repr(p) for p in self.providers])} (use {forms})"
 
 
 class Registry:
     """Names -> :class:`Entry` of one ``kind``; ``key`` maps a name to its lookup key."""
 
     def __init__(self, kind: str, *, noun: str | None = None, key: Callable[[str], str] | None = None):
-        self.kind = kind
-        self.noun = noun or kind.removesuffix("s")
+        self.kind, self.noun = kind, noun or kind.removesuffix("s")
         self._key: Callable[[str], str] = key or str
-        #: (provider, key) -> entry, in registration order.
+        #: (provider, key) -> entry, in registration order (plugins load sorted by name).
         self._entries: dict[tuple[str, str], Entry] = {}
 
     def add(
         self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None
     ) -> Entry:
-        """Add an entry (an identical one again is a no-op)."""
+        """Add an entry (an identical one again is a no-op); returns the stored one."""
+        what = f"{self.noun} {name!r} from {provider!r}"
         if not isinstance(name, str) or not name or SEPARATOR in name or ":" in name:
             raise ValueError(
-                f"{self.noun} {name!r} from {provider!r}: names are non-empty strings without '/' or ':' "
+                f"{what}: names are non-empty strings without '/' or ':' "
                 f"('/' separates the plugin in qualified names, ':' an import path)"
             )
         entry = Entry(name, target, provider, meta, lazy, self.noun)
         if entry.lazy:
-            check_target_string(target, f"{self.noun} {name!r} from {provider!r}")
+            check_target_string(target, what)
         return self.merge(entry)
 
     def merge(self, entry: Entry) -> Entry:
         """Store a checked entry (see :meth:`add`); returns the stored one."""
-        old = self._entries.get((entry.provider, self._key(entry.name)))
-        if old is not None and (old.target_repr, repr(old.meta)) != (entry.target_repr, repr(entry.meta)):
+        old = self._entries.setdefault((entry.provider, self._key(entry.name)), entry)
+        if (old.target_repr, repr(old.meta)) != (entry.target_repr, repr(entry.meta)):
             raise DuplicateRegistrationError(
                 f"{self.noun} {entry.name!r} is registered twice by {entry.provider!r} "
                 f"(with {old.target_repr!r} and {entry.target_repr!r}); one provider cannot register a name twice"
             )
-        return self._entries.setdefault((entry.provider, self._key(entry.name)), entry)
+        return old
 
-    def remove(self, name: str, provider: str | None = None) -> Entry | None:
-        """Remove and return an entry (``None`` when absent); ``name`` may be qualified."""
-        found = self.find(name) if provider is None else self.find_own(provider, name)
-        if found is not None:
-            del self._entries[(found.provider, self._key(found.name))]
+    def drop(self, provider: str) -> None:
+        """Remove every entry of ``provider``."""
+        self._entries = {k: e for k, e in self._entries.items() if e.provider != provider}
+
+    def find(self, name: str) -> Entry | None:
+        """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
+        for a bare name several plugins provide or a qualified name spelled with ``:``."""
+        if not isinstance(name, str):
+            return None
+        provider, bare = self._split(name)
+        if provider is not None:
+            return self._entries.get((provider, self._key(bare)))
+        provider, bare = self._split(name, ":")
+        if provider is not None:
+            choice = f"{namespace(provider)}{SEPARATOR}{bare}"
+            message = (
+                f"{self.noun} {name!r}: ':' separates an import path ('module:attr'); the qualified name of "
+                f"{provider!r}'s {self.noun} {bare!r} is written with '/': use {choice!r}"
+            )
+            raise AmbiguousNameError(message, name, [provider], [choice])
+        candidates = sorted(self._candidates(name), key=lambda e: e.provider)
+        if len(candidates) > 1:
+            providers, choices = [e.provider for e in candidates], [self.qualified_name(e) for e in candidates]
+            message = (
+                f"{self.noun} {name!r} is ambiguous: it is provided by {join_names(providers)}. "
+                f"Use a qualified name: {join_names(choices, 'or')}."
+            )
+            raise AmbiguousNameError(message, name, providers, choices)
+        return candidates[0] if candidates else None
+
+    def _candidates(self, name: str) -> list[Entry]:
+        return [e for (_, k), e in self._entries.items() if k == self._key(name)]
+
+    def _split(self, name: str, sep: str = SEPARATOR) -> tuple[str | None, str]:
+        """``(provider, bare)`` when ``name`` is ``"<plugin><sep><bare>"`` for a provider of
+        this registry, else ``(None, name)``."""
+        prefix, found, bare = name.partition(sep)
+        providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
+        return (providers[prefix], bare) if found and bare and prefix in providers else (None, name)
+
+    def entry(self, name: str) -> Entry:
+        """The entry for ``name``; :class:`UnknownNameError` with the closest names."""
+        found = self.find(name)
+        if found is None:
+            raise self.unknown(name)
         return found
 
-    def find_own(self, provider: str, name: str) -> Entry | None:
-        """``provider``'s entry named ``name`` (bare), or ``None``."""
-        return self._entries.get((provider, self._key(name)))
+    def unknown(self, name: str) -> UnknownNameError:
+        """The error for an unknown ``name``, with the closest registered names (or plugins)."""
+        if not self._entries:
+            message = f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin providing them"
+            return UnknownNameError(f"{message} (see `embodichain list plugins`)", name)
+        provider, bare = self._split(name)
+        prefix, sep, _ = name.partition(SEPARATOR)
+        if provider is not None:  # a known plugin, an unknown name: suggest among its names
+            message, typed = f"{provider!r} provides no {self.noun} {bare!r}", name
+            pool = [self.qualified_name(e) for e in self.by_provider(provider)]
+        elif sep:  # an unknown plugin: suggest among the plugins
+            typed, pool = prefix, self.providers()
+            message = f"unknown {self.noun} {name!r}: no plugin named {prefix!r} provides {self.kind}"
+        else:
+            message, typed, pool = f"unknown {self.noun} {name!r}", name, self.names()
+        listing = f"embodichain list {self.kind}" + (f" --provider {provider}" if provider else "")
+        hint = did_you_mean(typed, pool) or f" See `{listing}`."
+        return UnknownNameError(f"{message}.{hint}", name, closest(typed, pool))
+
+    def get(self, name: str) -> Any:
+        """The (imported) target registered as ``name``."""
+        return self.entry(name).resolve()
+
+    def qualified_name(self, entry: Entry) -> str:
+        """The name that always resolves to ``entry`` (``"<plugin>/<name>"``)."""
+        return f"{namespace(entry.provider)}{SEPARATOR}{entry.name}"
+
+    def names(self) -> list[str]:
+        """Registered bare names, sorted, each once (however many providers)."""
+        return sorted({self._key(e.name): e.name for e in reversed(self.ordered_entries())}.values())
+
+    def qualified_names(self) -> list[str]:
+        """The qualified name of every entry, sorted."""
+        return sorted(map(self.qualified_name, self._entries.values()))
+
+    def entries(self) -> list[Entry]:
+        """Entries sorted by name, then provider."""
+        return sorted(self._entries.values(), key=lambda e: (e.name, e.provider))
+
+    def ordered_entries(self) -> list[Entry]:
+        """Entries in registration order."""
+        return list(self._entries.values())
+
+    def by_provider(self, provider: str) -> list[Entry]:
+        """Entries registered by ``provider``."""
+        return [e for e in self.entries() if e.provider == provider]
 
     def providers(self) -> list[str]:
         """Every provider with at least one entry, sorted."""
@@ -218,132 +275,16 @@ class Registry:
         """The providers of the bare ``name``, sorted."""
         return sorted(e.provider for e in self._candidates(name))
 
-    def _candidates(self, name: str) -> list[Entry]:
-        key = self._key(name)
-        return [e for (_, k), e in self._entries.items() if k == key]
-
-    def _split(self, name: str, sep: str = SEPARATOR) -> tuple[str, str] | None:
-        """``(provider, bare)`` for ``"<plugin><sep><bare>"`` naming a provider of this registry."""
-        prefix, found, bare = name.partition(sep)
-        providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
-        return (providers[prefix], bare) if found and bare and prefix in providers else None
-
-    def find(self, name: str) -> Entry | None:
-        """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
-        for a bare name several plugins provide or a qualified name spelled with ``:``."""
-        if not isinstance(name, str):
-            return None
-        split = self._split(name)
-        if split is not None:
-            return self.find_own(*split)
-        old = self._split(name, ":")
-        if old is not None:
-            choice = f"{namespace(old[0])}{SEPARATOR}{old[1]}"
-            raise AmbiguousNameError(
-                f"{self.noun} {name!r}: ':' separates an import path ('module:attr'); the qualified name of "
-                f"{old[0]!r}'s {self.noun} {old[1]!r} is written with '/': use {choice!r}",
-                name,
-                [old[0]],
-                [choice],
-            )
-        candidates = self._candidates(name)
-        if len(candidates) > 1:
-            raise self.ambiguous(name, candidates)
-        return candidates[0] if candidates else None
-
-    def ambiguous(self, name: str, candidates: list[Entry]) -> AmbiguousNameError:
-        """The error for a bare ``name`` provided by several plugins."""
-        entries = sorted(candidates, key=lambda e: e.provider)
-        providers, choices = [e.provider for e in entries], [self.qualified_name(e) for e in entries]
-        message = (
-            f"{self.noun} {name!r} is ambiguous: it is provided by {join_names([repr(p) for p in providers])}. "
-            f"Use a qualified name: {join_names([repr(c) for c in choices], 'or')}."
-        )
-        return AmbiguousNameError(message, name, providers, choices)
-
-    def qualified_name(self, entry: Entry) -> str:
-        """The name that always resolves to ``entry`` (``"<plugin>/<name>"``)."""
-        return f"{namespace(entry.provider)}{SEPARATOR}{entry.name}"
-
-    def entry(self, name: str) -> Entry:
-        """The entry for ``name``; raises :class:`UnknownNameError` with suggestions."""
-        found = self.find(name)
-        if found is None:
-            raise self.unknown(name)
-        return found
-
-    def get(self, name: str) -> Any:
-        """The (resolved) target registered as ``name``."""
-        return self.entry(name).resolve()
-
-    def unknown(self, name: str) -> UnknownNameError:
-        """The error for an unknown ``name``, with the closest registered names."""
-        if not self._entries:
-            return UnknownNameError(
-                f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin "
-                f"providing them (see `embodichain list plugins`)",
-                name,
-            )
-        split = self._split(name)
-        if split is not None:
-            own = [self.qualified_name(e) for e in self.by_provider(split[0])]
-            hint = did_you_mean(name, own) or f" See `embodichain list {self.kind} --provider {split[0]}`."
-            return UnknownNameError(
-                f"{split[0]!r} provides no {self.noun} {split[1]!r}.{hint}", name, closest(name, own)
-            )
-        prefix, sep, _ = name.partition(SEPARATOR)
-        if sep:
-            hint = did_you_mean(prefix, self.providers()) or f" Providers: {', '.join(self.providers())}."
-            message = f"unknown {self.noun} {name!r}: no plugin named {prefix!r} provides {self.kind}.{hint}"
-            return UnknownNameError(message, name, closest(prefix, self.providers()))
-        hint = did_you_mean(name, self.names()) or f" See `embodichain list {self.kind}`."
-        return UnknownNameError(f"unknown {self.noun} {name!r}.{hint}", name, closest(name, self.names()))
-
-    def names(self) -> list[str]:
-        """Registered bare names, sorted, each once (however many providers)."""
-        first: dict[str, str] = {}
-        for (_, key), entry in self._entries.items():
-            first.setdefault(key, entry.name)
-        return sorted(first.values())
-
-    def qualified_names(self) -> list[str]:
-        """The qualified name of every entry, sorted."""
-        return sorted(self.qualified_name(e) for e in self._entries.values())
-
-    def entries(self) -> list[Entry]:
-        """Entries sorted by name, then provider."""
-        return sorted(self._entries.values(), key=lambda e: (e.name, e.provider))
-
-    def ordered_entries(self) -> list[Entry]:
-        """Entries in registration order (deterministic: plugins load sorted by name)."""
-        return list(self._entries.values())
-
-    def by_provider(self, provider: str) -> list[Entry]:
-        """Entries registered by ``provider``."""
-        return [e for e in self.entries() if e.provider == provider]
-
     def clashes(self) -> dict[str, list[str]]:
-        """Bare names provided by several plugins -> their providers (sorted)."""
-        return {c.name: list(c.providers) for c in self.name_clashes()}
-
-    def name_clashes(self) -> list[NameClash]:
-        """Every bare name several plugins provide, by name."""
-        groups: dict[str, list[Entry]] = {}
-        for (_, key), entry in self._entries.items():
-            groups.setdefault(key, []).append(entry)
-        found = []
-        for group in sorted(groups.values(), key=lambda g: g[0].name):
-            if len(group) > 1:
-                group = sorted(group, key=lambda e: e.provider)
-                providers = tuple(e.provider for e in group)
-                found.append(NameClash(self.kind, group[0].name, providers, tuple(map(self.qualified_name, group))))
-        return found
+        """Bare names provided by several plugins -> their providers (sorted), by name."""
+        providers = {name: self.providers_of(name) for name in self.names()}
+        return {name: found for name, found in providers.items() if len(found) > 1}
 
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):
             return False
-        split = self._split(name)
-        return self.find_own(*split) is not None if split is not None else bool(self._candidates(name))
+        provider, bare = self._split(name)
+        return (provider, self._key(bare)) in self._entries if provider else bool(self._candidates(name))
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names())

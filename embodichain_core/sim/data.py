@@ -21,7 +21,6 @@ folder paths ending with ``/`` (``"TableWare/tableware/fork/"``).
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Any, Iterable
 
 from embodichain_core.utils.suggest import closest
@@ -160,62 +159,19 @@ def _walk_names(root: str, max_depth: int) -> list[str]:
 def _split_provider(name: str) -> tuple[str | None, str]:
     """``(plugin, relative)`` for ``"<plugin>:<relative>"`` naming a plugin with data roots."""
     prefix, sep, rest = name.partition(":")
-    registry = _asset_registry() if sep else None
-    if registry is None or prefix not in registry.providers():
-        return None, name
-    return prefix, rest
+    return (prefix, rest) if sep and prefix in _asset_registry().providers() else (None, name)
 
 
 def _plugin_roots(provider: str | None = None) -> list[str]:
     """Data roots registered by plugins (only ``provider``'s when given), in load order."""
-    registry = _asset_registry()
-    if registry is None:
-        return []
-    entries = [e for e in _registry_entries(registry) if provider in (None, e.provider)]
-    roots = [_entry_root(entry) for entry in entries]
-    return [os.path.abspath(os.path.expanduser(os.fspath(r))) for r in roots if r]
+    from embodichain_core.plugins import get_asset_root
 
-
-def _entry_root(entry: Any) -> Any:
-    """An entry's root; a callable target is called once (cached in ``meta["root_path"]``,
-    shared with ``embodichain_core.plugins.get_asset_root``)."""
-    meta = getattr(entry, "meta", None)
-    if isinstance(meta, dict) and meta.get("root_path"):
-        return meta["root_path"]
-    target = getattr(entry, "target", entry)
-    root = target() if callable(target) else target
-    if isinstance(meta, dict) and root:
-        meta["root_path"] = Path(root)
-    return root
+    entries = [e for e in _asset_registry().ordered_entries() if provider in (None, e.provider)]
+    return [os.path.abspath(os.path.expanduser(os.fspath(get_asset_root(e)))) for e in entries]
 
 
 def _asset_registry() -> Any:
-    """The plugin host's ``assets`` registry after ``load_plugins()``, or None without one."""
-    try:
-        from embodichain_core.plugins import manager
+    """The plugin host's ``assets`` registry (loading the plugins first)."""
+    from embodichain_core.plugins import manager
 
-        manager.load_plugins()
-    except ImportError:
-        return None
-    try:
-        return manager.get_registry("assets")
-    except (LookupError, ValueError):
-        return None
-
-
-def _registry_entries(registry: Any) -> list[Any]:
-    """Entries of a registry in registration order, whatever its container shape.
-
-    ``Registry.entries()`` sorts by name, so ``ordered_entries()`` (or the insertion-ordered
-    mapping behind it) is read when there is one.
-    """
-    if callable(getattr(registry, "ordered_entries", None)):
-        return list(registry.ordered_entries())
-    ordered = getattr(registry, "_entries", None)
-    if isinstance(ordered, dict):
-        return list(ordered.values())
-    if callable(getattr(registry, "values", None)):
-        return list(registry.values())
-    if callable(getattr(registry, "entries", None)):
-        return list(registry.entries())
-    return list(registry)
+    return manager.get_registry("assets")

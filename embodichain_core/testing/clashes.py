@@ -6,7 +6,7 @@ functor, task, robot, sensor, data root or command name. This helper loads every
 installed plugin into a fresh manager (the plugin under test excluded, when it is
 installed too), registers the plugin under test next to them, and reports each bare
 name it shares with another plugin. Clashes never disable a plugin, but they make
-the bare names ambiguous for users (see :mod:`embodichain_core.plugins.names`).
+the bare names ambiguous for users (see docs/plugins.md, "Names and clashes").
 
 Example:
     >>> import embodichain_myplugin.plugin as plugin  # doctest: +SKIP
@@ -20,7 +20,7 @@ import types
 import warnings
 from typing import Any, Iterable
 
-from embodichain_core.plugins.registry import NameClash
+from embodichain_core.plugins.manager import NameClash
 
 __all__ = ["NameClashError", "check_name_clashes"]
 
