@@ -4,25 +4,13 @@ found it. No timing is asserted (the box is shared and noisy)."""
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-
 import pytest
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from bench_testlib import import_benchmarks, run_benchmark, run_script
 
 
 @pytest.fixture(scope="module")
 def bench():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    try:
-        import env_throughput
-        import step_breakdown
-    finally:
-        sys.path.pop(0)
-    return env_throughput, step_breakdown
+    return import_benchmarks("env_throughput", "step_breakdown")
 
 
 @pytest.fixture
@@ -132,17 +120,8 @@ def test_breakdown_is_none_without_a_batch(bench):
 
 @pytest.mark.timeout(300)
 def test_cold_ops_quick_run_writes_json(tmp_path):
-    out = tmp_path / "cold.json"
-    script = os.path.join(ROOT, "benchmarks", "cold_ops.py")
-    proc = subprocess.run(
-        [sys.executable, script, "--num-envs", "2", "--rounds", "3", "--out", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=280,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    records = json.loads(out.read_text())["records"]
+    _, data = run_benchmark("cold_ops.py", "--num-envs", "2", "--rounds", "3", out=tmp_path / "cold.json")
+    records = data["records"]
     assert [r["between"] for r in records] == ["nothing", "batch", "sleep", "spin"]
     for rec in records:
         assert rec["num_envs"] == 2
@@ -152,7 +131,6 @@ def test_cold_ops_quick_run_writes_json(tmp_path):
 
 
 def test_cold_ops_rejects_bad_arguments():
-    script = os.path.join(ROOT, "benchmarks", "cold_ops.py")
-    proc = subprocess.run([sys.executable, script, "--rounds", "0"], capture_output=True, text=True, timeout=120)
+    proc = run_script("cold_ops.py", "--rounds", "0", timeout=120)
     assert proc.returncode == 2
     assert "must be positive" in proc.stderr

@@ -3,16 +3,11 @@ the documented JSON. No timing is asserted (the box is shared and noisy)."""
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import subprocess
-import sys
 
 import pytest
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCRIPT = os.path.join(ROOT, "benchmarks", "env_throughput.py")
+from bench_testlib import import_benchmarks, run_benchmark, run_script
 
 RECORD_KEYS = {
     "num_envs",
@@ -59,17 +54,9 @@ BREAKDOWN_KEYS = {
 @pytest.mark.timeout(300)
 def test_quick_run_writes_json(tmp_path):
     out = tmp_path / "env_throughput.json"
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--quick", "--num-envs", "2", "--steps", "3", "--out", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=280,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    proc, data = run_benchmark("env_throughput.py", "--quick", "--num-envs", "2", "--steps", "3", out=out)
     assert "| num_envs |" in proc.stdout  # the table is printed
 
-    data = json.loads(out.read_text())
     assert data["benchmark"] == "env_throughput"
     assert data["settings"]["quick"] is True
     assert data["machine"]["mujoco"]
@@ -95,22 +82,14 @@ def test_quick_run_writes_json(tmp_path):
 
 
 def test_bad_arguments_are_rejected():
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--num-envs", "0", "--out", ""], cwd=ROOT, capture_output=True, text=True, timeout=120
-    )
+    proc = run_script("env_throughput.py", "--num-envs", "0", "--out", "", timeout=120)
     assert proc.returncode == 2
     assert "must be positive" in proc.stderr
 
 
 @pytest.mark.timeout(300)
 def test_reset_randomization_quick_run_writes_json(tmp_path):
-    out = tmp_path / "reset.json"
-    script = os.path.join(ROOT, "benchmarks", "reset_randomization.py")
-    proc = subprocess.run(
-        [sys.executable, script, "--quick", "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=280
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    data = json.loads(out.read_text())
+    _, data = run_benchmark("reset_randomization.py", "--quick", out=tmp_path / "reset.json")
     rec = data["records"][0]
     keys = {
         "plain_reset_ms",
@@ -138,12 +117,8 @@ def test_matched_twin_repeats_the_envs_pushes_and_resets():
     ``push_interval`` steps of an episode gives the cubes a horizontal velocity."""
     import numpy as np
 
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    try:
-        import env_throughput as et
-        from matched_twin import MatchedTwin, Workload
-    finally:
-        sys.path.pop(0)
+    et, matched_twin = import_benchmarks("env_throughput", "matched_twin")
+    MatchedTwin, Workload = matched_twin.MatchedTwin, matched_twin.Workload
     env = et.make_env(2)
     base = env.unwrapped
     work = Workload(episode_length=100, **et.WORKLOAD)
@@ -177,12 +152,8 @@ def test_matched_twin_repeats_the_envs_pushes_and_resets():
 
 
 def test_step_overhead_verdicts_judge_both_baselines():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    try:
-        from env_throughput import _step_overhead_verdicts
-    finally:
-        sys.path.pop(0)
-    lines = _step_overhead_verdicts(
+    (et,) = import_benchmarks("env_throughput")
+    lines = et._step_overhead_verdicts(
         [
             {"num_envs": 16, "ratio": 0.78, "ratio_matched": 0.86},
             {"num_envs": 2, "ratio": 0.1, "ratio_matched": 0.1},  # no target at 2 envs

@@ -3,34 +3,20 @@ documented JSON. No timing is asserted (the box is shared and noisy)."""
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import subprocess
-import sys
 
 import pytest
+from bench_testlib import import_benchmarks, run_benchmark
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCRIPT = os.path.join(ROOT, "benchmarks", "gym_compare.py")
 CONTENDERS = ("ours", "raw", "sync", "async")
 
 
 @pytest.mark.timeout(300)
 def test_quick_run_writes_json(tmp_path):
-    out = tmp_path / "gym_compare.json"
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--quick", "--async-max", "1", "--out", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=280,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    proc, data = run_benchmark("gym_compare.py", "--quick", "--async-max", "1", out=tmp_path / "gym_compare.json")
     assert "| num_envs |" in proc.stdout
     assert "ours / Sync" in proc.stdout
 
-    data = json.loads(out.read_text())
     assert data["benchmark"] == "gym_compare"
     assert data["settings"]["quick"] is True
     assert data["settings"]["async_max"] == 1
@@ -55,16 +41,8 @@ def test_quick_run_writes_json(tmp_path):
 
 @pytest.mark.timeout(300)
 def test_cpu_clock_leaves_out_the_async_contender_and_split_times_the_python(tmp_path):
-    out = tmp_path / "gym_compare_cpu.json"
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--quick", "--num-envs", "1", "--clock", "cpu", "--split", "--out", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=280,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    data = json.loads(out.read_text())
+    args = ("--quick", "--num-envs", "1", "--clock", "cpu", "--split")
+    _, data = run_benchmark("gym_compare.py", *args, out=tmp_path / "gym_compare_cpu.json")
     assert data["settings"]["clock"] == "cpu"
     (rec,) = data["results"]
     assert rec["async_steps_per_s"] is None
@@ -77,11 +55,7 @@ def test_cpu_clock_leaves_out_the_async_contender_and_split_times_the_python(tmp
 
 def test_the_gym_env_runs_the_env_model(tmp_path):
     """The MujocoEnv subclass loads the very model of the env, with its frame skip and actuators."""
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    try:
-        import gym_compare
-    finally:
-        sys.path.remove(os.path.join(ROOT, "benchmarks"))
+    (gym_compare,) = import_benchmarks("gym_compare")
     ours = gym_compare.make_ours(1)
     try:
         gym_env = gym_compare.gym_factory(ours, str(tmp_path))()

@@ -4,30 +4,15 @@ asserted (the box is shared and noisy). Slow: it runs the main job three times (
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-
 import pytest
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCRIPT = os.path.join(ROOT, "benchmarks", "main_job_render.py")
+from bench_testlib import run_benchmark
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_one_round_per_contender_writes_json(tmp_path):
-    out = tmp_path / "main_job_render.json"
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--rounds", "1", "--render-threads", "1", "2", "--out", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=580,
-    )
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    data = json.loads(out.read_text())
+    args = ("--rounds", "1", "--render-threads", "1", "2")
+    _, data = run_benchmark("main_job_render.py", *args, out=tmp_path / "main_job_render.json", timeout=580)
     assert set(data["rounds"]) == {"1", "2"}
     for threads, (rnd,) in data["rounds"].items():
         # every env step renders both eyes of both envs (resets add frames)

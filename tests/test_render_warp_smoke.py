@@ -3,21 +3,14 @@
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
+from bench_testlib import run_benchmark
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCRIPT = os.path.join(ROOT, "benchmarks", "render_throughput.py")
 ROW_KEYS = {"renderer", "device", "worlds", "resolution", "frames_per_s", "env_steps_per_s", "first_update_s"}
 
 
 def test_warp_rows_of_both_renderers(tmp_path) -> None:
-    out = tmp_path / "render.json"
-    args = ["--skip-opengl-table", "--warp-worlds", "2", "--warp-sizes", "32x24", "--min-seconds", "0"]
-    subprocess.run([sys.executable, SCRIPT, *args, "--out", str(out)], check=True, cwd=ROOT, timeout=300)
-    payload = json.loads(out.read_text())
+    args = ("--skip-opengl-table", "--warp-worlds", "2", "--warp-sizes", "32x24", "--min-seconds", "0")
+    _, payload = run_benchmark("render_throughput.py", *args, out=tmp_path / "render.json", timeout=300)
     assert payload["rows"] == []
     rows = payload["warp_rows"]
     assert [(r["renderer"], r["worlds"], r["resolution"]) for r in rows] == [
