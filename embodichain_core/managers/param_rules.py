@@ -21,8 +21,8 @@ param name                                             rule
 ``*_prob``, ``prob``, ``probability``                  a number in ``[0, 1]``
 any number, anywhere in the params                     not NaN
 a param annotated ``bool``/``int``/``float``/``str``   that type (``Optional``: or ``None``)
-a param annotated :data:`DataPath` (``Optional``, or    an asset name or path ``get_data_path`` finds
-a list of them)
+a param annotated :data:`DataPath` (``Optional``,      an asset name or path ``get_data_path`` finds
+or a list of them)
 =====================================================  ==========================================
 
 The signature rules (:func:`check_signature`, :func:`check_param_types`,
