@@ -1,14 +1,34 @@
-"""The instrumented pass of ``env_throughput.py``: where an env step's time goes.
+"""Where an env step's time goes: the instrumented pass of ``env_throughput.py``, and a
+phase profiler of ``PushCube-v1`` on any backend and device (run as a script).
 
-It splits the wall time of ``env.step`` into the MuJoCo calls (``Batch.step``,
-``Batch.forward``, ``Batch.reset``), the task's own functor code, and the framework's
-Python (the env loop, the managers and the entity API the functors call). From that
-split it derives a **ceiling**: the ratio to raw stepping the env would reach if the
-framework's Python took no time at all, with the task's physics and functors as they
-are. A target above the ceiling cannot be met by making the framework faster.
+Library use (``env_throughput.py``): :func:`breakdown` splits the wall time of ``env.step``
+on the CPU batch backend into the MuJoCo calls (``Batch.step``, ``Batch.forward``,
+``Batch.reset``), the task's own functor code, and the framework's Python (the env loop,
+the managers and the entity API the functors call). From that split it derives a
+**ceiling**: the ratio to raw stepping the env would reach if the framework's Python took
+no time at all, with the task's physics and functors as they are. A target above the
+ceiling cannot be met by making the framework faster. Everything is instrumented in place
+(the batch object, ``FunctorEntry.func``, entity methods as instance attributes) and
+restored afterwards; each timer adds ~0.2 µs.
 
-Everything is instrumented in place (the batch object, ``FunctorEntry.func``, entity
-methods as instance attributes) and restored afterwards; each timer adds ~0.2 µs.
+Script use: ``PushCube-v1`` on ``--backend``/``--device``, per ``--num-envs``, after an
+untimed warm-up (the first step on a GPU compiles MuJoCo Warp's kernels):
+
+- ``plain``: env steps/s of the uninstrumented loop;
+- ``phases``: each phase of ``EmbodiedEnv.step``, a few calls inside them and every
+  event/observation/reward functor, each call bracketed by two device syncs
+  (:class:`gpu_step_profile.PhaseTimer`);
+- ``syncs``: the calls per step that make the host wait for the device, and the lines that
+  make them (:class:`gpu_step_profile.SyncCounter`);
+- ``cprofile`` and ``torch_profiler``: the functions and ops with the most time.
+
+Each timed window is ``--steps`` env steps (one episode by default, so it holds one
+auto-reset of every env). Results are written after every section, so a run cut short
+keeps what it measured.
+
+Usage:
+    python benchmarks/step_breakdown.py [--backend warp] [--device cuda] [--num-envs 1024 4096]
+        [--steps 100] [--warmup 20] [--profile-steps 10] [--budget-s 0] [--out PATH] [--smoke]
 
 Example:
     >>> parts = breakdown(env.unwrapped, run_env, run_raw, steps=200, repeats=3)  # doctest: +SKIP
@@ -17,13 +37,16 @@ Example:
 
 from __future__ import annotations
 
+import argparse
+import os
+import sys
 import time
 from typing import Any, Callable, Optional
 
-from common import median, time_once
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-#: The managers whose functors count as the task's code.
-FUNCTOR_MANAGERS = ("event_manager", "observation_manager", "reward_manager")
+from common import machine_info, median, print_table, time_once, write_json  # noqa: E402
+from gpu_step_profile import FUNCTOR_MANAGERS, PhaseTimer, SyncCounter, cprofile_top, torch_profile  # noqa: E402
 
 
 class TimedBatch:
@@ -204,3 +227,162 @@ def _summary(rows: dict[str, list[float]], calls: dict[str, int], steps: int, re
         "physics_excess_ms": per_call["step"] - per_call["raw"],
         "ceiling_ratio": per_call["raw"] / max(per_call["env"] - framework_ms, 1e-9),
     }
+
+
+# -- the script -------------------------------------------------------------------------------------
+def make_env(num_envs: int, backend: str, device: str, episode_length: int) -> Any:
+    """PushCube-v1 on ``backend``/``device``, reset once."""
+    import gymnasium as gym
+
+    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
+    from embodichain_tasks.rl.push_cube import PushCubeCfg
+
+    cfg = PushCubeCfg()
+    cfg.sim_cfg.backend = backend
+    cfg.sim_cfg.sim_device = device
+    cfg.max_episode_steps = episode_length
+    env = gym.make("PushCube-v1", cfg=cfg, num_envs=num_envs, seed=0, verbose=False).unwrapped
+    env.reset(seed=0)
+    return env
+
+
+def _stepper(env: Any, cuda: bool) -> tuple[Callable[[int], None], Callable[[], None]]:
+    """``(run(steps), sync)``: ``steps`` env steps of cycled random actions on the env's device."""
+    import torch
+
+    gen = torch.Generator().manual_seed(0)
+    actions = [((torch.rand(env.action_space.shape, generator=gen) * 2 - 1) * 0.5).to(env.device) for _ in range(50)]
+    sync = torch.cuda.synchronize if cuda else (lambda: None)
+
+    def run(steps: int) -> None:
+        for t in range(steps):
+            env.step(actions[t % len(actions)])
+        sync()
+
+    return run, sync
+
+
+def _sections(env: Any, args: argparse.Namespace, cuda: bool) -> dict[str, Callable[[], Any]]:
+    """The script's sections (see the module docstring), by name, in order."""
+    run, sync = _stepper(env, cuda)
+    n = env.num_envs
+
+    def plain() -> dict[str, Any]:
+        times = [time_once(lambda: run(args.steps)) for _ in range(2)]
+        return {
+            "times_s": times,
+            "step_ms": median(times) / args.steps * 1e3,
+            "env_steps_per_s": n * args.steps / median(times),
+        }
+
+    def phases() -> dict[str, Any]:
+        with PhaseTimer(env, sync) as timer:
+            wall = time_once(lambda: run(args.steps))
+        return timer.summary(args.steps, wall)
+
+    def syncs() -> dict[str, Any]:
+        with SyncCounter(cuda) as counter:
+            run(args.steps)
+        return counter.summary(args.steps)
+
+    return {
+        "warmup": lambda: {"seconds": time_once(lambda: run(args.warmup)), "steps": args.warmup},
+        "plain": plain,
+        "phases": phases,
+        "syncs": syncs,
+        "cprofile": lambda: cprofile_top(run, args.steps),
+        "torch_profiler": lambda: torch_profile(run, args.profile_steps, cuda),
+    }
+
+
+def measure(args: argparse.Namespace, num_envs: int, save: Callable[[dict], None], start: float) -> dict[str, Any]:
+    """Every section at ``num_envs`` envs (skipped once ``--budget-s`` has passed since ``start``);
+    ``save(row)`` after each."""
+    built = time.perf_counter()
+    env = make_env(num_envs, args.backend, args.device, args.episode_length)
+    row: dict[str, Any] = {"num_envs": num_envs, "build_s": time.perf_counter() - built}
+    cuda = getattr(env.device, "type", str(env.device)).startswith("cuda")
+    for name, section in _sections(env, args, cuda).items():
+        if args.budget_s and time.perf_counter() - start > args.budget_s:
+            row[name] = {"skipped": f"past --budget-s {args.budget_s}"}
+            continue
+        print(f"[{num_envs} envs] {name} ...", flush=True)
+        try:
+            row[name] = section()
+        except Exception as err:  # keep the other sections' numbers
+            row[name] = {"error": f"{type(err).__name__}: {err}"}
+        save(row)
+    env.close()
+    return row
+
+
+def _device_info(device: str) -> dict[str, Any]:
+    """Versions of the GPU stack, and the GPU on a CUDA ``device``."""
+    info: dict[str, Any] = {}
+    for module in ("warp", "mujoco_warp", "gymnasium"):
+        try:
+            info[module] = __import__(module).__version__
+        except Exception:  # pragma: no cover - reporting only
+            info[module] = None
+    import torch
+
+    if device.startswith("cuda") and torch.cuda.is_available():
+        props = torch.cuda.get_device_properties(0)
+        info["gpu"] = f"{props.name} ({props.total_memory / 2**30:.0f} GiB)"
+    return info
+
+
+def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description="Where PushCube-v1's env step spends its time (see the module docstring).")
+    p.add_argument("--backend", default="warp", help="sim_cfg.backend: warp or mujoco_batch")
+    p.add_argument("--device", default="cuda", help="sim_cfg.sim_device: cuda, cuda:N or cpu")
+    p.add_argument("--num-envs", type=int, nargs="+", default=[1024, 4096])
+    p.add_argument("--steps", type=int, default=100, help="env steps per timed window (default: one episode)")
+    p.add_argument("--episode-length", type=int, default=100, help="max_episode_steps (PushCube's: 100)")
+    p.add_argument("--warmup", type=int, default=20, help="untimed env steps first (GPU: kernels compile)")
+    p.add_argument("--profile-steps", type=int, default=10, help="env steps under the torch profiler")
+    p.add_argument(
+        "--budget-s", type=float, default=0.0, help="skip the sections left after this many seconds (0: none)"
+    )
+    p.add_argument("--out", default=os.path.join("benchmarks", "results", "step_breakdown.json"))
+    p.add_argument("--smoke", action="store_true", help="warp on cpu, 4 envs, 4-step episodes (checks this script)")
+    args = p.parse_args(argv)
+    if args.smoke:
+        args.backend, args.device, args.num_envs = "warp", "cpu", [4]
+        args.steps, args.episode_length, args.warmup, args.profile_steps = 4, 4, 2, 2
+    if min(args.steps, args.profile_steps, args.episode_length, *args.num_envs) < 1 or args.warmup < 0:
+        p.error("--steps, --profile-steps, --episode-length and --num-envs must be positive, --warmup not negative")
+    return args
+
+
+def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
+    args = parse_args(argv)
+    start = time.perf_counter()
+    payload: dict[str, Any] = {
+        "benchmark": "step_breakdown",
+        "settings": vars(args),
+        "machine": machine_info() | _device_info(args.device),
+        "results": [],
+    }
+
+    def save(row: dict) -> None:
+        if not any(r is row for r in payload["results"]):
+            payload["results"].append(row)
+        if args.out:
+            write_json(args.out, payload)
+
+    for n in args.num_envs:
+        measure(args, n, save, start)
+    rows = [
+        {"num_envs": r["num_envs"], "phase": k, "ms": v["ms"]}
+        for r in payload["results"]
+        for k, v in (r.get("phases", {}).get("phases") or {}).items()
+    ]
+    print_table(rows, [("num_envs", "num_envs", "d"), ("phase", "phase", "s"), ("ms", "ms per env step", ".2f")])
+    if args.out:
+        print(f"wrote {args.out}")
+    return payload
+
+
+if __name__ == "__main__":
+    main()
