@@ -11,8 +11,9 @@ ceiling cannot be met by making the framework faster. Everything is instrumented
 (the batch object, ``FunctorEntry.func``, entity methods as instance attributes) and
 restored afterwards; each timer adds ~0.2 µs.
 
-Script use: ``PushCube-v1`` on ``--backend``/``--device``, per ``--num-envs``, after an
-untimed warm-up (the first step on a GPU compiles MuJoCo Warp's kernels):
+Script use: ``--task`` (``PushCube-v1`` by default) on ``--backend``/``--device``, per
+``--num-envs``, after an untimed warm-up (the first step on a GPU compiles MuJoCo Warp's
+kernels):
 
 - ``plain``: env steps/s of the uninstrumented loop;
 - ``phases``: each phase of ``EmbodiedEnv.step``, a few calls inside them and every
@@ -22,13 +23,13 @@ untimed warm-up (the first step on a GPU compiles MuJoCo Warp's kernels):
   make them (:class:`gpu_step_profile.SyncCounter`);
 - ``cprofile`` and ``torch_profiler``: the functions and ops with the most time.
 
-Each timed window is ``--steps`` env steps (one episode by default, so it holds one
-auto-reset of every env). Results are written after every section, so a run cut short
+Each timed window is ``--steps`` env steps (100 by default: one episode of PushCube-v1, so
+it holds one auto-reset of every env). Results are written after every section, so a run cut short
 keeps what it measured.
 
 Usage:
-    python benchmarks/step_breakdown.py [--backend warp] [--device cuda] [--num-envs 1024 4096]
-        [--steps 100] [--warmup 20] [--profile-steps 10] [--budget-s 0] [--out PATH] [--smoke]
+    python benchmarks/step_breakdown.py [--task PushCube-v1] [--backend warp] [--device cuda]
+        [--num-envs 1024 4096] [--steps 100] [--episode-length N] [--warmup 20] [--profile-steps 10] [--budget-s 0] [--out PATH] [--smoke]
 
 Example:
     >>> parts = breakdown(env.unwrapped, run_env, run_raw, steps=200, repeats=3)  # doctest: +SKIP
@@ -230,28 +231,39 @@ def _summary(rows: dict[str, list[float]], calls: dict[str, int], steps: int, re
 
 
 # -- the script -------------------------------------------------------------------------------------
-def make_env(num_envs: int, backend: str, device: str, episode_length: int) -> Any:
-    """PushCube-v1 on ``backend``/``device``, reset once."""
+def make_env(
+    num_envs: int, backend: str, device: str, episode_length: Optional[int] = None, task: str = "PushCube-v1"
+) -> Any:
+    """``task`` (a registered ``EmbodiedEnv``) on ``backend``/``device``, reset once;
+    ``episode_length`` replaces its ``max_episode_steps`` (``None``: the task's own)."""
     import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
 
-    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
-    from embodichain_tasks.rl.push_cube import PushCubeCfg
+    import embodichain_core  # noqa: F401  (loads the plugins and their tasks)
 
-    cfg = PushCubeCfg()
+    entry = gym.spec(task).entry_point
+    env_cls: Any = load_env_creator(entry) if isinstance(entry, str) else entry
+    cfg = env_cls.cfg_cls()
     cfg.sim_cfg.backend = backend
     cfg.sim_cfg.sim_device = device
-    cfg.max_episode_steps = episode_length
-    env = gym.make("PushCube-v1", cfg=cfg, num_envs=num_envs, seed=0, verbose=False).unwrapped
+    if episode_length is not None:
+        cfg.max_episode_steps = episode_length
+    env = gym.make(task, cfg=cfg, num_envs=num_envs, seed=0, verbose=False).unwrapped
     env.reset(seed=0)
     return env
 
 
 def _stepper(env: Any, cuda: bool) -> tuple[Callable[[int], None], Callable[[], None]]:
-    """``(run(steps), sync)``: ``steps`` env steps of cycled random actions on the env's device."""
+    """``(run(steps), sync)``: ``steps`` env steps of 50 cycled random actions on the env's
+    device, uniform over the middle half of the action space (a Box; bounds clipped to
+    [-1, 1])."""
     import torch
 
+    low, high = (torch.as_tensor(b, dtype=torch.float32) for b in (env.action_space.low, env.action_space.high))
+    mid, half = (high.clamp(max=1.0) + low.clamp(min=-1.0)) / 2, (high.clamp(max=1.0) - low.clamp(min=-1.0)) / 2
     gen = torch.Generator().manual_seed(0)
-    actions = [((torch.rand(env.action_space.shape, generator=gen) * 2 - 1) * 0.5).to(env.device) for _ in range(50)]
+    shape = env.action_space.shape
+    actions = [(mid + 0.5 * half * (torch.rand(shape, generator=gen) * 2 - 1)).to(env.device) for _ in range(50)]
     sync = torch.cuda.synchronize if cuda else (lambda: None)
 
     def run(steps: int) -> None:
@@ -299,7 +311,7 @@ def measure(args: argparse.Namespace, num_envs: int, save: Callable[[dict], None
     """Every section at ``num_envs`` envs (skipped once ``--budget-s`` has passed since ``start``);
     ``save(row)`` after each."""
     built = time.perf_counter()
-    env = make_env(num_envs, args.backend, args.device, args.episode_length)
+    env = make_env(num_envs, args.backend, args.device, args.episode_length, args.task)
     row: dict[str, Any] = {"num_envs": num_envs, "build_s": time.perf_counter() - built}
     cuda = getattr(env.device, "type", str(env.device)).startswith("cuda")
     for name, section in _sections(env, args, cuda).items():
@@ -333,12 +345,13 @@ def _device_info(device: str) -> dict[str, Any]:
 
 
 def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description="Where PushCube-v1's env step spends its time (see the module docstring).")
+    p = argparse.ArgumentParser(description="Where an env step's time goes (see the module docstring).")
+    p.add_argument("--task", default="PushCube-v1", help="a registered EmbodiedEnv task id")
     p.add_argument("--backend", default="warp", help="sim_cfg.backend: warp or mujoco_batch")
     p.add_argument("--device", default="cuda", help="sim_cfg.sim_device: cuda, cuda:N or cpu")
     p.add_argument("--num-envs", type=int, nargs="+", default=[1024, 4096])
     p.add_argument("--steps", type=int, default=100, help="env steps per timed window (default: one episode)")
-    p.add_argument("--episode-length", type=int, default=100, help="max_episode_steps (PushCube's: 100)")
+    p.add_argument("--episode-length", type=int, default=None, help="max_episode_steps (default: the task's own)")
     p.add_argument("--warmup", type=int, default=20, help="untimed env steps first (GPU: kernels compile)")
     p.add_argument("--profile-steps", type=int, default=10, help="env steps under the torch profiler")
     p.add_argument(
@@ -350,7 +363,7 @@ def parse_args(argv: Optional[list[str]] = None) -> argparse.Namespace:
     if args.smoke:
         args.backend, args.device, args.num_envs = "warp", "cpu", [4]
         args.steps, args.episode_length, args.warmup, args.profile_steps = 4, 4, 2, 2
-    if min(args.steps, args.profile_steps, args.episode_length, *args.num_envs) < 1 or args.warmup < 0:
+    if min(args.steps, args.profile_steps, args.episode_length or 1, *args.num_envs) < 1 or args.warmup < 0:
         p.error("--steps, --profile-steps, --episode-length and --num-envs must be positive, --warmup not negative")
     return args
 
