@@ -73,7 +73,8 @@ def call_site(depth: int = 3) -> str:
 
 
 class SyncCounter:
-    """Counts a block's device->host syncs by kind and call site (see the module docstring).
+    """Counts the calls of a block that make the host wait for the device, by kind and call
+    site (see the module docstring).
 
     Torch's sync check reports only on CUDA; Warp's waits are counted on every device.
     Other warnings raised in the block are kept in :attr:`other_warnings`.
