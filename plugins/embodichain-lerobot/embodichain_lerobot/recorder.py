@@ -79,7 +79,9 @@ class LeRobotRecorder(DatasetFunctor):
     (async variant only), ``min_free_mb``, ``writer_process`` (write in a child process;
     default off here, on in the async variant), ``environment_state`` (observation keys
     recorded as one ``observation.environment_state`` vector). lerobot is imported on a thread once the
-    first observation is recorded (the env build does not wait for it).
+    first observation is recorded (the env build does not wait for it); with ``writer_process`` it is
+    imported in the child, which starts with the dataset: at the first commit, or at the first step
+    when colour videos are streamed to it (a recorder closed before either starts none).
 
     Raises:
         ValueError: the env control frequency is not a whole number of Hz.
@@ -102,12 +104,10 @@ class LeRobotRecorder(DatasetFunctor):
         self._spec: Optional[FeatureSpec] = None
         self._buffers = EpisodeBuffers(env.num_envs)
         self._writer: Optional[DatasetWriter | WriterProcess] = None
-        self._writer_process: Optional[WriterProcess] = None
         if self.params.writer_process is None:
             self.params.writer_process = self.default_writer_process
-        if self.params.writer_process:  # the child imports lerobot while the env is built
-            self._writer_process = WriterProcess()
-            self._writer_process.start()
+        # its child starts with the dataset (_ensure_writer): a recorder that writes nothing starts none
+        self._writer_process = WriterProcess() if self.params.writer_process else None
         self._finalized = False
         self._path: Optional[str] = None
         self.discarded_episodes = 0

@@ -113,17 +113,26 @@ class WriterProcess:
 
     # -- life cycle --------------------------------------------------------------------------------
     def start(self) -> None:
-        """Launch the child and the sender/receiver threads (idempotent)."""
+        """Launch the child and the sender/receiver threads (idempotent; :meth:`open` calls it).
+
+        Raises:
+            WriterProcessError: the child could not be launched (the OS error, and the param that avoids it).
+        """
         if self._proc is not None:
             return
         mine, theirs = socket.socketpair()
         fd = theirs.fileno()
-        self._proc = subprocess.Popen(
-            [sys.executable, "-m", "embodichain_lerobot.writer_child", str(fd)],
-            pass_fds=(fd,),
-            stdin=subprocess.DEVNULL,
-        )
-        theirs.close()
+        command = [sys.executable, "-m", "embodichain_lerobot.writer_child", str(fd)]
+        try:
+            self._proc = subprocess.Popen(command, pass_fds=(fd,), stdin=subprocess.DEVNULL)
+        except OSError as err:
+            mine.close()
+            raise WriterProcessError(
+                f"cannot start the dataset writer process ({' '.join(command[:3])}): {err}; set the "
+                "recorder's params.writer_process to false to write the dataset in the recording process"
+            ) from err
+        finally:
+            theirs.close()
         self._conn = Connection(mine.detach())
         for target, name in ((self._send_loop, "lerobot-writer-send"), (self._receive_loop, "lerobot-writer-receive")):
             threading.Thread(target=target, name=name, daemon=True).start()

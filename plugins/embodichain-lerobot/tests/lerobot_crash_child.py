@@ -1,7 +1,7 @@
 """A recording process for the crash tests: ``python lerobot_crash_child.py MODE SAVE_PATH FUNC CAMERA``.
 
 Prints ``COMMITTED <n>`` (flushed) each time the recorder has saved its n-th
-episode; with a writer process also ``WRITER <pid>`` at the start and ``SENT <n>`` each
+episode; with a writer process also ``WRITER <pid>`` once it has started and ``SENT <n>`` each
 time the n-th episode has been handed to it. Modes: ``hang`` (3 episodes, then steps forever inside a 4th),
 ``churn`` (an episode every 2 steps, forever), ``die_in_save`` / ``die_in_publish``
 (SIGKILL itself while saving / publishing the 3rd episode), ``die_in_first_save`` /
@@ -83,9 +83,7 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
     proc = getattr(rec, "_writer_process", None)
-    if proc is not None and proc._proc is not None:
-        print(f"WRITER {proc._proc.pid}", flush=True)
-    saved, sent, step = 0, 0, 0
+    saved, sent, step, writer = 0, 0, 0, None
     try:
         while True:
             step += 1
@@ -95,6 +93,9 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
             if rec.saved_episodes > saved:
                 saved = rec.saved_episodes
                 print(f"COMMITTED {saved}", flush=True)
+            if proc is not None and proc._proc is not None and writer is None:  # started by the first commit
+                writer = proc._proc.pid
+                print(f"WRITER {writer}", flush=True)
             if proc is not None and proc.sent_episodes > sent:
                 sent = proc.sent_episodes
                 print(f"SENT {sent}", flush=True)  # handed to the writer process, maybe not saved yet

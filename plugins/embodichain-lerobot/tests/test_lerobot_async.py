@@ -6,7 +6,9 @@ no calls after finalize."""
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import subprocess
 import threading
 import time
 from pathlib import Path
@@ -20,6 +22,7 @@ from lerobot_helpers import arm_cfg, as_np, have_sensors, load, recorder_cfg, re
 
 from embodichain_lerobot.async_recorder import AsyncLeRobotRecorder
 from embodichain_lerobot.recorder import LeRobotRecorder
+from embodichain_lerobot.writer_process import WriterProcessError
 
 SCRIPT = [[".", "."], ["s", "."], [".", "f"], [".", "."], ["s", "s"], [".", "."]]
 
@@ -156,6 +159,66 @@ def test_a_writer_process_that_cannot_start_fails_the_recording_clearly(
     with contextlib.suppress(RuntimeError):  # raised again if the step raised first
         env.dataset_manager.finalize()
     assert list((tmp_path / "data").iterdir()) == []  # the reserved dataset folder is not left behind
+
+
+class _CountedPopen(subprocess.Popen):
+    """``subprocess.Popen`` that notes each dataset writer process it starts."""
+
+    started: list = []
+
+    def __init__(self, args: Any, *more: Any, **kwargs: Any):
+        if "embodichain_lerobot.writer_child" in list(args):
+            self.started.append(args)
+        super().__init__(args, *more, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "func, params, script",
+    [
+        ("AsyncLeRobotRecorder", {}, [["."], ["f"], ["."]]),  # a failed episode (discarded) and a live one
+        (
+            "LeRobotRecorder",
+            {"writer_process": True, "use_videos": True},
+            [],
+        ),  # streamed videos: the 1st step starts it
+    ],
+)
+def test_a_recorder_that_commits_no_episode_starts_no_writer_process_and_leaves_nothing(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, func: str, params: dict, script: list
+) -> None:
+    monkeypatch.setattr(_CountedPopen, "started", [])
+    monkeypatch.setattr(subprocess, "Popen", _CountedPopen)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func=func, **params)))
+    rec = env.dataset_manager.get_functor("rec")
+    assert rec.params.writer_process is True
+    reset(env)
+    run_script(env, script)
+    assert rec.discarded_episodes == int(bool(script))
+    assert _CountedPopen.started == []
+    env.close()
+    assert env.dataset_manager.finalize() == [None]
+    assert _CountedPopen.started == []
+    assert list((tmp_path / "data").glob("*")) == []  # no dataset folder (save_path itself is not made)
+
+
+def test_a_writer_process_that_cannot_be_launched_names_the_param_to_change(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_more_processes(*args: Any, **kwargs: Any) -> Any:
+        raise OSError(errno.EAGAIN, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(subprocess, "Popen", no_more_processes)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func="AsyncLeRobotRecorder")))
+    reset(env)
+    with pytest.raises(
+        WriterProcessError,
+        match=r"cannot start the dataset writer process \(.* -m embodichain_lerobot"
+        r"\.writer_child\): .*Resource temporarily unavailable; .*params\.writer_process to false",
+    ):
+        run_script(env, [["s"]])  # the first commit starts it
+    env.close()
+    assert env.dataset_manager.finalize() == [None]
+    assert list((tmp_path / "data").iterdir()) == []  # the folder reserved for the dataset is removed
 
 
 def test_episodes_are_copies_unaffected_by_later_steps(
