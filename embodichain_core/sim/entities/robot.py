@@ -54,6 +54,8 @@ class Robot(Articulation):
 
             path = getattr(record, "path", "") or uid
             self.solvers = build_cfg_solvers(self, cfg.solver_cfg, f"{path}.solver_cfg")
+        self._index_cache: dict[tuple[Any, ...], torch.Tensor] = {}
+        self._fk_cache = PartFKCache()
 
     def get_joint_ids(self, name: Optional[str] = None, remove_mimic: bool = False) -> list[int]:
         """Joint ids of control part ``name`` (all joints when ``None``)."""
@@ -144,36 +146,79 @@ class Robot(Articulation):
         """Pose of the solver root link of part ``name`` in the env frame, (n, 4, 4) or (n, 7)."""
         return self.get_link_pose(self.get_solver(name).root_link_name, env_ids, to_matrix)
 
-    def _part_qpos(self, solver: Any, qpos: Any, env: torch.Tensor) -> torch.Tensor:
-        """(n, k) float64 part joint values from ``qpos`` (None, (n, k) or (n, dof))."""
-        ids = list(solver.joint_ids)
+    def _fk_device(self, solver: Any) -> torch.device:
+        """Where part FK runs: the sim's device for solvers with ``fk_on_device``, else the CPU."""
+        return self.sim.device if getattr(solver, "fk_on_device", False) else torch.device("cpu")
+
+    def _on(self, index: Any, device: torch.device) -> torch.Tensor:
+        """A constant long index on ``device``, copied there once (no per-call host copy)."""
+        key = (tuple(int(i) for i in index), device)
+        out = self._index_cache.get(key)
+        if out is None:
+            out = self._index_cache[key] = torch.as_tensor(key[0], dtype=torch.long, device=device)
+        return out
+
+    def _rows(self, env_ids: Any, device: torch.device) -> Any:
+        """Env rows of the sim's views: every row (a slice, no index copy) when ``env_ids`` is None."""
+        return slice(None) if env_ids is None else self._ids(env_ids).to(device)
+
+    def _part_qpos(self, solver: Any, qpos: Any, env_ids: Any, device: Any = "cpu") -> torch.Tensor:
+        """(n, k) float64 part joint values on ``device`` from ``qpos`` (None, (n, k) or (n, dof))."""
+        ids, device = list(solver.joint_ids), torch.device(device)
         if qpos is None:
-            return self.sim.qpos[env][:, self.qpos_adr[ids]].to("cpu", torch.float64)  # solvers run on the CPU
-        q = torch.as_tensor(qpos).detach().to("cpu", torch.float64)
-        q = q.reshape(len(env), -1) if q.dim() != 1 or len(env) == 1 else q.expand(len(env), -1)
+            sim = self.sim
+            q = sim.qpos[self._rows(env_ids, sim.device)][:, self._on(self.qpos_adr[ids].tolist(), sim.device)]
+            return q.to(device, torch.float64)
+        n = self.num_envs if env_ids is None else len(self._ids(env_ids))
+        q = torch.as_tensor(qpos).detach().to(device, torch.float64)
+        q = q.reshape(n, -1) if q.dim() != 1 or n == 1 else q.expand(n, -1)
         if q.shape[-1] == len(ids):
             return q
         if q.shape[-1] == self.dof:
-            return q[:, ids]
+            return q[:, self._on(ids, device)]
         raise ValueError(
             f"{self.uid}: qpos has {q.shape[-1]} values per env; expected {len(ids)} "
             f"(the part's joints) or {self.dof} (all joints)"
         )
 
-    def _base_matrix(self, solver: Any, qpos: Any, env: torch.Tensor) -> torch.Tensor:
-        """(n, 4, 4) float64 root link pose; follows ``qpos`` when it is a full joint vector."""
+    def _base_matrix(self, solver: Any, qpos: Any, env_ids: Any, device: Any = "cpu") -> torch.Tensor:
+        """(n, 4, 4) float64 root link pose on ``device``; follows ``qpos`` when it is a full joint vector."""
         q = None if qpos is None else torch.as_tensor(qpos)
         if q is not None and q.shape[-1] == self.dof and q.shape[-1] != len(solver.joint_ids):
+            env = self._ids(env_ids)
             base = self.compute_fk(q.reshape(len(env), -1), link_names=[solver.root_link_name], env_ids=env)[:, 0]
-            return base.to("cpu", torch.float64)
-        body = int(self.body_ids[self.find_bodies(solver.root_link_name)[0][0]])
-        pose = torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), -1)
-        return pose_to_matrix(pose.to("cpu", torch.float64))
+            return base.to(device, torch.float64)
+        body = self._link_body.get(solver.root_link_name)
+        if body is None:
+            body = self._link_body[solver.root_link_name] = int(
+                self.body_ids[self.find_bodies(solver.root_link_name)[0][0]]
+            )
+        sim, rows = self.sim, self._rows(env_ids, self.sim.device)
+        pose = torch.cat((sim.xpos[rows, body], sim.xquat[rows, body]), -1)
+        return pose_to_matrix(pose.to(device, torch.float64))
+
+    def _part_fk64(self, name: Optional[str], qpos: Any, env_ids: Any) -> torch.Tensor:
+        """(n, 4, 4) float64 TCP pose of part ``name`` in the env frame, where FK runs
+        (the sim's device for solvers with ``fk_on_device``, else the CPU).
+
+        With ``qpos`` and ``env_ids`` None on the CPU, the result of the last call is reused
+        while its inputs (joint values, root link pose, solver and TCP) are unchanged.
+        """
+        solver = self.get_solver(name)
+        device = self._fk_device(solver)
+        q = self._part_qpos(solver, qpos, env_ids, device)
+        base = self._base_matrix(solver, qpos, env_ids, device)
+        current = qpos is None and env_ids is None and device.type == "cpu"
+        hit = self._fk_cache.get(name, solver, q, base) if current else None
+        if hit is not None:
+            return hit
+        pose = base @ torch.as_tensor(solver.get_fk(q)).to(device, torch.float64)
+        if current:
+            self._fk_cache.put(name, solver, q, base, pose)
+        return pose
 
     def _compute_part_fk(self, qpos: Any, name: str, env_ids: Any, to_matrix: bool) -> torch.Tensor:
-        solver, env = self.get_solver(name), self._ids(env_ids)
-        pose = self._base_matrix(solver, qpos, env) @ solver.get_fk(self._part_qpos(solver, qpos, env))
-        pose = self._out(pose)
+        pose = self._out(self._part_fk64(name, qpos, env_ids))
         return pose if to_matrix else matrix_to_pose(pose)
 
     def compute_ik(
@@ -211,3 +256,41 @@ def _rigid_inverse(pose: torch.Tensor) -> torch.Tensor:
     out[..., :3, 3] = -(rot_t @ pose[..., :3, 3:4])[..., 0]
     out[..., 3, 3] = 1.0
     return out
+
+
+class PartFKCache:
+    """The last current-state part FK of each control part, reused while its inputs are equal.
+
+    The key is what the pose is a function of: the solver object, its ``chain`` and ``tcp``,
+    the part's joint values and the root link pose, compared by value (so a reset, a state
+    write or a step within the control step that moves anything is a miss). Only solvers
+    with ``fk_on_device`` are cached (their FK depends on nothing else), and only on the
+    CPU: on an accelerator the value comparison would wait for the device, which costs
+    more than recomputing there.
+    """
+
+    def __init__(self) -> None:
+        self._last: dict[Optional[str], tuple[Any, ...]] = {}
+
+    def get(self, part: Optional[str], solver: Any, q: torch.Tensor, base: torch.Tensor) -> Optional[torch.Tensor]:
+        """The cached pose, or None when anything it depends on differs."""
+        last = self._last.get(part)
+        if last is None or not getattr(solver, "fk_on_device", False):
+            return None
+        now = (solver, getattr(solver, "chain", None), getattr(solver, "tcp", None), q, base)
+        return last[-1] if all(_same(a, b) for a, b in zip(last, now)) else None
+
+    def put(self, part: Optional[str], solver: Any, q: torch.Tensor, base: torch.Tensor, pose: torch.Tensor) -> None:
+        """Remember ``pose`` (float64; callers get converted copies) for these inputs."""
+        if getattr(solver, "fk_on_device", False):
+            tcp = getattr(solver, "tcp", None)
+            tcp = None if tcp is None else torch.as_tensor(tcp).clone()
+            self._last[part] = (solver, getattr(solver, "chain", None), tcp, q.clone(), base.clone(), pose)
+
+
+def _same(was: Any, now: Any) -> bool:
+    """Tensors by value (shape and every element), anything else by identity."""
+    if isinstance(was, torch.Tensor) and now is not None:
+        now = torch.as_tensor(now)
+        return was.shape == now.shape and bool(torch.equal(was, now.to(was.device, was.dtype)))
+    return was is now

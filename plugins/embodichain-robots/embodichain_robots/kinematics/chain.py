@@ -12,7 +12,7 @@ Example:
 
 from __future__ import annotations
 
-from typing import Optional, Sequence
+from typing import NamedTuple, Optional, Sequence
 
 import mujoco
 import numpy as np
@@ -34,6 +34,17 @@ def _translation(vec: Sequence[float]) -> np.ndarray:
     out = np.eye(4)
     out[:3, 3] = vec
     return out
+
+
+class _ChainConsts(NamedTuple):
+    """The constant per-joint terms of a chain on one device."""
+
+    base: torch.Tensor  # (4, 4) C_0
+    next: torch.Tensor  # (n, 4, 4) C_i
+    a: torch.Tensor  # (n, 4, 4) sin terms
+    b: torch.Tensor  # (n, 4, 4) 1 - cos terms
+    u: torch.Tensor  # (n, 4, 4) slide terms
+    hinge_f: torch.Tensor  # (n,) 1.0 for hinges
 
 
 class SerialChain:
@@ -72,6 +83,19 @@ class SerialChain:
         self._u[slide, :3, 3] = u[slide]
         self._next = nxt
         self._hinge_f = self.hinge.to(_F64)
+        host = _ChainConsts(self.consts[0], self._next, self._a, self._b, self._u, self._hinge_f)
+        self._on: dict[torch.device, _ChainConsts] = {torch.device("cpu"): host}
+
+    def on(self, device: torch.device) -> "_ChainConsts":
+        """The chain's constant terms on ``device`` (copied there once, then cached)."""
+        device = torch.device(device)
+        if device.type == "cuda" and device.index is None:
+            device = torch.device("cuda", torch.cuda.current_device())
+        consts = self._on.get(device)
+        if consts is None:
+            consts = _ChainConsts(*(t.to(device) for t in self._on[torch.device("cpu")]))
+            self._on[device] = consts
+        return consts
 
     @property
     def n(self) -> int:
@@ -117,10 +141,11 @@ class SerialChain:
     # -- kinematics --------------------------------------------------------------------
     def joint_transforms(self, q: torch.Tensor) -> torch.Tensor:
         """(N, n, 4, 4) transforms ``J_i(q_i) C_i`` (joint motion, then the next offset)."""
-        angle = q * self._hinge_f
+        k = self.on(q.device)
+        angle = q * k.hinge_f
         s, c = torch.sin(angle)[..., None, None], torch.cos(angle)[..., None, None]
-        slide = (q * (1.0 - self._hinge_f))[..., None, None]
-        return self._next + s * self._a + (1.0 - c) * self._b + slide * self._u
+        slide = (q * (1.0 - k.hinge_f))[..., None, None]
+        return k.next + s * k.a + (1.0 - c) * k.b + slide * k.u
 
     def forward(
         self, q: torch.Tensor, tip: Optional[torch.Tensor] = None
@@ -145,8 +170,18 @@ class SerialChain:
         return frame, axes_w, stacked[..., :3, 3]
 
     def fk(self, q: torch.Tensor, tip: Optional[torch.Tensor] = None) -> torch.Tensor:
-        """(N, 4, 4) pose of the end body (times ``tip``) in the root frame."""
-        return self.forward(q, tip)[0]
+        """(N, 4, 4) pose of the end body (times ``tip``) in the root frame, float64.
+
+        Computed where ``q`` is (CPU or an accelerator), with no host copy or sync;
+        ``tip`` must be on that device too. The products are those of
+        :meth:`forward`, in the same order (the same values on the CPU).
+        """
+        q = q.to(_F64)
+        motion = self.joint_transforms(q)
+        frame = self.on(q.device).base.expand(q.shape[0], 4, 4)
+        for i in range(self.n):
+            frame = frame @ motion[:, i]
+        return frame if tip is None else frame @ tip.to(_F64)
 
     def jacobian(self, q: torch.Tensor, tip: Optional[torch.Tensor] = None) -> tuple[torch.Tensor, torch.Tensor]:
         """``(pose (N, 4, 4), J (N, 6, n))``: the geometric Jacobian (linear rows first)."""

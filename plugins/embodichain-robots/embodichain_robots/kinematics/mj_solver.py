@@ -23,6 +23,9 @@ _F64 = torch.float64
 class MjDLSSolver(DLSSolver):
     """:class:`DLSSolver` with FK and Jacobians from MuJoCo (slower; a reference)."""
 
+    #: FK runs on the host (MuJoCo); the robot hands it CPU joint values.
+    fk_on_device = False
+
     def __init__(
         self,
         cfg: IKSolverCfg,

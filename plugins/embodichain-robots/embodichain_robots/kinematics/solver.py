@@ -119,7 +119,13 @@ def rotation_angle(target: torch.Tensor, rot: torch.Tensor) -> torch.Tensor:
 
 
 class DLSSolver:
-    """Batched damped-least-squares IK of one serial chain (see module docstring)."""
+    """Batched damped-least-squares IK of one serial chain (see module docstring).
+
+    FK (:meth:`get_fk`) runs where its input is; IK and the Jacobian on the CPU.
+    """
+
+    #: ``get_fk`` computes on its input's device (the robot keeps FK on the sim device).
+    fk_on_device: bool = True
 
     def __init__(self, cfg: IKSolverCfg, chain: SerialChain, joint_ids: Optional[Sequence[int]] = None):
         self.cfg = cfg
@@ -128,6 +134,7 @@ class DLSSolver:
         self.joint_ids = list(joint_ids) if joint_ids is not None else list(range(chain.n))
         self.root_link_name, self.end_link_name = cfg.root_link_name, cfg.end_link_name
         self.tcp = torch.as_tensor(cfg.tcp, dtype=_F64).reshape(4, 4)
+        self._tcp_cache: Optional[tuple[tuple[Any, ...], torch.Tensor]] = None
 
     @classmethod
     def from_model(
@@ -169,8 +176,26 @@ class DLSSolver:
     # -- kinematics ----------------------------------------------------------------------
     @_one_thread
     def get_fk(self, qpos: torch.Tensor) -> torch.Tensor:
-        """(N, 4, 4) TCP pose in the root link frame at ``qpos`` (N, n)."""
-        return self.chain.fk(_host(qpos).reshape(-1, self.dof), self.tcp)
+        """(N, 4, 4) float64 TCP pose in the root link frame at ``qpos`` (N, n).
+
+        Computed where ``qpos`` is (CPU or an accelerator): no host copy, no sync
+        (``fk_on_device``); the chain's constants and the TCP are copied to a device once.
+        """
+        q = torch.as_tensor(qpos)
+        q = q.reshape(-1, self.dof).to(_F64)
+        return self.chain.fk(q, self._tcp_on(q.device))
+
+    def _tcp_on(self, device: torch.device) -> torch.Tensor:
+        """``self.tcp`` on ``device``, cached until the TCP changes (``set_tcp``, a new or
+        an in-place edited ``tcp`` tensor)."""
+        if device.type == "cpu":
+            return self.tcp
+        key = (device, id(self.tcp), self.tcp._version)
+        cached = self._tcp_cache
+        if cached is None or cached[0] != key:
+            cached = (key, self.tcp.to(device, _F64))
+            self._tcp_cache = cached
+        return cached[1]
 
     @_one_thread
     def get_jacobian(self, qpos: torch.Tensor) -> torch.Tensor:
@@ -184,7 +209,7 @@ class DLSSolver:
     @_one_thread
     def pose_error(self, target: torch.Tensor, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(position error (N,) in m, rotation error (N,) in rad) of ``qpos`` w.r.t. ``target``."""
-        pose = self.get_fk(qpos)
+        pose = self.get_fk(_host(qpos))
         target = _host(target)
         pos = torch.linalg.norm(target[:, :3, 3] - pose[:, :3, 3], dim=-1)
         return pos, rotation_angle(target[:, :3, :3], pose[:, :3, :3])
