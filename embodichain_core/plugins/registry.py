@@ -204,7 +204,8 @@ class Registry:
         return candidates[0] if candidates else None
 
     def _candidates(self, name: str) -> list[Entry]:
-        return [e for (_, k), e in self._entries.items() if k == self._key(name)]
+        key = self._key(name)
+        return [e for (_, k), e in self._entries.items() if k == key]
 
     def _split(self, name: str, sep: str = SEPARATOR) -> tuple[str | None, str]:
         """``(provider, bare)`` when ``name`` is ``"<plugin><sep><bare>"`` for a provider of
