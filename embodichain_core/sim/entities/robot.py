@@ -9,7 +9,10 @@ plugins register (:mod:`embodichain_core.sim.entities.solvers`). A solver offers
 * ``joint_ids``: the robot joint ids it solves for (the part's joints, in order);
 * ``root_link_name``: the link its poses are expressed in;
 * ``get_fk(qpos (n, k)) -> (n, 4, 4)``: the part TCP in the root link frame;
-* ``get_ik(target (n, 4, 4), qpos_seed (n, k)) -> (success (n,), qpos (n, k))``.
+* ``get_ik(target (n, 4, 4), qpos_seed (n, k)) -> (success (n,), qpos (n, k))``;
+* optionally ``fk_on_device = True``: ``get_fk`` computes on its input's device and depends
+  on nothing but ``qpos``, ``chain`` and ``tcp``; part FK then runs on the sim's device
+  (no host copy), and on the CPU the current pose is reused while those inputs are equal.
 
 :meth:`Robot.compute_fk` (with ``name``) and :meth:`Robot.compute_ik` convert
 between the env frame and the root link frame.

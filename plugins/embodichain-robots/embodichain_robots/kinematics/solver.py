@@ -31,7 +31,7 @@ _F64 = torch.float64
 
 
 def _host(values: Any) -> torch.Tensor:
-    """``values`` as a float64 CPU tensor: the solvers run on the CPU whatever the sim device."""
+    """``values`` as a float64 CPU tensor: IK and Jacobians run on the CPU whatever the sim device."""
     return torch.as_tensor(values).to("cpu", _F64)
 
 
