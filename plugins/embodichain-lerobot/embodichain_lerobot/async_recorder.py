@@ -7,8 +7,7 @@ order. By default (``params.writer_process``) the worker thread only sends the
 episode to a child process that does that work
 (:mod:`embodichain_lerobot.writer_process`): lerobot's Python then never competes
 with stepping and rendering for this process's GIL, and lerobot is imported there
-while the episodes run (the child starts with the dataset: at the first commit, or at the
-first streamed video frame). Stepping waits only when ``max_pending_episodes`` episodes are
+while the first episodes run (the child starts with the first recorded observation). Stepping waits only when ``max_pending_episodes`` episodes are
 queued (0: never). A worker error is raised at the next commit, step or ``finalize()`` (a
 :class:`~embodichain_lerobot.storage.DiskFullError` as itself, others wrapped);
 ``finalize()`` drains the queue first, so every committed episode is written, and

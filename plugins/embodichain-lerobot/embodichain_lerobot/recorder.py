@@ -80,8 +80,8 @@ class LeRobotRecorder(DatasetFunctor):
     default off here, on in the async variant), ``environment_state`` (observation keys
     recorded as one ``observation.environment_state`` vector). lerobot is imported on a thread once the
     first observation is recorded (the env build does not wait for it); with ``writer_process`` it is
-    imported in the child, which starts with the dataset: at the first commit, or at the first step
-    when colour videos are streamed to it (a recorder closed before either starts none).
+    imported in the child, which starts with the first recorded observation (a recorder closed
+    before its env is reset starts none).
 
     Raises:
         ValueError: the env control frequency is not a whole number of Hz.
@@ -106,7 +106,7 @@ class LeRobotRecorder(DatasetFunctor):
         self._writer: Optional[DatasetWriter | WriterProcess] = None
         if self.params.writer_process is None:
             self.params.writer_process = self.default_writer_process
-        # its child starts with the dataset (_ensure_writer): a recorder that writes nothing starts none
+        # its child starts with the first recorded observation (_ensure_spec): a recorder never reset starts none
         self._writer_process = WriterProcess() if self.params.writer_process else None
         self._finalized = False
         self._path: Optional[str] = None
@@ -154,6 +154,8 @@ class LeRobotRecorder(DatasetFunctor):
             self._spec = FeatureSpec(obs, self._env, self.params.depth_format, self.params.environment_state)
             if self._writer_process is None:
                 preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
+            else:  # the child imports lerobot while the first episodes run
+                self._writer_process.start()
         return self._spec
 
     def record_reset(self, obs: Any, env_ids: Any) -> None:

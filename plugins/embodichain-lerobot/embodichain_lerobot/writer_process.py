@@ -151,6 +151,10 @@ class WriterProcess:
         self._finalized = True
         if self._proc is None:
             return None
+        if self.root == Path():  # started, never opened: no dataset, nothing to save or wait for
+            self._proc.kill()
+            self._stop()
+            return None
         try:
             path = self.submit("finalize", None).result(_REPLY_TIMEOUT_S)
             self._result = Path(path) if path else None

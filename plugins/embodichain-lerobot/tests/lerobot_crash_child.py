@@ -93,7 +93,7 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
             if rec.saved_episodes > saved:
                 saved = rec.saved_episodes
                 print(f"COMMITTED {saved}", flush=True)
-            if proc is not None and proc._proc is not None and writer is None:  # started by the first commit
+            if proc is not None and proc._proc is not None and writer is None:  # started by the first reset
                 writer = proc._proc.pid
                 print(f"WRITER {writer}", flush=True)
             if proc is not None and proc.sent_episodes > sent:

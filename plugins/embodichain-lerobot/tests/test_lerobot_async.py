@@ -173,32 +173,36 @@ class _CountedPopen(subprocess.Popen):
 
 
 @pytest.mark.parametrize(
-    "func, params, script",
-    [
-        ("AsyncLeRobotRecorder", {}, [["."], ["f"], ["."]]),  # a failed episode (discarded) and a live one
-        (
-            "LeRobotRecorder",
-            {"writer_process": True, "use_videos": True},
-            [],
-        ),  # streamed videos: the 1st step starts it
-    ],
+    "func, params",
+    [("AsyncLeRobotRecorder", {}), ("LeRobotRecorder", {"writer_process": True, "use_videos": True})],
 )
-def test_a_recorder_that_commits_no_episode_starts_no_writer_process_and_leaves_nothing(
-    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, func: str, params: dict, script: list
+def test_the_writer_process_starts_with_recording_and_a_recorder_without_commits_leaves_nothing(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, func: str, params: dict
 ) -> None:
     monkeypatch.setattr(_CountedPopen, "started", [])
     monkeypatch.setattr(subprocess, "Popen", _CountedPopen)
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func=func, **params)))
     rec = env.dataset_manager.get_functor("rec")
     assert rec.params.writer_process is True
+    assert _CountedPopen.started == []  # building the env (to check a config, say) starts no child
     reset(env)
-    run_script(env, script)
-    assert rec.discarded_episodes == int(bool(script))
-    assert _CountedPopen.started == []
+    assert len(_CountedPopen.started) == 1  # recording starts: the child imports lerobot meanwhile
+    run_script(env, [["."], ["f"], ["."]])  # a failed episode (discarded) and a live one, no commit
+    env.close()
+    assert env.dataset_manager.finalize() == [None]
+    assert len(_CountedPopen.started) == 1
+    assert list((tmp_path / "data").glob("*")) == []  # no dataset folder (save_path itself is not made)
+
+
+def test_an_env_built_and_closed_starts_no_writer_process(
+    make_env: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(_CountedPopen, "started", [])
+    monkeypatch.setattr(subprocess, "Popen", _CountedPopen)
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func="AsyncLeRobotRecorder")))
     env.close()
     assert env.dataset_manager.finalize() == [None]
     assert _CountedPopen.started == []
-    assert list((tmp_path / "data").glob("*")) == []  # no dataset folder (save_path itself is not made)
 
 
 def test_a_writer_process_that_cannot_be_launched_names_the_param_to_change(
@@ -209,16 +213,15 @@ def test_a_writer_process_that_cannot_be_launched_names_the_param_to_change(
 
     monkeypatch.setattr(subprocess, "Popen", no_more_processes)
     env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path / "data", func="AsyncLeRobotRecorder")))
-    reset(env)
     with pytest.raises(
         WriterProcessError,
         match=r"cannot start the dataset writer process \(.* -m embodichain_lerobot"
         r"\.writer_child\): .*Resource temporarily unavailable; .*params\.writer_process to false",
     ):
-        run_script(env, [["s"]])  # the first commit starts it
+        reset(env)  # the first recorded observation starts it
     env.close()
     assert env.dataset_manager.finalize() == [None]
-    assert list((tmp_path / "data").iterdir()) == []  # the folder reserved for the dataset is removed
+    assert list((tmp_path / "data").glob("*")) == []  # no dataset folder is made
 
 
 def test_episodes_are_copies_unaffected_by_later_steps(
