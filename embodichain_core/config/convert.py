@@ -66,8 +66,15 @@ def _convert_union(value: Any, members: tuple, path: str) -> Any:
     deepest = max(errors, key=lambda err: len(err.path))
     if len(deepest.path) > len(path):  # a member matched the structure; an item inside it is wrong
         raise deepest
-    names = ", ".join(getattr(m, "__name__", str(m)) for m in members)
+    names = ", ".join(_type_name(m) for m in members if m is not _NONE)
     raise ConfigError(path, f"value {value!r} does not match any of: {names}")
+
+
+def _type_name(hint: Any) -> str:
+    """``int``, or a Literal's values (``'auto'``) for an error message."""
+    if typing.get_origin(hint) is Literal:
+        return " or ".join(repr(v) for v in typing.get_args(hint))
+    return getattr(hint, "__name__", str(hint))
 
 
 def _convert_list(value: Any, hint: Any, path: str) -> Any:

@@ -45,7 +45,7 @@ from embodichain_sensors.camera_arrays import _add_spec_camera, _alloc, _host, _
 from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
-from embodichain_sensors.render_pool import RenderPool
+from embodichain_sensors.render_pool import RenderPool, render_thread_count
 from embodichain_sensors.renderer import SensorRenderer
 from embodichain_sensors.warp_renderer import WarpCameraRenderer, choose_renderer
 
@@ -135,12 +135,17 @@ class Camera(BaseSensor):
     def _check_renderer(self) -> str:
         """The renderer in effect (see ``CameraCfg.renderer``); what it cannot do raises here."""
         chosen = choose_renderer(self.scene.sim_cfg, getattr(self.cfg, "renderer", None), self.uid, self._path)
-        threads = int(getattr(self.cfg, "render_threads", 1) or 1)
+        setting = getattr(self.cfg, "render_threads", 1)  # "auto" falls back to one thread silently
         backend = gl_backend()
         self._threaded = backend in THREADED_BACKENDS
-        if chosen == "opengl" and threads > 1 and self.num_envs > 1 and not self._threaded:
+        if (
+            chosen == "opengl"
+            and setting != "auto"
+            and render_thread_count(setting, self.num_envs) > 1
+            and not self._threaded
+        ):
             warnings.warn(
-                f"{self._path}.render_threads = {threads}: rendering on one thread, since MUJOCO_GL "
+                f"{self._path}.render_threads = {setting}: rendering on one thread, since MUJOCO_GL "
                 f"{backend!r} cannot hand an OpenGL context between threads (use "
                 f"{' or '.join(THREADED_BACKENDS)} for parallel rendering)",
                 stacklevel=2,
@@ -207,7 +212,7 @@ class Camera(BaseSensor):
 
     def _render_pool(self) -> Optional[RenderPool]:
         """The pool of ``render_threads`` renderers (``None``: one renderer, this thread)."""
-        threads = min(int(getattr(self.cfg, "render_threads", 1) or 1), self.num_envs)
+        threads = render_thread_count(getattr(self.cfg, "render_threads", 1), self.num_envs)
         if threads <= 1 or not self._threaded:
             return None
         if self._pool is not None and self._pool.threads != threads:  # render_threads changed

@@ -16,7 +16,7 @@ Example:
 from __future__ import annotations
 
 import math
-from typing import Any, List, Literal, Optional
+from typing import Any, List, Literal, Optional, Union
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.cfg import SensorCfg
@@ -72,7 +72,8 @@ class CameraCfg(SensorCfg):
             ``"opengl"`` (docs/sensors.md).
         render_threads: with ``renderer: "opengl"``, how many envs rasterize at once, each
             on its own OpenGL context and worker thread (``MUJOCO_GL`` egl or osmesa; the
-            same images). ``1``: one context, on the calling thread.
+            same images). ``1``: one context, on the calling thread; ``"auto"``: one per
+            core but one (left to the recorder's writer), at most ``num_envs``.
     """
 
     @configclass
@@ -116,12 +117,12 @@ class CameraCfg(SensorCfg):
     enable_normal: bool = False
     enable_position: bool = False
     renderer: Optional[str] = None
-    render_threads: int = 1
+    render_threads: Union[int, Literal["auto"]] = 1
 
     def __post_init__(self) -> None:
         threads = self.render_threads
-        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-            raise ConfigError("render_threads", f"must be an int >= 1, got {threads!r}")
+        if threads != "auto" and (isinstance(threads, bool) or not isinstance(threads, int) or threads < 1):
+            raise ConfigError("render_threads", f"must be an int >= 1 or 'auto', got {threads!r}")
         if self.renderer is not None and self.renderer not in RENDERERS:
             raise ConfigError(
                 "renderer", f"must be one of {', '.join(map(repr, RENDERERS))} or None (auto), got {self.renderer!r}"

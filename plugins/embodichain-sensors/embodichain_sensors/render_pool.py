@@ -16,10 +16,25 @@ Example:
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
 from embodichain_sensors.renderer import SensorRenderer
+
+
+def render_thread_count(setting: Any, num_envs: int) -> int:
+    """The threads a camera's ``render_threads`` asks for, at most ``num_envs``: ``"auto"`` is
+    one per core this process may use but one, which is left to the recorder's writer process.
+
+    Example:
+        >>> render_thread_count(4, num_envs=2)
+        2
+    """
+    if setting == "auto":
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        setting = cores - 1
+    return max(1, min(int(setting or 1), int(num_envs)))
 
 
 class RenderPool:

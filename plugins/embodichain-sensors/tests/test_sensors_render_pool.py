@@ -13,7 +13,8 @@ from sensors_helpers import CUBE_POS
 from embodichain_core.config.errors import ConfigError
 from embodichain_sensors import camera as camera_module
 from embodichain_sensors.cfg import CameraCfg, StereoCameraCfg
-from embodichain_sensors.render_pool import RenderPool
+from embodichain_sensors import render_pool
+from embodichain_sensors.render_pool import RenderPool, render_thread_count
 
 EYE = (CUBE_POS[0] - 0.4, CUBE_POS[1], 0.9)
 
@@ -89,10 +90,32 @@ def test_a_failing_job_is_raised_after_every_job_stopped(scene_factory):
         pool.run(1, prepare=lambda r, i: None, render=lambda r, i: None)
 
 
-@pytest.mark.parametrize("bad", [0, -1, True, 1.5])
-def test_render_threads_must_be_a_positive_int(bad):
+@pytest.mark.parametrize("bad", [0, -1, True, 1.5, "aut", "2"])
+def test_render_threads_must_be_a_positive_int_or_auto(bad):
     with pytest.raises(ConfigError, match="render_threads"):
         CameraCfg(uid="cam", render_threads=bad)
+    with pytest.raises(ConfigError, match="render_threads.*'auto'"):
+        CameraCfg.from_dict({"uid": "cam", "render_threads": "aut"})
+
+
+@pytest.mark.parametrize("cores, num_envs, threads", [(2, 2, 1), (1, 4, 1), (4, 2, 2), (16, 8, 8), (8, 16, 7)])
+def test_auto_render_threads_leave_one_core_and_never_exceed_the_envs(monkeypatch, cores, num_envs, threads):
+    monkeypatch.setattr(render_pool.os, "sched_getaffinity", lambda pid: set(range(cores)), raising=False)
+    assert CameraCfg.from_dict({"uid": "cam", "render_threads": "auto"}).render_threads == "auto"
+    assert render_thread_count("auto", num_envs) == threads
+    assert render_thread_count(3, num_envs) == min(3, num_envs)
+
+
+def test_auto_on_a_backend_that_cannot_hand_contexts_over_is_one_thread_without_a_warning(
+    scene_factory, monkeypatch, recwarn
+):
+    _, (cam,) = scene_factory(stereo(render_threads="auto"), robot=True, num_envs=2)
+    monkeypatch.setattr(camera_module, "gl_backend", lambda: "glfw")
+    cam.bind()
+    assert not [w for w in recwarn if "render_threads" in str(w.message)]
+    monkeypatch.setattr(camera_module, "RenderPool", _NoPool)
+    cam.update()
+    assert cam.get_data()["color"].shape == (2, 32, 48, 4)
 
 
 def test_a_backend_that_cannot_hand_contexts_over_renders_on_one_thread(scene_factory, monkeypatch):
