@@ -21,24 +21,20 @@ from typing import Any, Iterable, Optional
 from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import SceneEntityCfg
-from embodichain_core.managers.param_rules import functor_params
+from embodichain_core.managers.param_rules import annotated_as, functor_params, param_items
 from embodichain_core.utils.suggest import did_you_mean
 
 __all__ = ["entity_params", "check_entity_params"]
 
 _ENTITY = re.compile(r"\bSceneEntityCfg\b")
-_SEQUENCE = re.compile(r"\b(Sequence|List|list|Tuple|tuple|Iterable)\[")
 
 
-def _entity_kind(param: inspect.Parameter) -> Optional[str]:
-    """``"one"``/``"many"`` for a param naming one entity or a sequence of them, else ``None``."""
+def _entity_kind(param: inspect.Parameter) -> Optional[bool]:
+    """Whether ``param`` names a sequence of entities (``False``: one entity), else ``None``."""
     annotation = param.annotation
-    text = "" if annotation is param.empty else annotation if isinstance(annotation, str) else str(annotation)
-    if text.replace("typing.", "") in ("", "Any"):  # not saying: the naming convention decides
-        return "one" if _conventional(param.name) else None
-    if not _ENTITY.search(text):
-        return None
-    return "many" if _SEQUENCE.search(text) else "one"
+    if annotation is param.empty or str(annotation).replace("typing.", "") in ("", "Any"):
+        return False if _conventional(param.name) else None  # not saying: the naming convention decides
+    return annotated_as(param, _ENTITY)
 
 
 def _conventional(name: str) -> bool:
@@ -56,9 +52,9 @@ def entity_params(func: Any, min_argc: Optional[int], keys: Iterable[str] = ()) 
     args = functor_params(func, min_argc)
     found = {}
     for param in args or []:
-        kind = None if param.kind is param.VAR_KEYWORD else _entity_kind(param)
-        if kind is not None:
-            found[param.name] = kind == "many"
+        many = None if param.kind is param.VAR_KEYWORD else _entity_kind(param)
+        if many is not None:
+            found[param.name] = many
     if args is None or any(p.kind is p.VAR_KEYWORD for p in args):
         named = {p.name for p in args or []}
         found.update({k: False for k in keys if k not in named and _conventional(k)})
@@ -70,12 +66,7 @@ def check_entity_params(params: dict, entities: dict[str, bool], path: str, uids
     ``SceneEntityCfg`` or ``{"uid": ...}`` (a list of them where it takes a sequence) naming
     a uid of ``uids`` (not checked when ``uids`` is ``None``)."""
     for key, many in entities.items():
-        value, where = params.get(key), join_path(path, key)
-        if many and isinstance(value, (list, tuple)):
-            items = [(f"{where}[{i}]", item) for i, item in enumerate(value)]
-        else:
-            items = [(where, value)]
-        for at, item in items:
+        for at, item in param_items(params.get(key), join_path(path, key), many):
             if item is None:
                 continue
             uid: Any

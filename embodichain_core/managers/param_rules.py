@@ -56,6 +56,8 @@ __all__ = [
     "check_data_path",
     "check_data_paths",
     "data_path_params",
+    "annotated_as",
+    "param_items",
     "functor_params",
     "range_bounds",
     "DataPath",
@@ -248,6 +250,24 @@ _DATA_PATH = re.compile(r"\bDataPath\b")
 _SEQUENCE = re.compile(r"\b(Sequence|List|list|Tuple|tuple|Iterable)\[")
 
 
+def annotated_as(param: inspect.Parameter, type_name: "re.Pattern[str]") -> Optional[bool]:
+    """Whether ``param``'s annotation names ``type_name`` (bare or ``Optional``: ``False``; a
+    ``Sequence``/``List``/... of it: ``True``), else ``None`` (not annotated so, or ``**kwargs``)."""
+    annotation = param.annotation
+    if annotation is param.empty or param.kind is param.VAR_KEYWORD:
+        return None
+    text = annotation if isinstance(annotation, str) else str(annotation)
+    return bool(_SEQUENCE.search(text)) if type_name.search(text) else None
+
+
+def param_items(value: Any, where: str, many: bool) -> list[tuple[str, Any]]:
+    """``(path, item)`` of each item of a list or tuple given to a param taking a sequence,
+    else ``[(where, value)]``."""
+    if many and isinstance(value, (list, tuple)):
+        return [(f"{where}[{i}]", item) for i, item in enumerate(value)]
+    return [(where, value)]
+
+
 def data_path_params(func: Any, min_argc: Optional[int]) -> dict[str, bool]:
     """The params of ``func`` annotated :data:`DataPath` -> whether each takes a list of them.
 
@@ -256,15 +276,8 @@ def data_path_params(func: Any, min_argc: Optional[int]) -> dict[str, bool]:
         >>> data_path_params(load, 2)
         {'textures': False, 'meshes': True}
     """
-    found = {}
-    for param in functor_params(func, min_argc) or []:
-        annotation = param.annotation
-        if annotation is param.empty or param.kind is param.VAR_KEYWORD:
-            continue
-        text = annotation if isinstance(annotation, str) else str(annotation)
-        if _DATA_PATH.search(text):
-            found[param.name] = bool(_SEQUENCE.search(text))
-    return found
+    found = {p.name: annotated_as(p, _DATA_PATH) for p in functor_params(func, min_argc) or []}
+    return {name: many for name, many in found.items() if many is not None}
 
 
 def check_data_paths(func: Any, params: dict, path: str, min_argc: Optional[int]) -> None:
@@ -272,11 +285,9 @@ def check_data_paths(func: Any, params: dict, path: str, min_argc: Optional[int]
     :func:`data_path_params`) names existing asset data (``None``: not given)."""
     label = _name(func)
     for key, many in data_path_params(func, min_argc).items():
-        value, where = params.get(key), join_path(path, "params", key)
-        items = list(enumerate(value)) if many and isinstance(value, (list, tuple)) else [(None, value)]
-        for i, item in items:
+        for where, item in param_items(params.get(key), join_path(path, "params", key), many):
             if item is not None:
-                check_data_path(item, where if i is None else f"{where}[{i}]", label)
+                check_data_path(item, where, label)
 
 
 def check_data_path(value: Any, path: str, functor: str = "") -> None:
