@@ -121,9 +121,9 @@ def urdf_robot_section(path: Path, uid: str = "arm", **extra: object) -> dict:
         "init_qpos": HOME + [0.01, 0.01],
         "control_parts": {"arm": ARM_JOINT_NAMES, "gripper": ["finger_left"]},
         "drive_pros": {
-            "stiffness": {"finger_.*": 500.0, ".*": 2000.0},
-            "damping": {"finger_.*": 20.0, ".*": 100.0},
-            "armature": {"finger_.*": 0.01, ".*": 0.05},
+            "stiffness": {"finger_.*": 500.0, "(?!finger_).*": 2000.0},
+            "damping": {"finger_.*": 20.0, "(?!finger_).*": 100.0},
+            "armature": {"finger_.*": 0.01, "(?!finger_).*": 0.05},
         },
     }  # rotor inertia: stable drives
     section.update(extra)

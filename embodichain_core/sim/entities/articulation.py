@@ -230,7 +230,7 @@ class Articulation(JointModelFields, Entity):
 
     def get_qvel_limits(self) -> torch.Tensor:
         """(N, dof) velocity limits from the drive config (``max_velocity``)."""
-        from embodichain_core.sim.scene_build.builder_articulation import joint_value
+        from embodichain_core.sim.scene_build.drive_values import joint_value
 
         vals = [joint_value(self.cfg.drive_pros.max_velocity, j, "drive_pros.max_velocity") for j in self.joint_names]
         vals = [v if np.isfinite(v) else 1e10 for v in vals]

@@ -19,6 +19,7 @@ import numpy as np
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.scene_build.actuators import drive_actuator_names, keep_servos, replace_actuators
 from embodichain_core.sim.scene_build.builder import EntityRecord, SceneBuilder
+from embodichain_core.sim.scene_build.drive_values import joint_value
 from embodichain_core.sim.scene_build.import_checks import balance_inertias
 from embodichain_core.sim.cfg import ArticulationCfg, JointDrivePropertiesCfg
 from embodichain_core.utils.math import init_pos_from_cfg, init_quat_from_cfg
@@ -124,19 +125,6 @@ def _mimic_joints(spec: mujoco.MjSpec) -> dict[str, tuple[str, float, float]]:
             coef = np.asarray(eq.data, dtype=float)
             out[eq.name1] = (eq.name2, float(coef[1]), float(coef[0]))
     return out
-
-
-def joint_value(values: Any, joint: str, path: str) -> float:
-    """A drive value for ``joint``: a number, or the first matching regex of a dict."""
-    if isinstance(values, dict):
-        for pattern, value in values.items():
-            if re.fullmatch(pattern, joint) or pattern == joint:
-                return float(value)
-        return float("nan")
-    try:
-        return float(values)
-    except (TypeError, ValueError) as err:
-        raise ConfigError(path, f"expected a number or a {{regex: number}} mapping, got {values!r}") from err
 
 
 def _add_drives(

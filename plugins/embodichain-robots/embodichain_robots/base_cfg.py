@@ -1,14 +1,15 @@
 """``ProceduralRobotCfg``: the shared base of this package's robot configs.
 
 It adds what EmbodiChain's ``merge_robot_cfg`` does to ``from_dict``: user
-``drive_pros`` dicts are deep-merged into the robot's defaults (user regexes are
-matched first) and ``solver_cfg`` is patched per part (a part dict without
-``class_type`` only updates the default solver, e.g. its ``tcp``). It also
+``drive_pros`` dicts are deep-merged into the robot's defaults (your entries win over the
+default groups they overlap: :func:`layer_patterns`) and ``solver_cfg`` is patched per
+part (a part dict without ``class_type`` only updates the default solver, e.g. its ``tcp``). It also
 builds the part solvers for the ``Robot`` (:meth:`build_solvers`).
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from embodichain_core.config.errors import ConfigError
@@ -47,7 +48,8 @@ def _join(path: str, key: str) -> str:
 
 
 def merge_drive_pros(default: JointDrivePropertiesCfg, user: Any, path: str) -> JointDrivePropertiesCfg:
-    """``default`` patched with ``user`` (a cfg replaces it; a dict is merged key by key)."""
+    """``default`` patched with ``user`` (a cfg replaces it; a dict is merged key by key, a
+    ``{joint regex: value}`` mapping by :func:`layer_patterns`: your entries win)."""
     if is_configclass(user):
         return user
     if not isinstance(user, dict):
@@ -55,11 +57,39 @@ def merge_drive_pros(default: JointDrivePropertiesCfg, user: Any, path: str) -> 
     merged = default.to_dict()
     for key, value in user.items():
         old = merged.get(key)
-        if isinstance(value, dict) and isinstance(old, dict):
-            merged[key] = {**value, **{k: v for k, v in old.items() if k not in value}}
-        else:
-            merged[key] = value
+        merged[key] = layer_patterns(value, old) if isinstance(value, dict) and isinstance(old, dict) else value
     return JointDrivePropertiesCfg.from_dict(merged, path)
+
+
+def layer_patterns(user: dict, default: dict) -> dict:
+    """``user``'s entries, then ``default``'s narrowed to the joints none of ``user``'s
+    patterns match, so a user pattern overrides a default group it overlaps (the core
+    rejects two patterns that give one joint different values).
+
+    A default pattern ``P`` becomes ``(?!(?:U1|U2)$)(?:P)`` (a negative lookahead on the
+    user's patterns); exact joint names need no narrowing (an exact name always wins). The
+    merge is idempotent: a default already narrowed in ``user`` (a config written by
+    ``to_dict`` and read again) is not added twice.
+    """
+    patterns = [str(k) for k in user if not _is_name(str(k)) and not _narrowed_from(str(k), default)]
+    out = dict(user)
+    for pattern, value in default.items():
+        if pattern in user or any(_narrowed_from(str(k), {pattern: value}) for k in user):
+            continue
+        out[_narrow(str(pattern), patterns)] = value
+    return out
+
+
+def _is_name(key: str) -> bool:
+    return re.escape(key) == key
+
+
+def _narrow(pattern: str, user_patterns: list[str]) -> str:
+    return f"(?!(?:{'|'.join(user_patterns)})$)(?:{pattern})" if user_patterns else pattern
+
+
+def _narrowed_from(key: str, default: dict) -> bool:
+    return key.startswith("(?!(?:") and any(key.endswith(f")$)(?:{p})") for p in default)
 
 
 def merge_solvers(default: dict, user: Any, path: str) -> dict[str, IKSolverCfg]:

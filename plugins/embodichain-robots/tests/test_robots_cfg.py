@@ -105,3 +105,16 @@ def test_arm_defaults() -> None:
     assert cfg.control_parts == {"arm": ["joint[1-7]"], "eef": ["finger_joint[12]"]}
     assert len(cfg.init_qpos) == 9
     assert cfg.solver_cfg["arm"].end_link_name == "hand"
+
+
+def test_a_user_pattern_overrides_the_default_group_it_overlaps() -> None:
+    from embodichain_core.sim.scene_build.drive_values import joint_value
+
+    cfg = DexforceW1Cfg.from_dict({"drive_pros": {"stiffness": {"(LEFT|RIGHT)_FINGER[12]": 3000.0}}})
+    stiffness = cfg.drive_pros.stiffness
+    # the hand group also matches LEFT_FINGER1 (at 1e2): narrowed, it no longer does
+    assert joint_value(stiffness, "LEFT_FINGER1", "drive_pros.stiffness") == 3000.0
+    assert joint_value(stiffness, "LEFT_HAND_INDEX", "drive_pros.stiffness") == 1e2
+    assert joint_value(stiffness, "RIGHT_J3", "drive_pros.stiffness") == 1e4
+    again = DexforceW1Cfg.from_dict(cfg.to_dict())  # the merge is idempotent
+    assert again.drive_pros.stiffness == stiffness
