@@ -13,6 +13,7 @@ from typing import Any
 
 from embodichain_core.config.checks import check_int, check_number, check_vector, describe, is_number
 from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.config.scene_types import check_scene_types
 
 __all__ = ["check_scene", "check_pose", "check_attrs", "check_shape", "check_light", "check_drive"]
 
@@ -61,6 +62,7 @@ def check_scene(cfg: Any) -> None:
     Raises:
         ConfigError: the first bad value, with its path and the rule it breaks.
     """
+    check_scene_types(cfg)
     check_articulation(cfg.robot, "robot")
     for key in ("articulation", "articulation_cfg"):
         for i, art in enumerate(getattr(cfg, key)):
