@@ -263,7 +263,7 @@ def round_table_cfg() -> Any:
     return RigidObjectCfg(
         uid="table",
         shape=mesh,
-        attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95, dynamic_friction=0.85, restitution=0.01),
+        attrs=RigidBodyAttributesCfg(mass=10.0, static_friction=0.95),
         body_type="kinematic",
         init_pos=(0.80, 0.0, 0.8),
         init_rot=(0.0, 90.0, 0.0),

@@ -92,7 +92,7 @@ class PickForkCfg(EmbodiedEnvCfg):
         RigidObjectCfg(
             uid="fork",
             shape=MeshCfg(fpath=FORK_FOLDER + "standard_fork_scale.ply"),
-            attrs=RigidBodyAttributesCfg(mass=0.05, static_friction=1.0, dynamic_friction=0.9),
+            attrs=RigidBodyAttributesCfg(mass=0.05, static_friction=1.0),
             body_scale=(0.75, 0.75, 1.0),
             init_pos=FORK_POS,
         ),
