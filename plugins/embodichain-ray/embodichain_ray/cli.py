@@ -68,7 +68,15 @@ def build_parser() -> argparse.ArgumentParser:
         "that --shards holds, e.g. after a failed merge",
     )
     p.add_argument("--headless", action="store_true", help="no viewer (workers are always headless)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--progress-every",
+        dest="progress_every",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="without a terminal (a log, CI, a scheduler): a plain progress line every S seconds (default 30)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no progress lines")
     return p
 
 
@@ -81,6 +89,7 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
         ("seed", 0),
         ("max_restarts", 0),
         ("close_timeout", 0),
+        ("progress_every", 0),
     ):
         if getattr(args, name) < low:
             raise ConfigError(f"--{name}", f"must be >= {low}, got {getattr(args, name)}")
@@ -108,6 +117,7 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
         show_bar=not args.quiet and sys.stderr.isatty(),
         close_timeout=args.close_timeout,
         dashboard=args.ray_dashboard,
+        progress_every=0.0 if args.quiet else args.progress_every,
     )
 
 

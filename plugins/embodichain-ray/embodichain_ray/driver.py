@@ -21,12 +21,13 @@ published is merged). Episodes already in the shards when a run starts are not r
 from __future__ import annotations
 
 import logging
-import os
+import sys
 import time
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
+from embodichain_ray.faults import PROG, GenerateError, death_reason, worker_death_note
 from embodichain_ray.spec import GenerateSpec
 from embodichain_ray.worker import BatchResult
 
@@ -42,6 +43,7 @@ class WorkerStats:
     env_steps: int = 0
     busy_s: float = 0.0
     restarts: int = 0
+    pid: int = 0  # the process of its last batch
     dead: bool = False
     died_closing: bool = False
 
@@ -76,36 +78,17 @@ class RunState:
         return self.env_steps / busy if busy > 0 else 0.0
 
 
-def init_ray(spec: GenerateSpec) -> None:
-    """Join ``spec.ray_address``, or start a small local Ray sized to the workers."""
-    import ray
-
-    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    if spec.ray_address:  # the cluster's own settings (token authentication included) apply
-        ray.init(address=spec.ray_address, log_to_driver=False, logging_level=logging.ERROR)
-        return
-    os.environ.setdefault("RAY_AUTH_MODE", "disabled")  # a private instance: no token file in ~/.ray
-    ray.init(
-        num_cpus=spec.workers,
-        include_dashboard=spec.dashboard,
-        object_store_memory=80 * 2**20,
-        log_to_driver=False,
-        logging_level=logging.ERROR,
-        configure_logging=True,
-    )
-
-
 def start_workers(spec: GenerateSpec) -> list:
     """One restartable actor per worker (1 CPU each).
 
     Raises:
-        RuntimeError: the cluster has fewer CPUs than workers (an actor would wait forever).
+        GenerateError: the cluster has fewer CPUs than workers (an actor would wait forever).
     """
     import ray
 
     cpus = int(ray.cluster_resources().get("CPU", 0))
     if cpus < spec.workers:
-        raise RuntimeError(
+        raise GenerateError(
             f"the Ray cluster has {cpus} CPU(s) for {spec.workers} worker(s) of 1 CPU each; "
             "lower --workers or add machines"
         )
@@ -128,8 +111,7 @@ class Scheduler:
     def __init__(self, spec: GenerateSpec, actors: list, state: RunState, bar: Any, done: frozenset = frozenset()):
         self.spec, self.actors, self.state, self.bar = spec, actors, state, bar
         self.queue: deque = deque(k for k in range(spec.episodes) if k not in done)
-        state.saved |= set(done)
-        bar.update(len(done))
+        state.saved |= set(done)  # the bar starts at len(done)
         self.inflight: dict = {}  # ObjectRef -> (worker, batch); batch None: a pid probe
         self.down: list = [False] * len(actors)
         state.workers = [WorkerStats() for _ in actors]
@@ -144,7 +126,7 @@ class Scheduler:
         self.inflight[self.actors[worker].pid.remote()] = (worker, None)
 
     def run(self) -> None:
-        """Run to the end (raises ``KeyboardInterrupt`` on Ctrl-C, ``RuntimeError`` when all workers died)."""
+        """Run to the end (raises ``KeyboardInterrupt`` on Ctrl-C, :class:`GenerateError` when all workers died)."""
         import ray
 
         for w in range(len(self.actors)):
@@ -158,7 +140,9 @@ class Scheduler:
                 elif not self.state.workers[worker].dead:
                     self._probe(worker)
             if not self.inflight and self.queue:
-                raise RuntimeError(f"every worker died ({self.state.error}); {len(self.queue)} episode(s) were not run")
+                raise GenerateError(
+                    f"every worker is gone ({self.state.error}); {len(self.queue)} episode(s) were not run"
+                )
 
     def stop(self, timeout: float) -> None:
         """Ask every worker to stop (the stop file) and take the batches they return within
@@ -188,13 +172,20 @@ class Scheduler:
                 self.queue.extendleft(reversed(batch))
             if not self.down[worker]:
                 self.down[worker], stats.restarts = True, stats.restarts + 1
-            if isinstance(err, ActorDiedError) and batch is None:  # past max_restarts, or it cannot start
-                stats.dead = True
-                self.state.error = f"worker {worker} is gone: {str(err).splitlines()[0]}"
+            gone = isinstance(err, ActorDiedError) and batch is None  # past max_restarts, or it cannot start
+            stats.dead = stats.dead or gone
+            limit = self.spec.max_restarts
+            note = worker_death_note(worker, batch, err, stats.restarts, limit, requeue, gone, stats.pid)
+            if note:
+                print(f"{PROG}: {note}", file=sys.stderr, flush=True)
+            if gone:
+                self.state.error = f"worker {worker} is gone: {death_reason(err, stats.pid)}"
             return False
         self.down[worker] = False
         if batch is not None:
             self._record(stats, value)
+        else:
+            stats.pid = int(value)
         return True
 
     def _record(self, stats: WorkerStats, result: BatchResult) -> None:
@@ -205,6 +196,7 @@ class Scheduler:
             else:
                 self.state.failed[outcome.episode] = outcome.attempts
         stats.episodes += len(self.state.saved) - before
+        stats.pid = result.pid
         stats.failures += result.failed_attempts
         stats.env_steps += result.env_steps
         stats.busy_s += result.seconds
@@ -234,7 +226,11 @@ def close_workers(actors: list, timeout: float = 120.0, state: RunState | None =
             try:
                 ray.get(ref)
             except Exception as err:  # noqa: BLE001  (a shard that failed to finalize keeps its episodes)
-                log.warning("worker %d failed to close its shard: %s", refs[ref], str(err).splitlines()[0])
+                print(
+                    f"{PROG}: worker {refs[ref]} died while closing its shard ({death_reason(err)}); "
+                    "the episodes it saved before are in its shard and are merged",
+                    file=sys.stderr,
+                )
                 if state is not None and state.workers:
                     state.workers[refs[ref]].died_closing = True
     kill_workers(actors)

@@ -19,11 +19,13 @@ from embodichain_ray.driver import (
     RunState,
     Scheduler,
     close_workers,
-    init_ray,
     kill_workers,
     start_workers,
 )
+from embodichain_ray.faults import GenerateError
+from embodichain_ray.local_ray import init_ray
 from embodichain_ray.plan import GeneratePlan
+from embodichain_ray.progress import progress
 from embodichain_ray.spec import WORKER_DIR, GenerateSpec, seed_table
 
 
@@ -82,22 +84,21 @@ def _run_workers(
 ) -> int:
     """Start Ray and the workers, run every episode, end the workers and Ray; the exit code so far."""
     import ray
-    from tqdm import tqdm
 
     from embodichain_core.cli.run_env import _interrupt_code
 
     actors: list = []
-    code, scheduler = 0, None
+    code, scheduler, reaper = 0, None, None
     done = frozenset(_durable(spec, plan))
     state.resumed = len(done)
     if done:
         print(f"{prog}: {len(done)} episode(s) of this run are already in {spec.shards}; running the rest")
     try:
-        init_ray(spec)
+        reaper = init_ray(spec)
         actors = start_workers(spec)
         if on_start is not None:
             on_start(actors)
-        with tqdm(total=spec.episodes, unit="ep", desc=plan.run.task_id, disable=not spec.show_bar) as bar:
+        with progress(spec, plan.run.task_id, initial=len(done)) as bar:
             scheduler = Scheduler(spec, actors, state, bar, done)
             scheduler.run()
     except KeyboardInterrupt as err:
@@ -107,6 +108,9 @@ def _run_workers(
             f"{spec.close_timeout:.0f} s), then the saved episodes are merged",
             file=sys.stderr,
         )
+    except GenerateError as err:  # understood: one line, no traceback
+        print(f"{prog}: {err}", file=sys.stderr)
+        state.error, code = str(err), 1
     except Exception as err:  # noqa: BLE001  (reported with its traceback; the saved episodes are merged)
         traceback.print_exception(err, file=sys.stderr)
         state.error, code = f"{type(err).__name__}: {err}", 1
@@ -114,6 +118,8 @@ def _run_workers(
         state.run_s = time.perf_counter() - state.start_s
         _end_workers(spec, actors, scheduler, state)
         ray.shutdown()
+        if reaper is not None:
+            reaper.stop()
         state.close_s = time.perf_counter() - state.start_s - state.run_s
     return code
 

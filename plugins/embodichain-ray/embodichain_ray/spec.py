@@ -75,6 +75,7 @@ class GenerateSpec:
         close_timeout: seconds a stop (Ctrl-C, ``SIGTERM``) gives the workers to finish their
             round, wait for their writers and close their shards before they are killed.
         dashboard: start the embedded Ray's dashboard (off unless asked).
+        progress_every: without the bar, seconds between plain progress lines (0: none).
     """
 
     task: str | None
@@ -92,6 +93,7 @@ class GenerateSpec:
     show_bar: bool = False
     close_timeout: float = 60.0
     dashboard: bool = False
+    progress_every: float = 0.0
 
     def worker_dir(self, worker: int) -> Path:
         """Where worker ``worker`` records (its recorder's ``save_path``)."""

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import time
 from pathlib import Path
 from typing import Any
 
@@ -32,3 +34,48 @@ def sidecar(root: Path) -> list[dict]:
     """The merged ``meta/embodichain_episodes.jsonl`` lines."""
     text = (Path(root) / "meta" / "embodichain_episodes.jsonl").read_text()
     return [json.loads(line) for line in text.splitlines()]
+
+
+def _stat(pid: int) -> tuple[int, int] | None:
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return int(fields[1]), int(fields[19])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def ray_processes(driver: int, writers: bool = False) -> dict[int, str]:
+    """The driver's descendant processes but its dataset writers (only those with ``writers``): pid -> command line."""
+    parents = {int(p): s[0] for p in os.listdir("/proc") if p.isdigit() and (s := _stat(int(p))) is not None}
+    found: dict[int, str] = {}
+    for pid in parents:
+        up = parents.get(pid)
+        while up is not None and up != driver:
+            up = parents.get(up)
+        if up != driver:
+            continue
+        try:
+            command = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if ("embodichain_lerobot.writer_child" in command) == writers:
+            found[pid] = command
+    return found
+
+
+def still_running(pids: dict[int, str], within: float) -> dict[int, str]:
+    """The processes of ``pids`` (not zombies) still running after up to ``within`` seconds."""
+    deadline = time.monotonic() + within
+    while True:
+        left = {pid: cmd for pid, cmd in pids.items() if _running(pid)}
+        if not left or time.monotonic() > deadline:
+            return left
+        time.sleep(0.2)
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state != "Z"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import threading
 import time
@@ -141,8 +142,14 @@ def test_a_worker_killed_mid_run_still_yields_six_loadable_episodes(
     hook = _kill_after_first_episode(shards, killed)
     config = tiny_config(max_episode_steps=40)  # ~1 s episodes: the kill lands mid-run
     assert _generate(config, out, 2, "--keep-shards", on_start=hook) == 0
-    summary = capsys.readouterr().out
+    captured = capsys.readouterr()
+    summary = captured.out
     assert killed, "worker 0 was never killed"
+    # said in words: which worker, which episodes, what happens now; not Ray's raw notes
+    died = r"worker 0 died while running episode\(s\) \d+ \(its process died( \(pid \d+\))?: killed, or it crashed\); "
+    assert re.search(died + r"Ray restarts it \(restart 1 of 3\) and they run again", captured.err), captured.err
+    assert "A worker died or was killed" not in captured.out + captured.err
+    assert "RpcError" not in captured.out + captured.err
     first = min((shards / "worker-000").glob("*/meta/info.json")).parent.parent
     assert (first / ".embodichain_staging").exists()  # the killed incarnation's shard, never finalized
     rows = [line.split() for line in summary.splitlines() if line.strip().startswith("0 ")]

@@ -1,7 +1,8 @@
 """Kill tests of ``embodichain generate`` with the ``AsyncLeRobotRecorder`` (a writer process
-per worker): a worker killed mid-run or while closing, and a Ctrl-C of the driver. Each checks
-that every episode counted as saved loads with ``LeRobotDataset`` from the merged dataset, and
-that the summary's counts (merged, the worker table) are what the merged dataset holds.
+per worker): a worker killed mid-run or while closing, a Ctrl-C, a ``SIGTERM`` and a ``SIGKILL``
+of the driver. Each checks that every episode counted as saved loads with ``LeRobotDataset``
+from the merged dataset, and that the summary's counts (merged, the worker table) are what the
+merged dataset holds; the driver's signals also that no process of its Ray outlives it.
 
 The timing is set by the writer processes' test gate (``EMBODICHAIN_WRITER_TEST_GATE``: how
 many episodes each may write; a held episode is announced in ``<gate>.held``), never by sleeps.
@@ -13,6 +14,8 @@ import json
 import os
 import re
 import signal
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -21,7 +24,7 @@ from typing import Any, Callable
 import pytest
 from embodichain_ray import cli, run
 from embodichain_ray.spec import episode_seed
-from ray_helpers import load, sidecar
+from ray_helpers import load, ray_processes, sidecar, still_running
 
 from embodichain_lerobot.writer_child import TEST_GATE_ENV
 
@@ -165,3 +168,64 @@ def test_ctrl_c_of_the_driver_merges_every_finished_episode_with_true_counts(
     assert f"resumed      {merged} episode(s)" in summary, summary
     assert _check(again, summary) == 6
     assert [line["generate"]["episode"] for line in sidecar(again)] == list(range(6))
+
+
+def _driver(config: str, out: Path, *extra: str) -> subprocess.Popen:
+    """``embodichain generate`` in its own process (output in ``<out>.stdout`` and ``<out>.stderr``)."""
+    argv = ["--gym_config", config, "--episodes", "6", "--workers", "2", "--seed", "3", "--output", str(out)]
+    with open(f"{out}.stdout", "w") as stdout, open(f"{out}.stderr", "w") as stderr:
+        return subprocess.Popen(
+            [sys.executable, "-m", "embodichain_ray.cli", *argv, "--keep-shards", *extra], stdout=stdout, stderr=stderr
+        )
+
+
+def _ray_of(proc: subprocess.Popen) -> dict[int, str]:
+    found = ray_processes(proc.pid)
+    assert any("raylet" in cmd for cmd in found.values()), found  # the embedded Ray runs under the driver
+    return found
+
+
+def test_sigterm_of_the_driver_stops_it_like_ctrl_c(tmp_path: Path, tiny_config: Any, monkeypatch: Any) -> None:
+    gate, out = Gate(tmp_path, monkeypatch, allowed=1), tmp_path / "merged"
+    config = _async_config(tiny_config, max_episode_steps=40)  # long episodes: the run is not over yet
+    proc = _driver(config, out, "--progress-every", "0.5")  # no terminal: plain progress lines
+    gate.wait_held(["worker-000", "worker-001"], 1)  # each worker: one episode saved, one in its writer
+    ray = _ray_of(proc)
+    gate.open(10_000)
+    proc.send_signal(signal.SIGTERM)
+    code = proc.wait(timeout=300)
+    summary, errors = Path(f"{out}.stdout").read_text(), Path(f"{out}.stderr").read_text()
+    assert code == 143, summary + errors
+    assert "SIGTERM received" not in errors, errors  # no crash dump of Ray's core worker
+    assert "Traceback" not in errors, errors
+    assert "terminated (SIGTERM); the workers finish their writes" in errors, errors
+    assert "stopped      early: terminated (SIGTERM)" in summary, summary
+    assert re.search(r"generate: [1-6]/6 episode\(s\) saved \(\d+%\), [\d.]+ episode\(s\)/s, ETA", summary), summary
+    merged = _check(out, summary)
+    assert 4 <= merged < 6, summary  # the episodes the writers held were flushed and merged
+    assert still_running(ray, within=10) == {}
+
+
+def test_sigkill_of_the_driver_leaves_no_ray_process_and_the_shards_keep_every_saved_episode(
+    tmp_path: Path, tiny_config: Any, monkeypatch: Any, capsys: Any
+) -> None:
+    gate, out = Gate(tmp_path, monkeypatch, allowed=1), tmp_path / "merged"
+    config = _async_config(tiny_config, max_episode_steps=40)
+    proc = _driver(config, out, "--quiet")
+    gate.wait_held(["worker-000", "worker-001"], 1)
+    ray = _ray_of(proc)
+    writers = ray_processes(proc.pid, writers=True)
+    assert len(writers) == 2, writers
+    proc.kill()
+    proc.wait(timeout=60)
+    assert still_running(ray, within=10) == {}  # the raylet's agents included
+    gate.open(10_000)  # the orphaned writers write the episode each one held, finalize and exit
+    assert still_running(writers, within=120) == {}
+    shards = out.with_name("merged.shards")
+    argv = ["--gym_config", config, "--episodes", "6", "--workers", "2", "--seed", "3", "--output", str(out)]
+    code = cli.main([*argv, "--quiet", "--merge-only", "--shards", str(shards)])
+    summary = capsys.readouterr().out
+    merged = int(re.search(r"episodes\s+(\d+)/6 merged", summary).group(1))
+    assert load(out).num_episodes == merged, summary
+    assert merged >= 4, summary  # each worker's saved episode and the one its writer held (more if sent)
+    assert code == (0 if merged == 6 else 1), summary
