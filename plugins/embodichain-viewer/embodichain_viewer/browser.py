@@ -16,7 +16,16 @@ import mujoco
 import numpy as np
 import viser
 
-from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, camera_distance, speed_label
+from embodichain_viewer.state import (
+    SPEEDS,
+    Controls,
+    LatestSlot,
+    Snapshot,
+    camera_distance,
+    camera_pose,
+    reading_rows,
+    speed_label,
+)
 
 
 class BrowserViewer:
@@ -42,6 +51,8 @@ class BrowserViewer:
         self.url = f"http://localhost:{self.port}"
         self.scene = ViserMujocoScene(self.server, model, num_envs=self.num_envs)
         self.scene.show_only_selected = True
+        # world coordinates (no body re-centred), so the page opens on the scene as the window does
+        self.scene.camera_tracking_enabled = False
         self.frames = 0  # snapshots drawn
         self.last: Optional[Snapshot] = None
         self._images: dict[str, Any] = {}
@@ -59,8 +70,14 @@ class BrowserViewer:
             paused = gui.add_checkbox("Paused", initial_value=False, hint="Hold the env loop before its next step")
             step = gui.add_button("Single step", hint="Run one control step, then hold")
             reset = gui.add_button("Reset env", hint="Reset the selected env (its episode is not recorded)")
-            labels = [speed_label(s) for s in SPEEDS]
-            speed = gui.add_dropdown("Speed", labels, initial_value=labels[0], hint="Multiple of real time")
+            self._speeds = {speed_label(s): s for s in SPEEDS}
+            speed = gui.add_dropdown(
+                "Speed",
+                tuple(self._speeds),
+                initial_value=speed_label(self.controls.speed),
+                hint="Multiple of real time",
+            )
+            self._speed = speed
             self._status = gui.add_markdown("waiting for the first step")
         with tabs.add_tab("Scene", icon=viser.Icon.VIDEO):  # env selector, camera
             self.scene.create_scene_gui(camera_distance=camera_distance(self.model))
@@ -85,7 +102,27 @@ class BrowserViewer:
 
         @speed.on_update
         def _(_: Any) -> None:
-            self.controls.speed = SPEEDS[labels.index(str(speed.value))]
+            self.controls.speed = self._speeds.get(str(speed.value), self.controls.speed)
+
+        self.server.on_client_connect(self.frame_scene)
+
+    def frame_scene(self, client: Any) -> None:
+        """Point a newly connected page's camera at the scene as the native window opens
+        (:func:`~embodichain_viewer.state.camera_pose`)."""
+        position, look_at = camera_pose(self.model)
+        client.camera.position = tuple(position)
+        client.camera.look_at = tuple(look_at)
+
+    def show_speed(self) -> None:
+        """Show the loop's speed in the Speed control when it was set elsewhere
+        (``dataset view --speed``), adding a choice for a speed the list lacks."""
+        label = speed_label(self.controls.speed)
+        if self._speed.value == label:
+            return
+        if label not in self._speeds:
+            self._speeds[label] = self.controls.speed
+            self._speed.options = tuple(self._speeds)
+        self._speed.value = label  # type: ignore[misc]  # viser sets it (its stub types the property read-only)
 
     # -- drawing --------------------------------------------------------------------------------
     def _loop(self) -> None:
@@ -94,6 +131,7 @@ class BrowserViewer:
             if int(self.scene.env_idx) != selected:  # the page's env selector moved
                 selected = self.controls.env_idx = int(self.scene.env_idx)
             seen, snap = self.slot.get(seen, timeout=0.1)
+            self.show_speed()
             if snap is not None:
                 self.draw(snap)
 
@@ -161,15 +199,14 @@ def body_poses(
 
 
 def readings_markdown(snap: Snapshot, dropped: int) -> str:
-    """The viewed env's step, reward, reward terms and success as a small Markdown table."""
+    """The viewed env's step and readings (:func:`~embodichain_viewer.state.reading_rows`:
+    success, reward, reward terms, metrics) as a small Markdown table."""
     lines = [
         f"**env {snap.env_idx}**, episode step {snap.episode_step} (step {snap.step})",
         "",
         "| reading | value |",
         "|---|---|",
-        f"| success | {'yes' if snap.success else 'no'} |",
-        f"| reward | {snap.reward:.4g} |",
-        *(f"| {name} | {value:.4g} |" for name, value in snap.terms.items()),
+        *(f"| {name} | {value} |" for name, value in reading_rows(snap)),
         "",
         f"frames skipped by the viewer: {dropped}",
     ]

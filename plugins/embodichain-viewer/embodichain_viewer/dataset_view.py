@@ -5,13 +5,15 @@ re-simulated from its recorded seed and actions by embodichain-lerobot's
 :class:`~embodichain_lerobot.replay.Replayer` (which also compares every frame with the
 recording); the viewer shows the re-simulated scene, with the recorded camera frames
 (``recorded/<feature>``) beside the re-rendered ones. The replay runs at real time
-(``--speed``), and the viewer stays open afterwards until Ctrl-C (or the window closes),
-unless ``--exit``.
+(``--speed``); the comparison is printed as soon as it ends, and the viewer stays open
+afterwards until Ctrl-C, SIGTERM or the window closes (each says goodbye), unless ``--exit``.
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
+import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Optional
@@ -38,13 +40,47 @@ def add_view_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--exit", action="store_true", help="close the viewer when the episode has been replayed")
 
 
+class Terminated(Exception):
+    """SIGTERM arrived (raised in the main thread by :func:`run_view`'s handler)."""
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    raise Terminated()
+
+
 def run_view(args: argparse.Namespace) -> int:
-    """Run ``embodichain dataset view``; 0 when the replay matched the recording, else 1."""
+    """Run ``embodichain dataset view``: the comparison is printed as soon as the episode has
+    been replayed (the viewer may stay open after it); 0 when it matched the recording, 1
+    when not, 130 after Ctrl-C and 143 after SIGTERM during the replay (each says goodbye)."""
     from embodichain_lerobot.replay_cli import format_replay
 
-    result, replayer = view_episode(args.path, args.episode, args.viewer, args.port, args.speed, hold=not args.exit)
-    print(format_replay(result, replayer.atol, replayer.min_psnr))
-    return 0 if result.ok else 1
+    outcome: list[Any] = []
+
+    def report(result: Any, replayer: Any) -> None:
+        outcome.append(result)
+        print(format_replay(result, replayer.atol, replayer.min_psnr), flush=True)
+
+    main = threading.current_thread() is threading.main_thread()  # handlers live in the main thread
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if main else None
+    try:
+        view_episode(args.path, args.episode, args.viewer, args.port, args.speed, not args.exit, on_replayed=report)
+    except (KeyboardInterrupt, Terminated) as stop:
+        return _goodbye(stop, outcome)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    return 0 if outcome and outcome[0].ok else 1
+
+
+def _goodbye(stop: BaseException, outcome: list[Any]) -> int:
+    """Say why the viewer closed and what was compared; the exit status: 143 after SIGTERM,
+    else the comparison's (0 or 1), or 130 when Ctrl-C came before it."""
+    what = "SIGTERM" if isinstance(stop, Terminated) else "Ctrl-C"
+    if outcome:
+        print(f"dataset view: {what}: the viewer is closed (the comparison is above)", flush=True)
+        return 143 if isinstance(stop, Terminated) else (0 if outcome[0].ok else 1)
+    print(f"dataset view: {what} during the replay: the viewer is closed, nothing was compared", flush=True)
+    return 143 if isinstance(stop, Terminated) else 130
 
 
 def view_episode(
@@ -55,6 +91,7 @@ def view_episode(
     speed: float = 1.0,
     hold: bool = True,
     on_open: Optional[Callable[[Any], None]] = None,
+    on_replayed: Optional[Callable[[Any, Any], None]] = None,
 ) -> tuple[Any, Any]:
     """Replay ``episode`` of the dataset at ``path`` with the viewer open.
 
@@ -66,6 +103,8 @@ def view_episode(
         speed: multiple of real time (``0``: as fast as it goes).
         hold: keep the viewer open after the replay until Ctrl-C or its window closes.
         on_open: called with the viewer session once it is open (tests).
+        on_replayed: called with ``(EpisodeReplay, Replayer)`` as soon as the episode has been
+            replayed, before the viewer is held open.
 
     Returns:
         ``(EpisodeReplay, Replayer)``: the frame-by-frame comparison and its tolerances.
@@ -93,6 +132,8 @@ def view_episode(
         if on_open is not None:
             on_open(session)
         result = replayer.replay(episode, episode_seed(files.root, episode, int(files.info["total_episodes"])))
+        if on_replayed is not None:
+            on_replayed(result, replayer)
         if hold:
             _hold(session)
     finally:
@@ -122,9 +163,7 @@ def episode_seed(root: Path, episode: int, total: int) -> Optional[int]:
 
 
 def _hold(session: Any) -> None:
+    """Keep the viewer open until its window closes (Ctrl-C and SIGTERM reach the caller)."""
     print("episode replayed; the viewer stays open (Ctrl-C to close)", flush=True)
-    try:
-        while session.viewer.alive():
-            time.sleep(0.2)
-    except KeyboardInterrupt:
-        pass
+    while session.viewer.alive():
+        time.sleep(0.2)

@@ -26,7 +26,17 @@ from typing import Any, Optional
 import mujoco
 import numpy as np
 
-from embodichain_viewer.state import SPEEDS, Controls, LatestSlot, Snapshot, camera_distance, speed_label
+from embodichain_viewer.state import (
+    CAMERA_AZIMUTH,
+    CAMERA_ELEVATION,
+    Controls,
+    LatestSlot,
+    Snapshot,
+    camera_distance,
+    next_speed,
+    reading_rows,
+    speed_label,
+)
 
 #: GLFW key codes of the keys above.
 KEYS = {"pause": 80, "step": 78, "reset": 82, "next": 93, "prev": 91, "faster": 61, "slower": 45}
@@ -61,7 +71,7 @@ class NativeViewer:
         with self.handle.lock():  # the whole scene in view, as the browser viewer starts
             self.handle.cam.lookat[:] = model.stat.center
             self.handle.cam.distance = camera_distance(model)
-            self.handle.cam.azimuth, self.handle.cam.elevation = 150.0, -25.0
+            self.handle.cam.azimuth, self.handle.cam.elevation = CAMERA_AZIMUTH, CAMERA_ELEVATION
         self._thread = threading.Thread(target=self._loop, name="embodichain-native-viewer", daemon=True)
         self._thread.start()
 
@@ -77,8 +87,7 @@ class NativeViewer:
         elif key in (KEYS["next"], KEYS["prev"]):
             c.env_idx = (c.env_idx + (1 if key == KEYS["next"] else -1)) % self.num_envs
         elif key in (KEYS["faster"], KEYS["slower"]):
-            i = SPEEDS.index(c.speed) + (1 if key == KEYS["faster"] else -1)
-            c.speed = SPEEDS[i % len(SPEEDS)]
+            c.speed = next_speed(c.speed, 1 if key == KEYS["faster"] else -1)
 
     def _loop(self) -> None:
         seen = 0
@@ -124,9 +133,7 @@ def overlay_text(snap: Snapshot, controls: Controls) -> tuple[str, str]:
     rows = [
         ("env", f"{snap.env_idx} / step {snap.episode_step}"),
         ("loop", state),
-        ("success", "yes" if snap.success else "no"),
-        ("reward", f"{snap.reward:.4g}"),
-        *((name, f"{value:.4g}") for name, value in snap.terms.items()),
+        *reading_rows(snap),
         ("keys", HELP),
     ]
     return "\n".join(r[0] for r in rows), "\n".join(r[1] for r in rows)

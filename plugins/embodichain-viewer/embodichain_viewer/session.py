@@ -87,8 +87,8 @@ class ViewerSession:
         info = info or {}
         if "success" in info:
             snap.success = bool(np.asarray(_host(info["success"])).reshape(-1)[i])
-        for name, values in (info.get("rewards") or {}).items():
-            snap.terms[str(name)] = float(np.asarray(_host(values)).reshape(-1)[i])
+        snap.terms = per_env_numbers(info.get("rewards"), i, self.env.num_envs)
+        snap.metrics = per_env_numbers(info.get("metrics"), i, self.env.num_envs)
         snap.images = camera_images(obs, i)
         if self.extra_images is not None:
             snap.images.update(self.extra_images())
@@ -101,6 +101,20 @@ class ViewerSession:
         self._closed = self.controls.closed = True
         atexit.unregister(self.close)
         self.viewer.close()
+
+
+def per_env_numbers(values: Any, env_idx: int, num_envs: int) -> dict[str, float]:
+    """``name -> value of env_idx`` for the entries of ``values`` that hold one number per
+    env (or one for all); others (vectors per env, text) are left out."""
+    out: dict[str, float] = {}
+    for name, value in (values or {}).items() if isinstance(values, dict) else ():
+        try:
+            arr = np.asarray(_host(value), dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            continue
+        if arr.size in (1, num_envs):
+            out[str(name)] = float(arr[env_idx if arr.size == num_envs else 0])
+    return out
 
 
 def camera_images(obs: Any, env_idx: int) -> dict[str, np.ndarray]:

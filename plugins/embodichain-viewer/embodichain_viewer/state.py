@@ -24,6 +24,17 @@ def speed_label(speed: Optional[float]) -> str:
     return "max" if speed is None else f"{speed:g}x"
 
 
+def next_speed(speed: Optional[float], step: int) -> Optional[float]:
+    """The speed ``step`` places along :data:`SPEEDS` from ``speed`` (wrapping around); a
+    speed between two of them (``--speed 0.3``) moves to its neighbour on that side."""
+    if speed in SPEEDS:
+        return SPEEDS[(SPEEDS.index(speed) + step) % len(SPEEDS)]
+    numbers = [s for s in SPEEDS if s is not None]
+    if step > 0:
+        return next((s for s in numbers if s > speed), None)  # type: ignore[operator]
+    return next((s for s in reversed(numbers) if s < speed), None)  # type: ignore[operator]
+
+
 @dataclass
 class Snapshot:
     """The state of every env after one step, and the viewed env's task readings.
@@ -37,6 +48,7 @@ class Snapshot:
         episode_step: that env's step in its episode.
         reward: its reward this step.
         terms: its reward terms (``info["rewards"]``).
+        metrics: the task's metrics (``info["metrics"]``) that are one number per env.
         success: its ``info["success"]``.
         images: its camera images, ``"<sensor>/<key>"`` -> ``(H, W, 3)`` uint8.
     """
@@ -49,8 +61,20 @@ class Snapshot:
     episode_step: int = 0
     reward: float = 0.0
     terms: dict[str, float] = field(default_factory=dict)
+    metrics: dict[str, float] = field(default_factory=dict)
     success: bool = False
     images: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+def reading_rows(snap: Snapshot) -> list[tuple[str, str]]:
+    """The viewed env's readings as ``(name, value)`` rows, the same in both viewers:
+    success, reward, each reward term, each metric."""
+    return [
+        ("success", "yes" if snap.success else "no"),
+        ("reward", f"{snap.reward:.4g}"),
+        *((name, f"{value:.4g}") for name, value in snap.terms.items()),
+        *((name, f"{value:.4g}") for name, value in snap.metrics.items()),
+    ]
 
 
 class LatestSlot:
@@ -127,10 +151,25 @@ class Controls:
             return asked
 
 
+#: Where both viewers' cameras start, around the model's centre (MuJoCo's convention:
+#: azimuth about +z from +x, a negative elevation looks down).
+CAMERA_AZIMUTH, CAMERA_ELEVATION = 150.0, -25.0
+
+
 def camera_distance(model: Any) -> float:
     """How far a viewer's camera starts from the scene: three extents, at most 2.5 m (a
     floor plane makes the model's extent far larger than a table top)."""
     return float(min(3.0 * model.stat.extent, 2.5))
+
+
+def camera_pose(model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(position, look_at)`` in world coordinates of the camera both viewers open with:
+    :func:`camera_distance` from the model's centre, at :data:`CAMERA_AZIMUTH` and
+    :data:`CAMERA_ELEVATION` (what MuJoCo's free camera does with those settings)."""
+    look_at = np.asarray(model.stat.center, dtype=np.float64).copy()
+    az, el = np.deg2rad(CAMERA_AZIMUTH), np.deg2rad(CAMERA_ELEVATION)
+    forward = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    return look_at - camera_distance(model) * forward, look_at
 
 
 def image_rgb(value: Any) -> Optional[np.ndarray]:

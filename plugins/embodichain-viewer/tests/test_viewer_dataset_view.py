@@ -3,6 +3,10 @@ camera frames shown beside the re-rendered ones."""
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -49,3 +53,32 @@ def test_dataset_view_command(dataset: Path, capsys: pytest.CaptureFixture) -> N
     assert "episode 0" in out
     assert embodichain([*argv, "--episode", "7", "--exit"]) == 2
     assert "out of range" in capsys.readouterr().err
+
+
+def test_the_comparison_prints_when_the_replay_ends_and_sigterm_says_goodbye(dataset: Path) -> None:
+    """Held open (no --exit): the comparison is out before the viewer is held, and SIGTERM
+    closes it with a goodbye and exit status 143."""
+    command = [str(Path(sys.executable).parent / "embodichain"), "dataset", "view", str(dataset)]
+    command += ["--viewer", "browser", "--port", str(free_port()), "--speed", "0"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines: list[str] = []
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline()  # type: ignore[union-attr]
+            if not line:
+                break
+            lines.append(line)
+            if line.startswith("episode replayed; the viewer stays open"):
+                break
+        assert lines, "dataset view printed nothing"
+        assert lines[-1].startswith("episode replayed"), "".join(lines)
+        assert any("episode 0" in line for line in lines[:-1]), "".join(lines)  # the comparison, before
+        proc.send_signal(signal.SIGTERM)
+        rest, _ = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, rest
+    assert "dataset view: SIGTERM: the viewer is closed (the comparison is above)" in rest
+    assert "Traceback" not in rest
