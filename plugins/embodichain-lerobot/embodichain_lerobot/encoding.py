@@ -121,6 +121,16 @@ def video_frame_count(path: Path) -> int:
 
 
 @functools.lru_cache(maxsize=None)
+def quiet_encoder_statistics() -> None:
+    """Keep FFmpeg's informational messages off the terminal in this process: libx264 (the
+    ``h264`` codec) prints ten lines of statistics each time a video is closed. Warnings and
+    errors still print. (lerobot hands FFmpeg's own log callback back after each video, so
+    the level, which that callback reads, is what is set here.)"""
+    import av.logging
+
+    av.logging.set_libav_level(av.logging.WARNING)
+
+
 def resolve_vcodec(vcodec: str) -> str:
     """``vcodec``, with ``"auto"`` resolved to a hardware encoder that opens here, else ``"libsvtav1"``.
 

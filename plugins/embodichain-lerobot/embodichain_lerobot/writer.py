@@ -54,6 +54,7 @@ import numpy as np
 from embodichain_lerobot.encoding import (
     batched_image_embedding,
     planar_rgb_channels,
+    quiet_encoder_statistics,
     resolve_vcodec,
     sampled_video_stats,
     video_frame_count,
@@ -164,6 +165,7 @@ class DatasetWriter:
             )
         wait_lerobot()
         quiet_encoder_disk_full()  # a full disk is reported once, by the save
+        quiet_encoder_statistics()  # no libx264 statistics per video (vcodec "h264")
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
         self.root = Path(root)
