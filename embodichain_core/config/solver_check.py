@@ -1,7 +1,7 @@
 """Checks of a robot section's ``solver_cfg`` at config load (before the model is built).
 
 ``{part: {"class_type": name, ...}}``: every part must be one of ``control_parts`` and
-every ``class_type`` a registered solver (bare or ``<plugin>:<name>``). Links and chains
+every ``class_type`` a registered solver (bare or ``<plugin>/<name>``). Links and chains
 need the compiled model; the robot checks them when it is built
 (:mod:`embodichain_core.sim.entities.solvers`).
 """

@@ -33,7 +33,7 @@ def embodichain_register_commands(register: Any) -> None:
     register(
         "dataset",
         "embodichain_lerobot.cli:main",
-        help="Inspect LeRobot datasets: 'info PATH', 'preview PATH --episode N'",
+        help="Inspect, replay and view LeRobot datasets: 'info', 'preview', 'replay', 'view' PATH",
     )
     register(
         "eval-policy",

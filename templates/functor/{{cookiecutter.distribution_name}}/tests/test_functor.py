@@ -99,7 +99,7 @@ def test_env_uses_the_randomization(registered, make_env, check_batched_env):
 
 def test_names_do_not_clash_with_the_installed_plugins():
     """A bare name that another installed plugin registers too becomes ambiguous for users
-    (they must then write '{{ cookiecutter.distribution_name }}:<name>'); rename it."""
+    (they must then write '{{ cookiecutter.distribution_name }}/<name>'); rename it."""
     from embodichain_core.testing import check_name_clashes
 
     check_name_clashes(plugin, name="{{ cookiecutter.distribution_name }}")
