@@ -63,7 +63,8 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Pat
     config.write_text(json.dumps({**data, "max_episodes": 2}))
     assert run_env.main(["--gym_config", str(config), "--quiet"]) == 0
     (dataset,) = [p for p in (root / "data").iterdir() if p.is_dir()]
-    yield {"config": write_config(root / "eval.json", win, root / "unused"), "dataset": dataset}
+    eval_config = write_config(root / "eval.json", win, root / "unused")
+    yield {"config": eval_config, "dataset": dataset, "gen_config": config, "root": root}
     for uid in (demo, win):
         gym.registry.pop(uid, None)
         REGISTERED_ENVS.pop(uid, None)
@@ -73,6 +74,29 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Pat
 def tiny(recorded: dict[str, Path]) -> dict[str, Path]:
     """:func:`recorded` and a tiny ACT trained 2 steps on its dataset."""
     return {**recorded, "policy": train_act(recorded["dataset"], recorded["dataset"].parents[1] / "act")}
+
+
+def state_only(config: Path, out: Path) -> Path:
+    """``config`` without its camera, the recorder listing ``robot/qvel`` as the environment state
+    (what a state-based ACT needs besides ``observation.state``), as the state pipeline's config."""
+    data = json.loads(config.read_text())
+    data.pop("sensor")
+    data["env"]["dataset"]["lerobot"]["params"]["environment_state"] = ["robot/qvel"]
+    data["env"]["dataset"]["lerobot"]["params"]["save_path"] = str(out.parent / "state_data")
+    out.write_text(json.dumps(data))
+    return out
+
+
+@pytest.fixture(scope="module")
+def tiny_state(recorded: dict[str, Path]) -> dict[str, Path]:
+    """A state-only ACT (``observation.state`` + ``observation.environment_state``) trained 2 steps
+    on 2 episodes recorded without a camera, and the matching eval config."""
+    root = recorded["root"]
+    gen = state_only(recorded["gen_config"], root / "state_gen.json")
+    assert run_env.main(["--gym_config", str(gen), "--quiet"]) == 0
+    (dataset,) = [p for p in (root / "state_data").iterdir() if p.is_dir()]
+    config = state_only(recorded["config"], root / "state_eval.json")
+    return {"config": config, "dataset": dataset, "policy": train_act(dataset, root / "state_act")}
 
 
 def lerobot(module: str, argv: list[str], monkeypatch: pytest.MonkeyPatch) -> None:
@@ -100,10 +124,17 @@ def lerobot_eval(tiny: dict[str, Path], out: Path, monkeypatch: pytest.MonkeyPat
     return json.loads((out / "eval_info.json").read_text())
 
 
-@pytest.mark.slow  # ~40 s on 2 cores: records and trains the tiny policy, then evaluates
+@pytest.mark.slow  # ~30 s on 2 cores: records and trains the tiny policy, then evaluates
+@pytest.mark.parametrize("policy", ["camera", "state"])
 def test_lerobot_eval_runs_our_env_and_agrees_with_eval_policy(
-    tiny: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    policy: str, request: pytest.FixtureRequest, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    """The camera policy reads ``observation.images.head`` + ``.state``, the state policy
+    ``observation.state`` + ``.environment_state`` in a config without camera (videos of the scene)."""
+    tiny = request.getfixturevalue("tiny" if policy == "camera" else "tiny_state")
+    inputs = json.loads((tiny["policy"] / "config.json").read_text())["input_features"]
+    assert ("observation.images.head" in inputs) == (policy == "camera")
+    assert ("observation.environment_state" in inputs) == (policy == "state")
     info = lerobot_eval(tiny, tmp_path / "eval", monkeypatch)
     (task,) = info["per_task"]
     metrics = task["metrics"]  # episode k ran with seed 7 + k (lerobot's --seed)
@@ -132,6 +163,14 @@ def test_lerobot_eval_runs_our_env_and_agrees_with_eval_policy(
     for k, (total, mine) in enumerate(zip(metrics["sum_rewards"], ours)):
         if mine["length"] >= ours[k ^ 1]["length"]:
             assert total == pytest.approx(mine["episode_return"], rel=1e-5), k
+    if policy == "state":  # a config whose recorder lists no environment_state: the trained dataset's names
+        data = json.loads(tiny["config"].read_text())
+        del data["env"]["dataset"]["lerobot"]["params"]["environment_state"]
+        bare = tmp_path / "bare.json"
+        bare.write_text(json.dumps(data))
+        again = lerobot_eval({**tiny, "config": bare}, tmp_path / "again", monkeypatch)["per_task"][0]["metrics"]
+        assert again["successes"] == metrics["successes"]
+        assert again["sum_rewards"] == pytest.approx(metrics["sum_rewards"], rel=1e-6)
 
 
 @pytest.mark.slow  # ~40 s on 2 cores: lerobot-train's loop with one evaluation of 2 episodes
@@ -238,6 +277,7 @@ def test_an_env_without_camera_renders_its_scene_for_lerobots_videos(recorded: d
         assert obs["agent_pos"].shape == (1, 7)
         assert vec.call("_max_episode_steps") == (3,)
         assert vec.call("task_description") == ("reach forward",)
+        assert vec.call("task") == (data["id"],)
         frame = vec.envs[0].render()
         assert frame.shape == (240, 320, 3)
         assert frame.dtype == np.uint8

@@ -10,7 +10,7 @@ from typing import Optional
 
 from embodichain_core.config.errors import ConfigError
 
-__all__ = ["check_task", "required_inputs", "check_inputs"]
+__all__ = ["check_task", "required_inputs", "check_inputs", "trained_state_keys"]
 
 #: The non-image inputs lerobot's policies read (``robot_state_feature``, ``env_state_feature``).
 _READ_STATES = ("observation.state", "observation.environment_state")
@@ -50,22 +50,45 @@ def _dataset_inputs(root: Path) -> dict[str, tuple[str, tuple[int, ...]]]:
     return {k: (ft.type.name, tuple(ft.shape)) for k, ft in features.items() if ft.type.name != "ACTION"}
 
 
-def required_inputs(args: Optional[list[str]] = None) -> tuple[str, dict[str, tuple[str, tuple[int, ...]]]]:
-    """``(where, {input: (type, shape)})`` of the inputs the command's policy reads: those of
-    ``--policy.path``, else of the local dataset ``--dataset.root``; ``("", {})`` without either."""
+def _sources(args: Optional[list[str]]) -> tuple[Optional[Path], Optional[Path]]:
+    """``(policy folder, dataset root)`` given on the command line (local folders only)."""
     from lerobot.configs import parser
 
     from embodichain_lerobot.policy_io import find_pretrained_dir
 
     path = parser.get_path_arg("policy", args)
     if path and Path(path).expanduser().exists():
-        folder = find_pretrained_dir(path)
+        return find_pretrained_dir(path), None
+    root = parser.parse_arg("dataset.root", args)
+    if root and (Path(root) / "meta" / "info.json").is_file():
+        return None, Path(root)
+    return None, None
+
+
+def trained_state_keys(args: Optional[list[str]] = None) -> list[str]:
+    """The ``environment_state`` keys of the dataset the command's policy was (or is being)
+    trained on, as ``eval-policy`` reads them for a config without the recorder's list."""
+    from embodichain_lerobot import env_state
+
+    folder, root = _sources(args)
+    if folder is not None:
+        return env_state.trained_state_keys(folder)
+    if root is None:
+        return []
+    features = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))["features"]
+    return env_state.keys_from_names((features.get(env_state.ENV_STATE) or {}).get("names") or [])
+
+
+def required_inputs(args: Optional[list[str]] = None) -> tuple[str, dict[str, tuple[str, tuple[int, ...]]]]:
+    """``(where, {input: (type, shape)})`` of the inputs the command's policy reads: those of
+    ``--policy.path``, else of the local dataset ``--dataset.root``; ``("", {})`` without either."""
+    folder, root = _sources(args)
+    if folder is not None:
         found = ("the policy " + str(folder), _policy_inputs(folder))
+    elif root is not None:
+        found = ("the dataset " + str(root), _dataset_inputs(root))
     else:
-        root = parser.parse_arg("dataset.root", args)
-        if not root or not (Path(root) / "meta" / "info.json").is_file():
-            return "", {}
-        found = ("the dataset " + root, _dataset_inputs(Path(root)))
+        return "", {}
     where, inputs = found
     read = {k: v for k, v in inputs.items() if v[0] == "VISUAL" or k in _READ_STATES}
     return where, read

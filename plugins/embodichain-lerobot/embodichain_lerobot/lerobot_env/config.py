@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from draccus.utils import ParsingError
@@ -10,7 +10,7 @@ from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_lerobot.lerobot_env.checks import check_inputs, check_task, required_inputs
+from embodichain_lerobot.lerobot_env.checks import check_inputs, check_task, required_inputs, trained_state_keys
 from embodichain_lerobot.lerobot_env.view import GYM_ID, build_env, feature_spec, lerobot_sources
 
 __all__ = ["EmbodiChainEnv", "ENV_TYPE", "EnvConfigError"]
@@ -49,12 +49,17 @@ class EmbodiChainEnv(EnvConfig):
         seed: the env config's seed (randomness before the first reset); lerobot seeds
             each episode itself (``--seed``: episode ``k`` resets with ``seed + k``).
         max_steps: the episode step limit (default: the config's ``max_episode_steps``).
+        environment_state: the observation keys of ``observation.environment_state``
+            (default: the config recorder's list, else the names of the dataset the policy
+            was trained on, as ``eval-policy`` reads them).
+        fps: replaced by the env's control rate.
     """
 
     task: Optional[str] = None
     gym_config: Optional[str] = None
     seed: Optional[int] = None
     max_steps: Optional[int] = None
+    environment_state: Optional[list[str]] = field(default=None)
     fps: int = 30  # replaced by the env's control rate (its render_fps)
 
     def __post_init__(self) -> None:
@@ -66,6 +71,8 @@ class EmbodiChainEnv(EnvConfig):
     def _check(self) -> None:
         if not self.gym_config:
             check_task(self.task)
+        if self.environment_state is None:
+            self.environment_state = trained_state_keys()
         if not self.features:
             self._read_env()
         where, inputs = required_inputs()
@@ -76,7 +83,7 @@ class EmbodiChainEnv(EnvConfig):
     def _read_env(self) -> None:
         env, cfg = build_env(self.task, self.gym_config, self.seed, self.max_steps)
         try:
-            spec = feature_spec(env, cfg, self.seed)
+            spec = feature_spec(env, cfg, self.seed, self.environment_state)
             self.fps = int(env.unwrapped.metadata.get("render_fps") or self.fps)
         finally:
             env.close()
@@ -101,7 +108,14 @@ class EmbodiChainEnv(EnvConfig):
     @property
     def gym_kwargs(self) -> dict[str, Any]:
         """What :func:`~embodichain_lerobot.lerobot_env.view.make_view` builds."""
-        return {"task": self.task, "gym_config": self.gym_config, "seed": self.seed, "max_steps": self.max_steps}
+        keys = self.environment_state
+        return {
+            "task": self.task,
+            "gym_config": self.gym_config,
+            "seed": self.seed,
+            "max_steps": self.max_steps,
+            "environment_state": keys,
+        }
 
 
 def _state_type(name: str) -> FeatureType:

@@ -22,7 +22,7 @@ lerobot reads from ``info["final_info"]``; ``render()`` is the colour cameras si
 from __future__ import annotations
 
 import argparse
-from typing import Any, Optional
+from typing import Any, Optional, Sequence
 
 import gymnasium as gym
 import numpy as np
@@ -81,10 +81,12 @@ def build_env(
     return run_env.make_env(plan), plan.cfg
 
 
-def feature_spec(env: Any, cfg: Any, seed: Optional[int]) -> FeatureSpec:
-    """The recorder's features of ``env`` (reset once with ``seed``), with its action."""
+def feature_spec(env: Any, cfg: Any, seed: Optional[int], state_keys: Optional[Sequence[str]] = None) -> FeatureSpec:
+    """The recorder's features of ``env`` (reset once with ``seed``), with its action;
+    ``observation.environment_state`` of the config recorder's list, else of ``state_keys``."""
     obs, _ = env.reset(seed=seed)
-    spec = FeatureSpec(obs, env.unwrapped, environment_state=state_keys_of(getattr(cfg, "dataset", None)))
+    keys = state_keys_of(getattr(cfg, "dataset", None)) or list(state_keys or [])
+    spec = FeatureSpec(obs, env.unwrapped, environment_state=keys)
     spec.set_action(np.zeros((1, _action_dim(env)), np.float32))
     return spec
 
@@ -103,12 +105,15 @@ class LeRobotEnvView(gym.Wrapper):
         env: the task's env, built with ``num_envs=1`` (:func:`build_env`).
         cfg: its env config (the recorder's ``environment_state`` and instruction).
         seed: the seed of the reset that fixes the observation layout.
+        state_keys: the ``environment_state`` keys when the config's recorder lists none.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"]}
 
-    def __init__(self, env: Any, cfg: Any = None, seed: Optional[int] = None):
-        self.feature_spec = feature_spec(env, cfg, seed)
+    def __init__(
+        self, env: Any, cfg: Any = None, seed: Optional[int] = None, state_keys: Optional[Sequence[str]] = None
+    ):
+        self.feature_spec = feature_spec(env, cfg, seed, state_keys)
         self.sources = lerobot_sources(self.feature_spec)
         super().__init__(UnbatchedEnv(env))
         base = env.unwrapped
@@ -120,6 +125,8 @@ class LeRobotEnvView(gym.Wrapper):
         self._max_episode_steps = int(base.max_episode_steps)
         #: given to the policy as ``"task"`` (the recorder's instruction, as ``eval-policy`` does).
         self.task_description = recorded_instruction(cfg) or ""
+        #: the task id (lerobot warns when an env has no ``task``).
+        self.task = str(getattr(env.spec, "id", "") or "")
         self._last: dict[str, Any] = {}
         self._scene: Optional[Any] = None  # the scene renderer of an env without a colour camera
 
@@ -141,10 +148,10 @@ class LeRobotEnvView(gym.Wrapper):
         return gym.spaces.Dict(spaces)
 
     def _obs(self, row: Any) -> dict[str, Any]:
-        flat = flatten_obs(row)
+        flat = {k: np.asarray(v)[None] for k, v in flatten_obs(row).items()}  # a batch of one
         out: dict[str, Any] = {}
         for key, s in self.sources.items():
-            value = s.convert(np.asarray(flat[s.key])[None], 1)[0]
+            value = s.take(flat, 1)[0]
             if key.startswith("pixels/"):
                 out.setdefault("pixels", {})[key.split("/", 1)[1]] = value
             else:
@@ -185,11 +192,12 @@ def make_view(
     gym_config: Optional[str] = None,
     seed: Optional[int] = None,
     max_steps: Optional[int] = None,
+    environment_state: Optional[Sequence[str]] = None,
 ) -> LeRobotEnvView:
     """The entry point of :data:`GYM_ID`: ``gym.make(GYM_ID, task=..., gym_config=...)``."""
     env, cfg = build_env(task, gym_config, seed, max_steps)
     try:
-        return LeRobotEnvView(env, cfg, seed)
+        return LeRobotEnvView(env, cfg, seed, environment_state)
     except BaseException:
         env.close()
         raise
