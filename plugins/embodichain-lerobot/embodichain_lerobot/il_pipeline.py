@@ -1,24 +1,26 @@
-"""Imitation learning from our demonstrations, end to end: generate, train, evaluate.
+"""Imitation learning from our demonstrations, end to end: generate, train, validate, test.
 
-``python -m embodichain_lerobot.il_pipeline --out DIR`` runs, and prints before each step,
-the three commands a user would type:
+``python -m embodichain_lerobot.il_pipeline --out DIR [--policy state|camera]`` runs, and
+prints before each step, the commands a user would type:
 
-1. ``embodichain generate``: scripted demos of the task on Ray workers, one merged
-   dataset (``DIR/demos``), from a copy of the gym config (``DIR/config.json``) without
-   its cameras (``--cameras`` keeps them, for a visuomotor policy) and without videos;
-   the config's recorder must list ``environment_state`` (the task observations a
-   state-based policy needs);
-2. ``lerobot-train``: an ACT policy on ``observation.state`` + ``observation.environment_state``
-   (``DIR/train``), a checkpoint every ``--save_freq`` steps;
-3. ``embodichain eval-policy``: every checkpoint on ``--eval_episodes`` new episodes
-   (``--eval_seed``; the episode seeds are checked against the training demos' seeds:
-   none may be shared), results in ``DIR/eval/<step>.json``.
+1. ``embodichain generate``: scripted demos of the task on Ray workers, one merged dataset
+   (``DIR/demos``), from a copy of the gym config (``DIR/config.json``) made for the recipe
+   (:mod:`embodichain_lerobot.il_recipes`: the state recipe renders no camera, the camera
+   recipe only the cameras named by ``--cameras`` and records no object pose);
+2. ``lerobot-train``: lerobot's ACT on what the recipe reads (``DIR/train``), a checkpoint
+   every ``--save_freq`` steps;
+3. ``embodichain eval-policy`` of every checkpoint on ``--val_episodes`` validation episodes
+   (``--val_seed``), results in ``DIR/eval/val_<step>.json``;
+4. ``embodichain eval-policy`` of the checkpoint with the best validation rate on
+   ``--test_episodes`` test episodes (``--test_seed``), ``DIR/eval/test_<step>.json``: the
+   reported rate, from episodes that chose nothing.
 
-It then writes ``DIR/results.json`` (the commands, the data, each checkpoint's success
-rate) and ``DIR/success_curve.png``. A step whose output exists is not run again, so an
-interrupted pipeline resumes. ACT (not Diffusion): one forward pass per action chunk
-(Diffusion denoises for each), it trains in far fewer steps on a CPU, and chunked actions
-suit the scripted demos' smooth, unimodal trajectories (no VAE needed).
+Training, validation and test episodes never share a seed (checked from the datasets'
+``meta/embodichain_episodes.jsonl`` and the eval files; the run stops if one does). It writes
+``DIR/results.json`` (commands, wall time of each stage, every validation rate and the test
+rate with their 95% Wilson intervals, the test episodes one by one) and
+``DIR/success_curve.png``. A step whose output exists is not run again, so an interrupted
+pipeline resumes.
 """
 
 from __future__ import annotations
@@ -29,58 +31,76 @@ import json
 import shlex
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-__all__ = ["main", "plot_curve", "state_config"]
+from embodichain_lerobot.il_recipes import POLICIES, pipeline_config, train_flags
+from embodichain_lerobot.il_stats import choose_checkpoint, format_rate, rate_summary
+
+__all__ = ["main", "build_parser", "MAIN_JOB", "CAMERA_CONFIG"]
 
 
-def _main_job() -> Optional[Path]:
-    """The main job's config shipped by ``embodichain-tasks`` (``None`` when it is not installed)."""
+def _tasks_config(name: str) -> Optional[Path]:
+    """A config shipped by ``embodichain-tasks`` (``None`` when it is not installed)."""
     spec = importlib.util.find_spec("embodichain_tasks")
     if spec is None or not spec.submodule_search_locations:
         return None
-    return Path(next(iter(spec.submodule_search_locations))) / "configs" / "main_job.json"
+    return Path(next(iter(spec.submodule_search_locations))) / "configs" / name
 
 
-#: The default ``--config``: PickFork-v1's main job (``embodichain-tasks``).
-MAIN_JOB = _main_job()
-#: ACT settings for a state-only policy on a CPU (lerobot-train flags).
-ACT_FLAGS = (
-    "--policy.type=act",
-    "--policy.chunk_size=20",
-    "--policy.n_action_steps=10",
-    "--policy.dim_model=256",
-    "--policy.dim_feedforward=1024",
-    "--policy.n_encoder_layers=2",
-    "--policy.n_decoder_layers=1",
-    "--policy.use_vae=false",
-    "--policy.optimizer_lr=1e-4",
-    "--policy.push_to_hub=false",
-)
+#: The state recipe's default ``--config``: PickFork-v1's data-generation job.
+MAIN_JOB = _tasks_config("main_job.json")
+#: The camera recipe's default ``--config``: the same job with a 96x96 policy camera.
+CAMERA_CONFIG = _tasks_config("pick_fork_camera.json")
 
 
-def state_config(source: Path, cameras: bool) -> dict[str, Any]:
-    """The gym config to generate and evaluate with: no cameras (unless ``cameras``), no videos.
+def build_parser() -> argparse.ArgumentParser:
+    """The pipeline's options (defaults: the documented PickFork-v1 runs)."""
+    p = argparse.ArgumentParser(prog="python -m embodichain_lerobot.il_pipeline", description=__doc__.splitlines()[0])
+    add = p.add_argument
+    add("--out", type=Path, required=True, help="output folder (config, demos, train, eval, results)")
+    add("--policy", choices=POLICIES, default="state", help="what the policy reads (default: state)")
+    add("--config", type=Path, help="gym config with a LeRobot recorder (default: the recipe's PickFork-v1 config)")
+    add("--cameras", nargs="+", default=["policy_cam"], help="camera recipe: the cameras it reads (default policy_cam)")
+    add("--demos", type=int, default=100, help="demonstrations to generate (default 100)")
+    add("--workers", type=int, default=2, help="Ray workers of embodichain generate (default 2)")
+    add("--num_envs", type=int, default=2, help="envs per worker, and of eval-policy (default 2)")
+    add("--seed", type=int, default=0, help="generate's run seed and lerobot-train's seed (default 0)")
+    add("--steps", type=int, default=5000, help="lerobot-train steps (default 5000)")
+    add("--save_freq", type=int, default=1000, help="steps between checkpoints (default 1000)")
+    add("--batch_size", type=int, default=64, help="lerobot-train batch size (default 64)")
+    add("--num_workers", type=int, default=0, help="lerobot-train data loader processes (default 0)")
+    add("--val_episodes", type=int, default=50, help="validation episodes per checkpoint (default 50)")
+    add("--val_seed", type=int, default=1_000_000, help="validation reset seed (default 1000000)")
+    add("--test_episodes", type=int, default=100, help="test episodes of the chosen checkpoint (default 100)")
+    add("--test_seed", type=int, default=2_000_000, help="test reset seed (default 2000000)")
+    add("--max_steps", type=int, help="step limit of evaluated episodes (default: the config's max_episode_steps)")
+    add("--device", default="cpu", help="lerobot-train's policy device (default cpu)")
+    add(
+        "--no_visual_randomization",
+        action="store_true",
+        help="generate and evaluate without the config's visual randomization (env.filter_visual_rand)",
+    )
+    return p
 
-    Raises:
-        ValueError: the config has no LeRobot recorder listing ``environment_state``.
-    """
-    data = json.loads(source.read_text(encoding="utf-8"))
-    recorders = [f for f in (data.get("env", {}).get("dataset") or {}).values() if "Recorder" in str(f.get("func"))]
-    if not recorders or not (recorders[0].get("params") or {}).get("environment_state"):
-        raise ValueError(f"{source}: its LeRobot recorder must list params.environment_state (see docs/datasets.md)")
-    if not cameras:
-        data["sensor"] = []
-        recorders[0]["params"]["use_videos"] = False
-    return data
+
+def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    names = ("demos", "steps", "save_freq", "batch_size", "val_episodes", "test_episodes", "workers", "num_envs")
+    for name in (*names, "max_steps"):
+        if getattr(args, name) is not None and getattr(args, name) < 1:
+            parser.error(f"--{name} must be at least 1, got {getattr(args, name)}")
+    if args.config is None:
+        args.config = CAMERA_CONFIG if args.policy == "camera" else MAIN_JOB
+    if args.config is None:
+        parser.error("--config is required: embodichain-tasks (the default PickFork-v1 configs) is not installed")
 
 
-def _run(cmd: list[str], log: list[str], env: Optional[dict] = None) -> None:
+def _run(cmd: list[str], log: list[str]) -> None:
     line = " ".join(shlex.quote(c) for c in cmd)
     log.append(line)
     print(f"\n$ {line}", flush=True)
-    subprocess.run(cmd, check=True, env=env)
+    subprocess.run(cmd, check=True)
 
 
 def _bin(name: str) -> str:
@@ -96,145 +116,133 @@ def _checkpoints(train_dir: Path) -> list[tuple[int, Path]]:
     return sorted(found)
 
 
-def _seeds(dataset: Path) -> set[int]:
+def _train_seeds(dataset: Path) -> set[int]:
     from embodichain_lerobot.reading import read_sidecar
 
     return {int(r["episode_seed"]) for r in read_sidecar(dataset) if r.get("episode_seed") is not None}
 
 
-def plot_curve(points: Sequence[tuple[int, float]], path: Path, title: str) -> Path:
-    """A success-rate-over-training-steps PNG (Pillow; no plotting library needed)."""
-    from PIL import Image, ImageDraw
+class _Stages:
+    """Runs the stages, timing each, and keeps the commands for ``results.json``."""
 
-    w, h, m = 640, 400, 60
-    img = Image.new("RGB", (w, h), "white")
-    d = ImageDraw.Draw(img)
-    d.rectangle([m, m // 2, w - m // 2, h - m], outline="black")
-    last = max((s for s, _ in points), default=1) or 1
-    for frac in (0.0, 0.25, 0.5, 0.75, 1.0):
-        y = h - m - frac * (h - 1.5 * m)
-        d.line([m - 4, y, m, y], fill="black")
-        d.text((8, y - 6), f"{frac:.2f}", fill="black")
-    xy = [(m + s / last * (w - 1.5 * m), h - m - r * (h - 1.5 * m)) for s, r in points]
-    if len(xy) > 1:
-        d.line(xy, fill="blue", width=2)
-    for (x, y), (s, r) in zip(xy, points):
-        d.ellipse([x - 3, y - 3, x + 3, y + 3], fill="blue")
-        d.text((x - 10, h - m + 6), str(s), fill="black")
-    d.text((m, 8), title, fill="black")
-    d.text((w // 2 - 40, h - 22), "training step", fill="black")
-    img.save(path)
-    return path
+    def __init__(self, args: argparse.Namespace, out: Path):
+        self.args, self.out = args, out
+        self.config, self.demos, self.train = out / "config.json", out / "demos", out / "train"
+        self.log: list[str] = []
+        self.seconds: dict[str, float] = {}
 
+    def timed(self, stage: str, fn: Any, *a: Any) -> Any:
+        start = time.monotonic()
+        try:
+            return fn(*a)
+        finally:
+            self.seconds[stage] = round(self.seconds.get(stage, 0.0) + time.monotonic() - start, 1)
 
-def build_parser() -> argparse.ArgumentParser:
-    """The pipeline's options (defaults: the documented PickFork-v1 run)."""
-    p = argparse.ArgumentParser(prog="python -m embodichain_lerobot.il_pipeline", description=__doc__.splitlines()[0])
-    add = p.add_argument
-    add("--config", type=Path, default=MAIN_JOB, help="gym config with a LeRobot recorder (default: the main job)")
-    add("--out", type=Path, required=True, help="output folder (config, demos, train, eval, results)")
-    add("--demos", type=int, default=100, help="demonstrations to generate (default 100)")
-    add("--workers", type=int, default=2, help="Ray workers of embodichain generate (default 2)")
-    add("--num_envs", type=int, default=2, help="envs per worker, and of eval-policy (default 2)")
-    add("--seed", type=int, default=0, help="generate's run seed (default 0)")
-    add("--steps", type=int, default=5000, help="lerobot-train steps (default 5000)")
-    add("--save_freq", type=int, default=1000, help="steps between checkpoints (default 1000)")
-    add("--batch_size", type=int, default=64, help="lerobot-train batch size (default 64)")
-    add("--eval_episodes", type=int, default=50, help="episodes per evaluated checkpoint (default 50)")
-    add("--eval_seed", type=int, default=1_000_000, help="eval-policy's reset seed (default 1000000)")
-    add("--cameras", action="store_true", help="keep the config's cameras (a visuomotor policy; use a GPU)")
-    add("--device", default="cpu", help="lerobot-train's policy device (default cpu)")
-    return p
+    def generate(self) -> None:
+        a = self.args
+        if self.demos.exists():
+            print(f"{self.demos} exists: not generated again", flush=True)
+            return
+        cmd = [_bin("embodichain"), "generate", "--gym_config", str(self.config), "--episodes", str(a.demos)]
+        cmd += ["--workers", str(a.workers), "--num_envs", str(a.num_envs), "--seed", str(a.seed)]
+        _run([*cmd, "--output", str(self.demos), "--quiet"], self.log)
 
+    def train_policy(self) -> None:
+        a = self.args
+        if any(step >= a.steps for step, _ in _checkpoints(self.train)):
+            print(f"{self.train} has its last checkpoint: not trained again", flush=True)
+            return
+        if self.train.exists():  # lerobot-train refuses an existing output_dir; resuming is its own flag
+            raise SystemExit(
+                f"{self.train} holds an unfinished training: resume it with lerobot-train "
+                f"--config_path={self.train}/checkpoints/last/pretrained_model/train_config.json --resume=true, "
+                "or delete it"
+            )
+        cmd = [_bin("lerobot-train"), f"--dataset.repo_id=local/{self.demos.name}", f"--dataset.root={self.demos}"]
+        cmd += [*train_flags(a.policy), f"--policy.device={a.device}", f"--output_dir={self.train}"]
+        cmd += [f"--steps={a.steps}", f"--save_freq={a.save_freq}", f"--batch_size={a.batch_size}"]
+        cmd += [f"--num_workers={a.num_workers}", "--log_freq=100", "--wandb.enable=false", f"--seed={a.seed}"]
+        _run(cmd, self.log)
 
-def _generate(args: argparse.Namespace, config: Path, demos: Path, log: list[str]) -> None:
-    if demos.exists():
-        print(f"{demos} exists: not generated again", flush=True)
-        log.append(f"# {demos} existed")
-        return
-    cmd = [_bin("embodichain"), "generate", "--gym_config", str(config), "--episodes", str(args.demos)]
-    cmd += ["--workers", str(args.workers), "--num_envs", str(args.num_envs), "--seed", str(args.seed)]
-    _run([*cmd, "--output", str(demos), "--quiet"], log)
-
-
-def _train(args: argparse.Namespace, demos: Path, train: Path, log: list[str]) -> None:
-    if any(step >= args.steps for step, _ in _checkpoints(train)):
-        print(f"{train} has its last checkpoint: not trained again", flush=True)
-        return
-    cmd = [_bin("lerobot-train"), f"--dataset.repo_id=local/{demos.name}", f"--dataset.root={demos}", *ACT_FLAGS]
-    cmd += [f"--policy.device={args.device}", f"--output_dir={train}", f"--steps={args.steps}"]
-    cmd += [f"--save_freq={args.save_freq}", f"--batch_size={args.batch_size}", "--num_workers=0"]
-    cmd += ["--log_freq=100", "--wandb.enable=false", f"--seed={args.seed}"]
-    if args.cameras:
-        cmd.append("--policy.pretrained_backbone_weights=null")  # nothing is downloaded
-    if train.exists():  # lerobot-train refuses an existing output_dir; resuming is lerobot's own flag
-        raise SystemExit(
-            f"{train} holds an unfinished training: resume it with lerobot-train "
-            f"--config_path={train}/checkpoints/last/pretrained_model/train_config.json --resume=true, "
-            "or delete it"
-        )
-    _run(cmd, log)
-
-
-def _evaluate(args: argparse.Namespace, config: Path, train: Path, out: Path, log: list[str]) -> list[dict]:
-    rows = []
-    for step, policy in _checkpoints(train):
-        result = out / "eval" / f"{step:06d}.json"
+    def evaluate(self, policy: Path, split: str, step: int, episodes: int, seed: int) -> dict[str, Any]:
+        """One eval-policy run (skipped when its JSON exists); its rate summary."""
+        result = self.out / "eval" / f"{split}_{step:06d}.json"
         if not result.is_file():
-            cmd = [_bin("embodichain"), "eval-policy", "--policy", str(policy), "--gym_config", str(config)]
-            cmd += ["--episodes", str(args.eval_episodes), "--num_envs", str(args.num_envs)]
-            _run([*cmd, "--seed", str(args.eval_seed), "--json", str(result), "--quiet"], log)
+            cmd = [_bin("embodichain"), "eval-policy", "--policy", str(policy), "--gym_config", str(self.config)]
+            cmd += ["--episodes", str(episodes), "--num_envs", str(self.args.num_envs), "--headless"]
+            cmd += ["--max_steps", str(self.args.max_steps)] if self.args.max_steps else []
+            _run([*cmd, "--seed", str(seed), "--json", str(result), "--quiet"], self.log)
         data = json.loads(result.read_text(encoding="utf-8"))
-        rows.append(
-            {
-                "step": step,
-                "success_rate": data["success_rate"],
-                "episodes": data["num_episodes"],
-                "mean_length": data["mean_length"],
-                "seeds": [e.get("episode_seed") for e in data["episodes"]],
-            }
-        )
-    return rows
+        return {"step": step, "json": str(result), **rate_summary(data["episodes"])}
+
+
+def _check_seeds(trained: set[int], validation: list[dict], test: dict) -> dict[str, int]:
+    """Stop when a validation or test episode reuses a training seed, or test a validation one."""
+    val = {r["seed"] for row in validation for r in row["per_episode"]}
+    tst = {r["seed"] for r in test["per_episode"]}
+    shared = {"validation_training": len(val & trained), "test_training": len(tst & trained)}
+    shared["test_validation"] = len(tst & val)
+    if any(shared.values()):
+        raise SystemExit(f"evaluation episodes share seeds with other splits: {shared}")
+    return shared
+
+
+def _results(stages: _Stages, validation: list[dict], test: dict, shared: dict, trained: set, policy: Path) -> dict:
+    a = stages.args
+    return {
+        "recipe": a.policy,
+        "config": str(a.config),
+        "visual_randomization": not a.no_visual_randomization,
+        "cameras": list(a.cameras) if a.policy == "camera" else [],
+        "demos": {"path": str(stages.demos), "episodes": len(trained), "seed": a.seed},
+        "policy": {"type": "act", "flags": list(train_flags(a.policy)), "steps": a.steps, "batch_size": a.batch_size},
+        "validation": {"episodes": a.val_episodes, "seed": a.val_seed, "max_steps": a.max_steps},
+        "test_split": {"episodes": a.test_episodes, "seed": a.test_seed, "max_steps": a.max_steps},
+        "seeds_shared": shared,
+        "seconds": stages.seconds,
+        "checkpoints": [{k: v for k, v in r.items() if k != "per_episode"} for r in validation],
+        "chosen_step": test["step"],
+        "chosen_policy": str(policy),
+        "test": test,
+        "commands": stages.log,
+    }
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the pipeline; 0 when it ran to the end."""
+    from embodichain_lerobot.il_plots import plot_success_curve
     from embodichain_lerobot.reading import go_offline
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.config is None:
-        parser.error("--config is required: embodichain-tasks (the default PickFork-v1 main job) is not installed")
+    _check_args(parser, args)
+    try:
+        config = pipeline_config(args.config, args.policy, args.cameras)
+    except ValueError as err:
+        parser.error(str(err))
+    if args.no_visual_randomization:
+        config.setdefault("env", {})["filter_visual_rand"] = True
     go_offline()  # lerobot-train and eval-policy read local folders only
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
-    config = out / "config.json"
-    config.write_text(json.dumps(state_config(args.config, args.cameras), indent=1), encoding="utf-8")
-    log: list[str] = []
-    demos, train = out / "demos", out / "train"
-    _generate(args, config, demos, log)
-    _train(args, demos, train, log)
-    rows = _evaluate(args, config, train, out, log)
-    trained = _seeds(demos)
-    shared = sorted({s for r in rows for s in r.pop("seeds") if s in trained})
-    if shared:
-        raise SystemExit(f"eval episodes share seeds with the training demos: {shared[:5]}")
-    results = {
-        "config": str(args.config),
-        "demos": {"path": str(demos), "episodes": len(trained), "seed": args.seed},
-        "policy": {"type": "act", "flags": list(ACT_FLAGS), "steps": args.steps, "batch_size": args.batch_size},
-        "eval": {"episodes": args.eval_episodes, "seed": args.eval_seed, "seeds_shared_with_training": 0},
-        "checkpoints": rows,
-        "commands": log,
-    }
+    stages = _Stages(args, out)
+    stages.config.write_text(json.dumps(config, indent=1), encoding="utf-8")
+    stages.timed("generate", stages.generate)
+    stages.timed("train", stages.train_policy)
+    ckpts = _checkpoints(stages.train)
+    validation = [
+        stages.timed("validate", stages.evaluate, p, "val", s, args.val_episodes, args.val_seed) for s, p in ckpts
+    ]
+    chosen = choose_checkpoint(validation)
+    policy = dict(ckpts)[chosen["step"]]
+    test = stages.timed("test", stages.evaluate, policy, "test", chosen["step"], args.test_episodes, args.test_seed)
+    trained = _train_seeds(stages.demos)
+    results = _results(stages, validation, test, _check_seeds(trained, validation, test), trained, policy)
     (out / "results.json").write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
-    curve = plot_curve(
-        [(r["step"], r["success_rate"]) for r in rows],
-        out / "success_curve.png",
-        f"{json.loads(config.read_text())['id']}: eval success rate ({args.eval_episodes} episodes)",
-    )
-    for r in rows:
-        print(f"step {r['step']:>7}  success {r['success_rate']:.2f}  ({r['episodes']} episodes)")
+    curve = plot_success_curve(validation, test, out / "success_curve.png", f"{config['id']} ({args.policy} policy)")
+    for r in validation:
+        print(f"step {r['step']:>7}  validation {format_rate(r)}")
+    print(f"chosen step {test['step']}: test {format_rate(test)}")
     print(f"results {out / 'results.json'}\ncurve   {curve}")
     return 0
 

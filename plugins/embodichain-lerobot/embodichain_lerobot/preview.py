@@ -3,8 +3,8 @@
 * cameras: a contact sheet PNG (rows: camera streams, depth maps (normalised per
   row, black: nothing in range) and masks (one colour per entity); columns: frames
   sampled evenly over the episode) or an mp4 of all streams side by side;
-* ``state_action.png``: ``observation.state`` and ``action`` over time, with
-  matplotlib when it is installed, else a plain line drawing with Pillow.
+* ``state_action.png``: ``observation.state`` and ``action`` over time (matplotlib:
+  one panel each, time axis in seconds, one labelled line per joint).
 """
 
 from __future__ import annotations
@@ -146,7 +146,7 @@ def _series(ds: Any, key: str) -> Optional[np.ndarray]:
 
 
 def plot_state_action(ds: Any, path: Path, title: str) -> Path:
-    """``observation.state`` and ``action`` over time (matplotlib, else Pillow).
+    """``observation.state`` and ``action`` over time, drawn with matplotlib.
 
     ``ds`` is an :class:`~embodichain_lerobot.episode_reader.EpisodeFiles` or a ``LeRobotDataset``.
     """
@@ -154,13 +154,11 @@ def plot_state_action(ds: Any, path: Path, title: str) -> Path:
     t = np.arange(n) / float(ds.fps)
     series = {k: v for k in ("observation.state", "action") if (v := _series(ds, k)) is not None}
     names = {k: ds.features[k].get("names") for k in series}
-    try:
-        import matplotlib
+    import matplotlib
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return _plot_with_pillow(t, series, path)
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(len(series), 1, figsize=(9, 3 * len(series)), sharex=True, squeeze=False)
     for ax, (key, values) in zip(axes[:, 0], series.items()):
         labels = names[key] if isinstance(names[key], list) else [f"{key}[{i}]" for i in range(values.shape[1])]
@@ -173,26 +171,6 @@ def plot_state_action(ds: Any, path: Path, title: str) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
-    return path
-
-
-def _plot_with_pillow(t: np.ndarray, series: dict[str, np.ndarray], path: Path) -> Path:
-    width, height = 900, 260
-    img = Image.new("RGB", (width, height * max(1, len(series))), "white")
-    draw = ImageDraw.Draw(img)
-    palette = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75)]
-    for r, (key, values) in enumerate(series.items()):
-        y0, lo, hi = r * height, float(values.min()), float(values.max())
-        draw.text((5, y0 + 5), key, fill="black")
-        span, tmax = (hi - lo) or 1.0, float(t[-1]) if len(t) > 1 else 1.0
-        for i in range(values.shape[1]):
-            pts = [
-                (40 + (width - 60) * float(x) / tmax, y0 + height - 20 - (height - 40) * (float(v) - lo) / span)
-                for x, v in zip(t, values[:, i])
-            ]
-            if len(pts) > 1:
-                draw.line(pts, fill=palette[i % len(palette)], width=2)
-    img.save(path)
     return path
 
 

@@ -119,14 +119,23 @@ def test_preview_writes_cameras_and_a_state_action_plot(
             assert Image.open(cams).size[0] > 2 * 96  # the sampled frames side by side
 
 
-def test_plot_without_matplotlib_is_a_simple_png(
-    dataset: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setitem(sys.modules, "matplotlib", None)
+def test_the_state_action_plot_has_labelled_axes(dataset: Path, tmp_path: Path) -> None:
+    import matplotlib.pyplot as plt
+
     from embodichain_lerobot.reading import load_dataset
 
-    path = preview.plot_state_action(load_dataset(dataset, episodes=[0]), tmp_path / "plot.png", "t")
-    assert Image.open(path).size == (900, 520)
+    seen: list = []
+    real_savefig = plt.Figure.savefig
+
+    def spy(fig: "plt.Figure", *a: object, **kw: object) -> None:
+        seen.extend((ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes)
+        real_savefig(fig, *a, **kw)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(plt.Figure, "savefig", spy)
+        path = preview.plot_state_action(load_dataset(dataset, episodes=[0]), tmp_path / "plot.png", "t")
+    assert Image.open(path).size == (900, 600)  # two panels, 9 x 3 inches each at 100 dpi
+    assert seen == [("", "observation.state"), ("time (s)", "action")]
 
 
 @pytest.mark.parametrize(

@@ -12,7 +12,8 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_lerobot.config import parse_params
 from embodichain_lerobot.env_state import ENV_STATE, keys_from_names, state_keys_of, state_source, trained_state_keys
 from embodichain_lerobot.features import Source
-from embodichain_lerobot.il_pipeline import MAIN_JOB, plot_curve, state_config
+from embodichain_lerobot.il_pipeline import MAIN_JOB
+from embodichain_lerobot.il_recipes import pipeline_config
 
 
 def _sources() -> list[Source]:
@@ -61,18 +62,16 @@ def test_the_keys_come_from_the_recorder_or_from_the_training_dataset(tmp_path: 
     assert trained_state_keys(policy) == ["opening", "fork_pose"]
 
 
-def test_the_pipeline_config_drops_the_cameras_and_needs_environment_state(tmp_path: Path) -> None:
-    data = state_config(MAIN_JOB, cameras=False)
+def test_the_state_recipe_drops_the_cameras_and_needs_environment_state(tmp_path: Path) -> None:
+    data = pipeline_config(MAIN_JOB, "state")
     assert data["sensor"] == []
     assert data["env"]["dataset"]["lerobot"]["params"]["use_videos"] is False
-    assert state_config(MAIN_JOB, cameras=True)["sensor"]
+    assert data["env"]["dataset"]["lerobot"]["params"]["environment_state"] == ["fork_pose"]
     plain = json.loads(MAIN_JOB.read_text())
     del plain["env"]["dataset"]["lerobot"]["params"]["environment_state"]
     (tmp_path / "c.json").write_text(json.dumps(plain))
     with pytest.raises(ValueError, match="environment_state"):
-        state_config(tmp_path / "c.json", cameras=False)
-    png = plot_curve([(0, 0.0), (1000, 0.4), (2000, 0.7)], tmp_path / "curve.png", "test")
-    assert png.stat().st_size > 1000
+        pipeline_config(tmp_path / "c.json", "state")
 
 
 def test_merged_shards_keep_one_env_description(tmp_path: Path) -> None:

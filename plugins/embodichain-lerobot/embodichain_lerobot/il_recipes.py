@@ -1,0 +1,127 @@
+"""The imitation pipeline's two recipes: what the policy reads, and how ACT is trained on it.
+
+* ``state``: ``observation.state`` (the joints) and ``observation.environment_state`` (the
+  object poses the recorder's ``environment_state`` lists). No camera is rendered.
+* ``camera``: ``observation.state`` and the images of the cameras named by ``cameras``
+  (``observation.images.<uid>``); no object pose. The other cameras of the config are
+  dropped, so only what the policy reads is rendered.
+
+Both train lerobot's ACT, on the CPU by default: one forward pass gives a chunk of actions,
+the scripted demonstrations are unimodal (no VAE), and the model is small (256-wide
+transformer, 2 encoder layers, 1 decoder layer). The camera recipe trains its ResNet-18 from
+scratch (nothing is downloaded), at the transformer's learning rate (lerobot's default
+backbone rate, 1e-5, suits ImageNet weights being fine-tuned, not a backbone learning from
+nothing), with colour jitter and small random shifts of the images (the augmentation that
+matters most for small image datasets).
+
+Example:
+    >>> config = pipeline_config(Path("pick_fork_camera.json"), "camera", ["policy_cam"])  # doctest: +SKIP
+    >>> flags = train_flags("camera")                                                     # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Sequence
+
+__all__ = ["POLICIES", "ACT_FLAGS", "CAMERA_FLAGS", "pipeline_config", "train_flags", "camera_uids"]
+
+#: The recipes ``--policy`` accepts.
+POLICIES = ("state", "camera")
+
+#: ACT settings shared by both recipes (lerobot-train flags).
+ACT_FLAGS = (
+    "--policy.type=act",
+    "--policy.chunk_size=20",
+    "--policy.n_action_steps=10",
+    "--policy.dim_model=256",
+    "--policy.dim_feedforward=1024",
+    "--policy.n_encoder_layers=2",
+    "--policy.n_decoder_layers=1",
+    "--policy.use_vae=false",
+    "--policy.optimizer_lr=1e-4",
+    "--policy.push_to_hub=false",
+)
+
+#: Image augmentation of the camera recipe: at most 3 of these per frame (lerobot's
+#: ``ImageTransforms``); ``shift`` moves the image by up to 4% of its size, no rotation.
+IMAGE_TRANSFORMS = {
+    "brightness": {"weight": 1.0, "type": "ColorJitter", "kwargs": {"brightness": [0.8, 1.2]}},
+    "contrast": {"weight": 1.0, "type": "ColorJitter", "kwargs": {"contrast": [0.8, 1.2]}},
+    "saturation": {"weight": 1.0, "type": "ColorJitter", "kwargs": {"saturation": [0.5, 1.5]}},
+    "hue": {"weight": 1.0, "type": "ColorJitter", "kwargs": {"hue": [-0.05, 0.05]}},
+    "shift": {"weight": 1.0, "type": "RandomAffine", "kwargs": {"degrees": 0, "translate": [0.04, 0.04]}},
+}
+
+#: What the camera recipe adds to :data:`ACT_FLAGS`.
+CAMERA_FLAGS = (
+    "--policy.pretrained_backbone_weights=null",
+    "--policy.optimizer_lr_backbone=1e-4",
+    "--dataset.image_transforms.enable=true",
+    "--dataset.image_transforms.max_num_transforms=3",
+    "--dataset.image_transforms.tfs=" + json.dumps(IMAGE_TRANSFORMS),
+)
+
+
+def train_flags(policy: str) -> tuple[str, ...]:
+    """The lerobot-train policy (and augmentation) flags of a recipe."""
+    return ACT_FLAGS + (CAMERA_FLAGS if policy == "camera" else ())
+
+
+def camera_uids(data: dict[str, Any]) -> list[str]:
+    """The uids of the config's camera sensors (``sensor_type`` ending in ``Camera``)."""
+    return [str(s.get("uid")) for s in data.get("sensor") or [] if str(s.get("sensor_type", "")).endswith("Camera")]
+
+
+def _recorder(data: dict[str, Any], source: Path) -> dict[str, Any]:
+    recorders = [f for f in ((data.get("env") or {}).get("dataset") or {}).values() if "Recorder" in str(f.get("func"))]
+    if not recorders:
+        raise ValueError(f"{source}: env.dataset has no LeRobot recorder to record the demonstrations with")
+    params: dict[str, Any] = recorders[0].setdefault("params", {})
+    return params
+
+
+def _keep_cameras(data: dict[str, Any], cameras: Sequence[str], source: Path) -> None:
+    available = camera_uids(data)
+    if not available:
+        raise ValueError(
+            f"{source}: sensor: the config has no camera, and --policy camera reads images; add a Camera "
+            "sensor (docs/datasets.md, 'A policy camera') or use --policy state"
+        )
+    missing = [c for c in cameras if c not in available]
+    if missing or not cameras:
+        raise ValueError(
+            f"{source}: sensor: no camera {', '.join(map(repr, missing)) or '(none named)'}; "
+            f"the config's cameras: {', '.join(available)}"
+        )
+    data["sensor"] = [s for s in data["sensor"] if s.get("uid") in cameras]
+
+
+def pipeline_config(source: Path, policy: str, cameras: Sequence[str] = ()) -> dict[str, Any]:
+    """The gym config to generate and evaluate with, for the ``policy`` recipe.
+
+    ``state``: no camera, no video; the recorder must list ``environment_state``.
+    ``camera``: only the cameras named in ``cameras``, recorded as videos (the recorder's
+    ``use_videos`` is turned on), and no ``environment_state`` (the policy must not read
+    object poses).
+
+    Raises:
+        ValueError: an unknown recipe; no recorder; ``state`` without ``environment_state``;
+            ``camera`` on a config without a camera or naming one it does not have.
+    """
+    if policy not in POLICIES:
+        raise ValueError(f"policy: unknown recipe {policy!r}; choose one of {', '.join(POLICIES)}")
+    data = json.loads(source.read_text(encoding="utf-8"))
+    params = _recorder(data, source)
+    params["use_videos"] = policy == "camera"
+    if policy == "state":
+        if not params.get("environment_state"):
+            raise ValueError(
+                f"{source}: its LeRobot recorder must list params.environment_state (see docs/datasets.md)"
+            )
+        data["sensor"] = []
+        return data
+    _keep_cameras(data, cameras, source)
+    params.pop("environment_state", None)
+    return data
