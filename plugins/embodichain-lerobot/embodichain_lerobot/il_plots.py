@@ -28,6 +28,7 @@ def plot_success_curve(
     test: Optional[Mapping[str, Any]],
     path: Path,
     title: str,
+    label: str = "validation",
 ) -> Path:
     """Success rate over training steps, each point with its 95% Wilson interval.
 
@@ -38,6 +39,7 @@ def plot_success_curve(
             ``None`` when the test episodes were not run.
         path: the PNG to write.
         title: the plot's title.
+        label: what the per-checkpoint episodes were (the legend's word for them).
 
     Returns:
         ``path``.
@@ -57,7 +59,7 @@ def plot_success_curve(
             yerr=_errors(validation),
             fmt="o-",
             capsize=4,
-            label=f"validation ({n} episodes per checkpoint)",
+            label=f"{label} ({n} episodes per checkpoint)",
         )
     if test is not None:
         ax.errorbar(
