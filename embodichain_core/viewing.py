@@ -3,9 +3,11 @@
 ``sim_cfg.viewer`` (``--viewer``) is one of :data:`VIEWER_MODES`: ``auto`` picks MuJoCo's
 native window when a display is available (``DISPLAY`` or ``WAYLAND_DISPLAY`` set) and the
 browser viewer otherwise; ``native`` and ``browser`` force one; ``none`` opens nothing.
-The viewers live in the ``embodichain-viewer`` plugin: with ``headless: true`` (or
-``viewer: none``) nothing of it is imported, and when it is missing a non-headless env
-stops with one message naming the install command.
+Plugins provide the viewers through the ``embodichain_register_viewers`` hook
+(:class:`~embodichain_core.plugins.hookspecs.ViewerRegister`); :func:`viewer_opener` looks
+one up. With ``headless: true`` (or ``viewer: none``) no viewer module is imported, and when
+no installed plugin provides the viewer asked for, a non-headless env stops with one message
+naming the viewers that are registered and what to install.
 
 Example:
     >>> resolve_viewer_mode("auto", {"DISPLAY": ":0"})
@@ -18,15 +20,21 @@ from __future__ import annotations
 
 import contextlib
 import os
-from typing import Any, Iterator, Mapping, Optional
+from typing import Any, Callable, Iterator, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_core.plugins import failed_plugins, viewer_registry
+from embodichain_core.plugins.hookspecs import VIEWER_NAMES, hook_name
+from embodichain_core.plugins.registry import AmbiguousNameError, Registry, TargetImportError, join_names
 from embodichain_core.utils.suggest import did_you_mean
 
 #: Values of ``sim_cfg.viewer`` / ``--viewer``.
-VIEWER_MODES = ("auto", "native", "browser", "none")
-#: The command that installs the viewers (printed when they are missing).
-INSTALL_HINT = "pip install -e plugins/embodichain-viewer  (or: pip install embodichain-viewer)"
+VIEWER_MODES = ("auto", *VIEWER_NAMES, "none")
+#: What a missing viewer's message tells to install.
+INSTALL_ADVICE = (
+    f"install a plugin that registers viewers (hook {hook_name('viewers')}; the 'Installing' section of "
+    "the viewer documentation, viewer.md, names one), then check it with `embodichain list viewers`"
+)
 _forced: Optional[str] = None  # set by force_viewer()
 
 
@@ -89,7 +97,7 @@ def attach_viewer(env: Any) -> Optional[Any]:
         ``close()``), or ``None``.
 
     Raises:
-        ConfigError: a bad ``sim_cfg.viewer``, or the viewer plugin is not installed.
+        ConfigError: a bad ``sim_cfg.viewer``, or no plugin provides that viewer (:func:`viewer_opener`).
     """
     sim_cfg = env.cfg.sim_cfg
     if _forced is None and getattr(sim_cfg, "headless", True):
@@ -97,12 +105,46 @@ def attach_viewer(env: Any) -> Optional[Any]:
     mode = resolve_viewer_mode(_forced or str(getattr(sim_cfg, "viewer", "auto")))
     if mode == "none":
         return None
+    opener = viewer_opener(mode)
+    return opener(env, mode, port=int(getattr(sim_cfg, "viewer_port", 8080)))
+
+
+def viewer_opener(name: str) -> Callable[..., Any]:
+    """The opener a plugin registered for viewer ``name`` (``"native"`` or ``"browser"``), imported.
+
+    Raises:
+        ConfigError: at ``sim_cfg.headless``: no installed plugin registers that viewer (the message
+            names the viewers that are registered and what to install), several do, or its module
+            fails to import. Each message also offers running headless.
+    """
+    registry = viewer_registry()
     try:
-        from embodichain_viewer.session import open_session
-    except ImportError as err:
-        raise ConfigError(
-            "sim_cfg.headless",
-            f"headless: false opens a viewer, which needs the embodichain-viewer plugin ({err}); "
-            f"install it with: {INSTALL_HINT}; or run headless (--headless / --viewer none)",
-        ) from None
-    return open_session(env, mode, port=int(getattr(sim_cfg, "viewer_port", 8080)))
+        entry = registry.find(name)
+        if entry is not None:
+            return entry.resolve()
+        problem = _missing(registry, name)
+    except AmbiguousNameError as err:
+        problem = (
+            f"several plugins register it ({join_names(err.providers)}); keep one of them installed, or "
+            "block the others with EMBODICHAIN_BLOCK_PLUGINS"
+        )
+    except TargetImportError as err:
+        problem = str(err)
+    raise ConfigError(
+        "sim_cfg.headless",
+        f"headless: false opens the {name} viewer, but {problem}; or run headless (--headless / --viewer none)",
+    )
+
+
+def _missing(registry: Registry, name: str) -> str:
+    """Why no ``name`` viewer is there: the viewers registered, the plugins that failed, what to install."""
+    entries = registry.entries()
+    have = (
+        "the viewers registered are " + join_names([f"{e.name} ({e.provider})" for e in entries])
+        if entries
+        else "no viewers are registered"
+    )
+    failed = [plugin for plugin, _ in failed_plugins()]
+    if failed:
+        have += f"; plugins that failed to load: {join_names(failed)} (`embodichain list plugins -v`)"
+    return f"no installed plugin registers it ({have}); {INSTALL_ADVICE}"

@@ -7,6 +7,11 @@ and its table of allowed upward imports ``| importer | imports | why |`` (when i
 ``from ... import`` statement of ``embodichain_core/**`` (function-local ones included, those
 under ``if TYPE_CHECKING:`` not) must go from a module to its own layer, to a layer its row
 allows, or be listed as an upward import; and every listed upward import must still exist.
+
+The core knows no plugin: no module of ``embodichain_core/**`` imports a plugin package
+(the ``embodichain_*`` packages of ``plugins/*/`` and ``tests/fixture_plugins/*/``), by an
+import statement (function-local ones included, ``if TYPE_CHECKING:`` ones not) or by
+``importlib.import_module`` / ``__import__`` of a constant name.
 """
 
 from __future__ import annotations
@@ -108,6 +113,49 @@ def core_imports() -> list[Import]:
                 target = _resolve(modules, module, alias)
                 if target != name:
                     found.append(Import(name, target, f"{path.relative_to(ROOT)}:{node.lineno}"))
+    return found
+
+
+#: The plugin packages the issue of the core boundary names; :func:`plugin_packages` must find them all.
+KNOWN_PLUGIN_PACKAGES = {
+    f"embodichain_{name}"
+    for name in ("functors", "robots", "sensors", "lerobot", "tasks", "ray", "rl", "assets", "viewer")
+}
+_DYNAMIC_IMPORTS = ("import_module", "__import__")
+
+
+def plugin_packages() -> set[str]:
+    """The top-level packages of the plugins of this repository (and of the test fixture plugins)."""
+    roots = [ROOT / "plugins", ROOT / "tests" / "fixture_plugins"]
+    return {p.parent.name for root in roots for p in root.glob("*/embodichain_*/__init__.py")}
+
+
+def _imported_names(node: ast.AST) -> list[str]:
+    """The absolute module names an import statement or a constant dynamic import names."""
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    if isinstance(node, ast.ImportFrom):
+        return [node.module] if node.module and not node.level else []
+    if isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant):
+        func = ast.unparse(node.func).split(".")[-1]
+        if func in _DYNAMIC_IMPORTS and isinstance(node.args[0].value, str):
+            return [node.args[0].value]
+    return []
+
+
+def plugin_imports(pkg_dir: Path, packages: set[str]) -> list[str]:
+    """``path:line: module`` of every import of one of ``packages`` under ``pkg_dir``,
+    function-local ones included, ``if TYPE_CHECKING:`` ones left out."""
+    found = []
+    for path in sorted(pkg_dir.rglob("*.py")):
+        tree = ast.parse(path.read_text(), filename=str(path))
+        skip = _type_checking_nodes(tree)
+        for node in ast.walk(tree):
+            if id(node) in skip:
+                continue
+            for name in _imported_names(node):
+                if name.split(".")[0] in packages:
+                    found.append(f"{path.relative_to(pkg_dir.parent)}:{node.lineno}: {name}")
     return found
 
 
@@ -242,3 +290,40 @@ def test_imports_follow_the_layers(text: str) -> None:
     assert not broken, "imports against docs/architecture.md's layers:\n" + "\n".join(broken)
     stale = sorted(set(rules.upward) - seen_upward)
     assert not stale, f"docs/architecture.md lists upward imports that no longer happen: {stale}"
+
+
+# --- the core knows no plugin ----------------------------------------------------------------
+
+
+def test_the_core_imports_no_plugin_package() -> None:
+    packages = plugin_packages()
+    assert KNOWN_PLUGIN_PACKAGES <= packages, f"plugin packages not found: {sorted(KNOWN_PLUGIN_PACKAGES - packages)}"
+    found = plugin_imports(ROOT / PKG, packages)
+    assert not found, (
+        "embodichain_core imports plugin packages (a plugin registers what the core looks up; docs/plugins.md):\n"
+        + "\n".join(found)
+    )
+
+
+def test_the_plugin_import_check_sees_local_and_dynamic_imports(tmp_path: Path) -> None:
+    pkg = tmp_path / "core"
+    pkg.mkdir()
+    (pkg / "mod.py").write_text(
+        "from __future__ import annotations\n"
+        "import importlib\n"
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n"
+        "    from embodichain_viewer.session import ViewerSession\n"
+        "import embodichain_functors.events\n"
+        "def f():\n"
+        "    from embodichain_viewer.session import open_session\n"
+        "    return importlib.import_module('embodichain_lerobot.writer')\n"
+        "from . import sibling\n"
+        "import embodichain_functorsx\n"
+    )
+    found = plugin_imports(pkg, KNOWN_PLUGIN_PACKAGES)
+    assert found == [
+        "core/mod.py:6: embodichain_functors.events",
+        "core/mod.py:8: embodichain_viewer.session",
+        "core/mod.py:9: embodichain_lerobot.writer",
+    ]

@@ -1,4 +1,4 @@
-"""``embodichain list {plugins,tasks,functors,robots,solvers,sensors,assets,commands}``.
+"""``embodichain list {plugins,tasks,functors,robots,solvers,sensors,assets,commands,viewers}``.
 
 Prints an aligned table (or JSON with ``--json``) of what the installed plugins
 registered, with the provider of every row. Lazy targets are shown as ``"module:attr"``
@@ -22,7 +22,7 @@ from typing import Any, Callable, Sequence
 
 from embodichain_core.plugins.registry import Entry, TargetImportError, describe_target
 
-WHAT = ("plugins", "tasks", "functors", "robots", "solvers", "sensors", "assets", "commands")
+WHAT = ("plugins", "tasks", "functors", "robots", "solvers", "sensors", "assets", "commands", "viewers")
 
 #: (header, key) of the table columns of every listing.
 COLUMNS: dict[str, list[tuple[str, str]]] = {
@@ -57,6 +57,7 @@ COLUMNS: dict[str, list[tuple[str, str]]] = {
     ],
     "assets": [("NAME", "name"), ("ROOT", "root"), ("PROVIDER", "provider")],
     "commands": [("COMMAND", "name"), ("TARGET", "target"), ("PROVIDER", "provider"), ("HELP", "help")],
+    "viewers": [("VIEWER", "name"), ("OPENER", "target"), ("PROVIDER", "provider"), ("DESCRIPTION", "description")],
 }
 
 
@@ -266,6 +267,10 @@ def _command_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "target": entry.target_repr, "help": entry.meta.get("help") or entry.description}
 
 
+def _viewer_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+    return {**_base(entry), "target": entry.target_repr, "description": _description(entry, resolve)}
+
+
 _ROWS: dict[str, Callable[[Entry, bool], dict[str, Any]]] = {
     "tasks": _task_row,
     "functors": _functor_row,
@@ -274,4 +279,5 @@ _ROWS: dict[str, Callable[[Entry, bool], dict[str, Any]]] = {
     "sensors": _sensor_row,
     "assets": _asset_row,
     "commands": _command_row,
+    "viewers": _viewer_row,
 }

@@ -14,6 +14,7 @@ from embodichain_core.plugins.hookspecs import FunctorRegister as FunctorRegiste
 from embodichain_core.plugins.hookspecs import RobotRegister as RobotRegister
 from embodichain_core.plugins.hookspecs import SensorRegister as SensorRegister
 from embodichain_core.plugins.hookspecs import TaskRegister as TaskRegister
+from embodichain_core.plugins.hookspecs import ViewerRegister as ViewerRegister
 from embodichain_core.plugins.hookspecs import hookimpl as hookimpl
 from embodichain_core.plugins.manager import CORE_PLUGIN_NAME as CORE_PLUGIN_NAME
 from embodichain_core.plugins.manager import NameClash as NameClash
@@ -33,7 +34,8 @@ from embodichain_core.plugins.registry import describe_target as describe_target
 
 # Each accessor returns the registry of one kind (loading the plugins first). Entry meta:
 # functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
-# ``max_episode_steps``/``kwargs``/``config``/``description``; commands ``help``. Robot,
+# ``max_episode_steps``/``kwargs``/``config``/``description``; commands ``help``; viewers
+# ``description``. Robot,
 # solver and sensor lookups ignore case and a trailing ``Cfg``.
 functor_registry = partial(get_registry, "functors")
 robot_registry = partial(get_registry, "robots")
@@ -42,6 +44,7 @@ sensor_registry = partial(get_registry, "sensors")
 asset_registry = partial(get_registry, "assets")
 task_registry = partial(get_registry, "tasks")
 command_registry = partial(get_registry, "commands")
+viewer_registry = partial(get_registry, "viewers")
 
 
 def get_functor(name: str) -> Any:

@@ -16,6 +16,9 @@ hookspec = pluggy.HookspecMarker(PROJECT_NAME)
 hookimpl = pluggy.HookimplMarker(PROJECT_NAME)
 
 FUNCTOR_KINDS = ("event", "observation", "reward", "action", "dataset")
+#: The viewers ``sim_cfg.viewer`` can open (MuJoCo's native window, a page in the browser);
+#: plugins register an opener for each through ``embodichain_register_viewers``.
+VIEWER_NAMES = ("native", "browser")
 #: Functor category removed by ``filter_visual_rand`` (with names ``randomize_*``).
 VISUAL_RANDOMIZATION = "randomization.visual"
 
@@ -131,6 +134,28 @@ class TaskRegister(BaseRegister):
         return self._add(task_id, entry_point, meta)
 
 
+class ViewerRegister(BaseRegister):
+    """``register(name, opener, description="")``: ``name`` is the viewer ``sim_cfg.viewer``
+    selects (one of :data:`VIEWER_NAMES`); ``opener(env, name, port=...)`` opens it on a built
+    env and returns its session (``before_step()``, ``after_step(obs, reward, info)``, ``close()``).
+    Give ``opener`` as a ``"module:function"`` string so that a headless run imports nothing of it."""
+
+    kind, noun = "viewers", "viewer"
+
+    def __call__(self, name: str, opener: Any, description: str = "") -> Entry:
+        if name not in VIEWER_NAMES:
+            raise ValueError(
+                f"viewer {name!r} from {self.provider!r}: a viewer is registered as one of "
+                f"{', '.join(VIEWER_NAMES)}.{did_you_mean(str(name), VIEWER_NAMES)}"
+            )
+        if not (is_lazy_target(opener) or callable(opener)):
+            raise TypeError(
+                f"viewer {name!r} from {self.provider!r}: the opener must be a 'module:function' string or a "
+                f"callable, got {type(opener).__name__}"
+            )
+        return self._add(name, opener, {"description": description})
+
+
 #: kind -> register class, in the order the hooks are called.
 KINDS: dict[str, type[BaseRegister]] = {
     r.kind: r
@@ -142,6 +167,7 @@ KINDS: dict[str, type[BaseRegister]] = {
         SensorRegister,
         FunctorRegister,
         TaskRegister,
+        ViewerRegister,
     )
 }
 
@@ -189,3 +215,8 @@ def embodichain_register_tasks(register: TaskRegister) -> None:
 @hookspec
 def embodichain_register_commands(register: CommandRegister) -> None:
     """Register ``embodichain`` subcommands."""
+
+
+@hookspec
+def embodichain_register_viewers(register: ViewerRegister) -> None:
+    """Register the viewers a non-headless env opens (``sim_cfg.viewer``)."""

@@ -35,6 +35,8 @@ from pathlib import Path
 from typing import Any, Optional, Sequence
 
 PROG = "embodichain dataset"
+#: How to install the embodichain-viewer plugin, which ``dataset view`` needs.
+VIEWER_INSTALL = "pip install -e plugins/embodichain-viewer  (or: pip install embodichain-viewer)"
 #: Episodes ``info`` lists without ``--episodes``.
 EPISODE_LINES = 20
 
@@ -104,9 +106,7 @@ def _view(args: argparse.Namespace) -> int:
     try:
         from embodichain_viewer.dataset_view import run_view
     except ImportError:
-        from embodichain_core.viewing import INSTALL_HINT
-
-        print(f"{PROG} view: needs the embodichain-viewer plugin; install it with: {INSTALL_HINT}", file=sys.stderr)
+        print(f"{PROG} view: needs the embodichain-viewer plugin; install it with: {VIEWER_INSTALL}", file=sys.stderr)
         return 2
     return run_view(args)
 

@@ -42,7 +42,7 @@ class ViewerSession:
         #: Further images shown beside the env's cameras (``name -> (H, W, 3)`` uint8), asked for
         #: at each snapshot: ``embodichain dataset view`` shows the recorded frames with it.
         self.extra_images: Optional[Callable[[], dict[str, np.ndarray]]] = None
-        # a script that never closes its env (the seed tutorial) must not exit mid-frame
+        # a script that never closes its env (the modular-env tutorial) must not exit mid-frame
         atexit.register(self.close)
 
     def before_step(self) -> None:
