@@ -11,8 +11,8 @@ flags of shape ``(N,)``; ``gym.make(task_id)`` still builds the batched env (a b
 one). ``"async"`` needs the ``"spawn"`` start method (MuJoCo's threads do not survive a
 ``fork``):
 
-Example:
-    >>> venv = gym.make_vec("PushCube-v1", num_envs=4, vectorization_mode="async",
+Example (``task_id``: any registered task, ``embodichain list tasks``):
+    >>> venv = gym.make_vec(task_id, num_envs=4, vectorization_mode="async",
     ...                     vector_kwargs={"context": "spawn"})  # doctest: +SKIP
     >>> _, reward, *_ = venv.step(venv.action_space.sample())  # doctest: +SKIP
     >>> reward.shape  # doctest: +SKIP

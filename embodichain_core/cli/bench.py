@@ -22,7 +22,7 @@ BENCHMARKS = {
     "render": ("render_throughput.py", "camera frames/s vs a bare mujoco.Renderer"),
     "ik": ("ik_throughput.py", "batched IK solves/s"),
     "scene": ("scene_build.py", "scene build time, cold and warm coacd cache"),
-    "record": ("record_throughput.py", "recorded env-steps/s, sync vs async LeRobot recorder"),
+    "record": ("record_throughput.py", "recorded env-steps/s, sync vs async dataset recorder"),
 }
 
 

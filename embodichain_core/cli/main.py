@@ -6,8 +6,8 @@ Subcommands are ``"module:function"`` targets from the ``commands`` registry
 ``embodichain <command> ...`` forwards the rest of the arguments verbatim, so
 ``embodichain <command> --help`` reaches the command's own parser.
 
-A command is named by its bare name (``dataset``) or its qualified name
-(``embodichain-lerobot/dataset``). A bare name that several plugins register is an
+A command is named by its bare name (``list``) or its qualified name
+(``<plugin>/<name>``: ``embodichain-core/list``). A bare name that several plugins register is an
 error naming every provider and the qualified forms.
 
 Example:

@@ -57,13 +57,13 @@ with 143. Either way the env is closed, so dataset recorders finalize (the episo
 stay loadable), and the summary is printed with a `stopped` line saying why.
 
 **Dataset outputs.** Before the env is built, each dataset functor class that defines
-`preflight(params, path)` checks its output. The LeRobot recorder needs its
-`params.save_path` (default `$EMBODICHAIN_DEFAULT_DATASET_ROOT`, else `./outputs/datasets`)
-to be a writable folder on a filesystem with at least `params.min_free_mb` MB free
-(default 256); otherwise the run stops with a config error naming
-`env.dataset.<name>.params.save_path`. `--filter_dataset_saving` records nothing and skips
-the check. A disk that fills up later ends the run with a `DiskFullError`, the saved
-episodes intact (see datasets.md).
+`preflight(params, path)` checks its output: a dataset recorder, for example, that its
+output folder is writable and has room (its keys and defaults are documented with the plugin
+that provides it; for recorded datasets, datasets.md). A failed check stops the run with a
+config error naming the key, such as `env.dataset.<name>.params.save_path`.
+`--filter_dataset_saving` records nothing and skips the checks. An error while recording (a
+disk that fills up, say) ends the run like any other: the env is closed and the episodes
+saved before it stay loadable.
 
 **Exit codes.** 0 success, 1 stopped by an error, 2 configuration error, 130 interrupted
 (Ctrl-C), 143 terminated (SIGTERM).

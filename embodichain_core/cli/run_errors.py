@@ -1,8 +1,8 @@
 """How ``embodichain run-env`` fails: output checks before the build, error reports after.
 
 * :func:`preflight_outputs` runs before the env is built: every dataset functor
-  class with a ``preflight(params, path)`` classmethod checks its output (the
-  LeRobot recorder: the dataset folder is writable and has room). It raises a
+  class with a ``preflight(params, path)`` classmethod checks its output (a dataset
+  recorder: its output folder is writable and has room). It raises a
   :class:`~embodichain_core.config.errors.ConfigError` naming the config key.
 * :func:`report_error` prints an error raised while building or running: the
   traceback, then one line naming the functor that raised it (its config path, e.g.
