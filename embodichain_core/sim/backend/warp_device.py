@@ -108,7 +108,7 @@ class StepGraphs:
         self.device = device
         self._graphs: dict[Any, Any] = {}
         # Warp records CPU launches too: a replay skips the Python cost of ~100 kernel launches
-        # per MuJoCo step (measured 7x faster on the CPU); CUDA capture needs a memory pool
+        # per MuJoCo step (docs/performance.md, section 4); CUDA capture needs a memory pool
         self.enabled = device == "cpu" or bool(wp.is_mempool_enabled(device))
 
     def clear(self) -> None:

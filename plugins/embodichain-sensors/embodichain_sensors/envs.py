@@ -1,8 +1,8 @@
 """Per-env model and data for the sensors, written into reused buffers.
 
-``BatchSim.get_model(i)`` and ``get_data(i)`` return new copies (a fresh MjData
-costs hundreds of microseconds); the batch can also write env ``i`` into an
-existing ``MjModel``/``MjData``, which costs a few microseconds.
+``BatchSim.get_model(i)`` and ``get_data(i)`` return new copies; the batch can also
+write env ``i`` into an existing ``MjModel``/``MjData``, which is far cheaper (measured in
+docs/performance.md, section 4).
 """
 
 from __future__ import annotations
