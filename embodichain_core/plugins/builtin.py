@@ -13,7 +13,7 @@ from embodichain_core.plugins.hookspecs import CommandRegister, hookimpl
 BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
     "list": (
         "embodichain_core.cli.list_cmd:main",
-        "List installed plugins, tasks, functors, robots, sensors, assets or commands",
+        "List installed plugins, tasks, functors, robots, solvers, sensors, assets, commands or viewers",
     ),
     "run-env": (
         "embodichain_core.cli.run_env:main",
