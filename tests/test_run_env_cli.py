@@ -211,7 +211,9 @@ def test_demo_action_list_retries_failed_attempts(
     # the failed first attempt counts in the success rate; both envs' retries were saved
     assert "successes    2/4 (50.0%)" in out
     assert "discarded    2 failed demo episode(s)" in out
-    assert "saved        2 episode(s); failed 2" in out
+    assert "saved        2 episode(s)\n" in out
+    assert "failed       2 demo episode(s) did not succeed" in out
+    assert "lost" not in out
     assert f"data         {tmp_path / 'data'}" in out
     assert sorted(SAVED) == [0, 1]  # the successful attempt of both envs was committed once
     assert run_env.main(["--gym_config", str(config), "--quiet", "--filter_dataset_saving"]) == 0

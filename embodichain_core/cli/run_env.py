@@ -31,6 +31,7 @@ from embodichain_core.cli.run_loops import (  # noqa: F401  (re-exported)
     RunPlan,
     RunStats,
     describe_space,
+    lost_episodes,
     make_env,
     output_paths,
     preview,
@@ -187,7 +188,8 @@ def _run(env: Any, plan: RunPlan, stats: RunStats, show_bar: bool) -> int:
         return 0
     except KeyboardInterrupt as err:
         code, stats.error = _interrupt_code(err)
-        print(f"{PROG}: {stats.error}; closing (committed episodes are kept)", file=sys.stderr)
+        with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C this soon: the close still runs
+            print(f"{PROG}: {stats.error}; closing (committed episodes are kept)", file=sys.stderr)
         return code
     except RunError as err:
         print(f"{PROG}: {err}", file=sys.stderr)
@@ -201,19 +203,28 @@ def _run(env: Any, plan: RunPlan, stats: RunStats, show_bar: bool) -> int:
 def _close(env: Any, stats: RunStats) -> int:
     """Close the env, which finalizes the dataset (saved episodes stay loadable); 0 or 1."""
     manager = getattr(env.unwrapped, "dataset_manager", None)
-    code = 0
+    code, interrupted = 0, False
     try:
         env.close()
+    except KeyboardInterrupt as err:  # a second Ctrl-C: stop waiting, still say what was saved
+        (code, reason), interrupted = _interrupt_code(err), True
+        stats.error = stats.error or reason
+        print(
+            f"{PROG}: {reason} again: stopped closing; the summary counts what is saved now (a dataset "
+            "writer process still finishes the episodes it holds)",
+            file=sys.stderr,
+        )
     except Exception as err:  # e.g. a recorder that failed to finalize
         code = report_error(PROG, err, "closing the env")
         stats.error = stats.error or describe_error(err)
     if manager is not None:
-        try:
-            finalized = list(manager.finalize())  # idempotent: what close() finalized
+        try:  # idempotent: what close() finalized (not waited for again after a second Ctrl-C)
+            finalized = [] if interrupted else list(manager.finalize())
         except Exception:  # reported above
             finalized = []
         stats.data_paths = output_paths(env.unwrapped, finalized)
         stats.saved = written_episodes(env.unwrapped)
+        stats.lost = lost_episodes(env.unwrapped, stats.saved)
     return code
 
 

@@ -8,7 +8,8 @@
   traceback, then one line naming the functor that raised it (its config path, e.g.
   ``env.events.drive_damping``, from
   :func:`~embodichain_core.managers.manager_base.functor_path_of`) and the error.
-* :class:`RunError` is an expected way for a run to end (message only).
+* :class:`~embodichain_core.errors.RunError` is an expected way for a run to end (message
+  only, no traceback, whether it stops the run or the closing of the env).
 """
 
 from __future__ import annotations
@@ -19,16 +20,13 @@ import traceback
 from typing import Any
 
 from embodichain_core.config.errors import ConfigError, join_path
+from embodichain_core.errors import RunError
 from embodichain_core.managers.cfg import DatasetFunctorCfg
 from embodichain_core.managers.manager_base import functor_path_of, iter_section, resolve_func
 
 #: Exit code of a run stopped by an error (configuration errors exit with 2, Ctrl-C with 130).
 EXIT_ERROR = 1
 EXIT_CONFIG = 2
-
-
-class RunError(RuntimeError):
-    """A run cannot go on for a known reason; reported without a traceback."""
 
 
 def preflight_outputs(cfg: Any) -> None:
@@ -63,7 +61,8 @@ def describe_error(err: BaseException) -> str:
 def report_error(prog: str, err: BaseException, during: str = "") -> int:
     """Print ``err`` to stderr and return the exit code.
 
-    Configuration errors get one line (exit 2); anything else gets its traceback
+    Configuration errors get one line (exit 2), a :class:`~embodichain_core.errors.RunError`
+    one line (exit 1); anything else gets its traceback
     (which ends with the functor note, when a functor raised it) and then one line
     naming the functor (exit 1).
 
@@ -76,6 +75,9 @@ def report_error(prog: str, err: BaseException, during: str = "") -> int:
     if isinstance(err, ConfigError) and functor_path_of(err) is None:
         print(f"{prog}: {describe_error(err)}", file=sys.stderr)
         return EXIT_CONFIG
+    if isinstance(err, RunError):  # understood: its message says it all
+        print(f"{prog}: stopped{when}: {err}", file=sys.stderr)
+        return EXIT_ERROR
     traceback.print_exception(err, file=sys.stderr)
     print(f"{prog}: stopped by an error{when}: {describe_error(err)}", file=sys.stderr)
     return EXIT_CONFIG if isinstance(err, ConfigError) else EXIT_ERROR

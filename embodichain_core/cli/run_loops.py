@@ -29,6 +29,7 @@ class RunStats:
     successes: int = 0
     failed: int = 0
     saved: Optional[int] = None
+    lost: int = 0  # finished episodes handed to a recorder that were not saved (its writer failed)
     recording: bool = False
     env_steps: int = 0
     discarded: int = 0
@@ -104,6 +105,17 @@ def written_episodes(base: Any) -> Optional[int]:
     return max(counts) if counts else int(manager.committed_episodes)
 
 
+def lost_episodes(base: Any, saved: Optional[int]) -> int:
+    """Finished episodes handed to the recorders but not saved: what they report
+    (``lost_episodes``), else the committed episodes beyond ``saved``."""
+    manager = getattr(base, "dataset_manager", None)
+    if manager is None:
+        return 0
+    reported = [getattr(e.func, "lost_episodes", None) for e in manager.entries.values()]
+    counts = [c for c in reported if isinstance(c, int) and not isinstance(c, bool)]
+    return max(counts) if counts else max(int(manager.committed_episodes) - (saved or 0), 0)
+
+
 def output_paths(base: Any, finalized: list) -> list:
     """What ``finalize`` returned, plus the existing ``dataset_path`` of recorders whose
     ``finalize`` failed (their saved episodes are still there)."""
@@ -149,9 +161,9 @@ def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
     manager = getattr(base, "dataset_manager", None)
     keep_failed = manager is not None and manager.save_failed_episodes
     for attempt in range(1, max_attempts + 1):
-        success, ended = _replay_demo(env, stats)
-        stats.episodes += n
-        stats.successes += int(success.sum())
+        success, ended = _replay_demo(env, stats)  # counts the episodes that ended early
+        stats.episodes += int((~ended).sum())
+        stats.successes += int((success & ~ended).sum())
         if success.any() or keep_failed:
             open_ids = torch.nonzero(~ended).flatten()
             if len(open_ids):
@@ -167,7 +179,11 @@ def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
 
 
 def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
-    """Step the demo action list; return per-env success and whether the episode ended early."""
+    """Step the demo action list; return per-env success and whether the episode ended early.
+
+    An episode that ends early is counted (``stats.episodes``, ``stats.successes``) at the step
+    that ended it: the env's auto-reset has committed it then, so a Ctrl-C right after still
+    finds it in the counts."""
     import torch
 
     base = env.unwrapped
@@ -180,6 +196,8 @@ def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
         done = (_flags(terminated, n) | _flags(truncated, n)) & ~ended
         success |= done & _flags(info["success"], n)
         ended |= done
+        stats.episodes += int(done.sum())
+        stats.successes += int((done & success).sum())
         if ended.all():
             return success, ended
     success |= ~ended & _flags(base.is_task_success(), n)
@@ -230,8 +248,7 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
     outside = getattr(env.unwrapped, "out_of_space_actions", None)
     if outside is not None:
         lines.append(f"  actions      {outside} env-step(s) outside the action space (clipped)")
-    if stats.saved is not None:
-        lines.append(f"  saved        {stats.saved} episode(s); failed {stats.failed}")
+    lines += _dataset_lines(stats)
     if stats.discarded:
         lines.append(f"  discarded    {stats.discarded} failed demo episode(s)")
     if paths:
@@ -243,3 +260,16 @@ def print_summary(task_id: str, env: Any, stats: RunStats) -> None:
     if stats.error:
         lines.append(f"  stopped      early: {stats.error}")
     print("\n".join(lines))
+
+
+def _dataset_lines(stats: RunStats) -> list[str]:
+    """What the recorders hold: saved episodes (as the recorders count them on disk), the demo
+    episodes that failed, and committed episodes that were lost (each on its own line)."""
+    if stats.saved is None:
+        return []
+    lines = [f"  saved        {stats.saved} episode(s)"]
+    if stats.failed:
+        lines.append(f"  failed       {stats.failed} demo episode(s) did not succeed")
+    if stats.lost > 0:
+        lines.append(f"  lost         {stats.lost} finished episode(s) were not saved (the error above says why)")
+    return lines

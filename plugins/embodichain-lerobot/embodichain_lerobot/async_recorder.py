@@ -29,6 +29,7 @@ from typing import Any, Optional
 from embodichain_lerobot.episodes import Episode
 from embodichain_lerobot.recorder import LeRobotRecorder, log
 from embodichain_lerobot.storage import DiskFullError
+from embodichain_lerobot.writer_process import WriterProcessError
 
 _STOP = object()
 
@@ -79,7 +80,8 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         if err is None:
             log.info("saved episode %s of env %d (%d frames) to %s", future.result(), env_id, length, self.dataset_path)
             return
-        log.error("writing an episode of env %s failed: %r", env_id, err)
+        if not isinstance(err, WriterProcessError):  # a dead writer is told once, when it is raised
+            log.error("writing an episode of env %s failed: %r", env_id, err)
         with self._lock:
             self._errors.append(err)
 
@@ -101,13 +103,19 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
             finally:
                 self._queue.task_done()
 
-    def _raise_worker_errors(self, final: bool = False) -> None:
+    def _raise_worker_errors(self) -> None:
+        """Raise the write errors not raised before (each is raised once)."""
         with self._lock:
-            new = self._errors[self._reported :] if not final else self._errors
+            new = self._errors[self._reported :]
             self._reported = len(self._errors)
         if not new:
             return
-        if isinstance(new[0], DiskFullError):  # its message says what happened and what to do
+        proc = self._writer_process
+        if isinstance(new[0], WriterProcessError) and proc is not None and proc.exit_code is not None:
+            futures_wait(self._futures, timeout=10)  # every episode sent is now written or known lost
+            proc.dead_reported = True  # its finalize() then finishes the folder quietly
+            raise WriterProcessError(proc.death_message()) from None
+        if isinstance(new[0], (DiskFullError, WriterProcessError)):  # its message says what happened and what to do
             raise new[0]
         detail = "; ".join(repr(e) for e in new[:5]) + (f"; ... ({len(new)} errors)" if len(new) > 5 else "")
         raise RuntimeError(f"{type(self).__name__}: writing {len(new)} episode(s) failed: {detail}") from new[0]
@@ -120,7 +128,7 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         self._raise_worker_errors()
 
     def finalize(self) -> Optional[str]:
-        """Drain the queue, finalize the dataset, then raise the worker errors (if any)."""
+        """Drain the queue, finalize the dataset, then raise the worker errors not raised before (if any)."""
         if self._finalized:
             return self._path
         if self._thread is not None:
@@ -128,5 +136,5 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
             self._thread.join()
         futures_wait(self._futures)  # the writer process also finishes them before it finalizes
         path = super().finalize()
-        self._raise_worker_errors(final=True)
+        self._raise_worker_errors()
         return path

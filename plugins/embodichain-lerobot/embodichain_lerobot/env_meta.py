@@ -101,12 +101,22 @@ def describe_env(env: Any) -> dict[str, Any]:
     }
 
 
+def env_meta_text(env: Any) -> str:
+    """The :data:`ENV_META` file's text for ``env`` (JSON)."""
+    return json.dumps(describe_env(env), indent=1, default=str) + "\n"
+
+
 def write_env_meta(root: str | os.PathLike, env: Any) -> Path:
     """Write :data:`ENV_META` of ``env`` into the dataset folder ``root`` (atomically)."""
+    return write_env_meta_text(root, env_meta_text(env))
+
+
+def write_env_meta_text(root: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` (from :func:`env_meta_text`) as ``root``'s :data:`ENV_META` (atomically)."""
     path = Path(root) / ENV_META
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(describe_env(env), indent=1, default=str) + "\n", encoding="utf-8")
+    tmp.write_text(text, encoding="utf-8")
     os.replace(tmp, path)
     return path
 

@@ -94,10 +94,14 @@ def incomplete_message(status: FolderStatus) -> str:
     if not status.readable:
         return f"{root} is not a readable dataset: its meta/info.json cannot be parsed"
     what = "meta/info.json counts 0 episodes" if (root / "meta" / "info.json").is_file() else "no meta/info.json"
+    cleanup = (
+        "the recorder also removes such folders when it runs again with the same save_path"
+        if status.removable
+        else "the recorder leaves it alone: it has no recording marker, so it may not be one of its recordings"
+    )
     return (
         f"{root} is an incomplete recording, not a dataset ({what}): the recording stopped before its "
-        "first episode was saved, so it holds no episode. Delete the folder; the recorder also removes "
-        "such folders when it runs again with the same save_path"
+        f"first episode was saved, so it holds no episode. Delete the folder; {cleanup}"
     )
 
 

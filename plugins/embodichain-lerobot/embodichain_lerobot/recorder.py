@@ -44,10 +44,10 @@ from embodichain_lerobot.config import (
     robot_type_of,
 )
 from embodichain_lerobot.encoding import preload_lerobot
-from embodichain_lerobot.env_meta import write_env_meta
+from embodichain_lerobot.env_meta import env_meta_text
 from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
 from embodichain_lerobot.features import FeatureSpec, action_array, to_numpy
-from embodichain_lerobot.folders import clean_incomplete
+from embodichain_lerobot.folders import clean_incomplete, folder_status
 from embodichain_lerobot.storage import DEFAULT_MIN_FREE_MB, check_output_dir, ensure_space
 from embodichain_lerobot.writer import DatasetWriter
 from embodichain_lerobot.writer_process import WriterProcess
@@ -137,8 +137,17 @@ class LeRobotRecorder(DatasetFunctor):
 
     @property
     def saved_episodes(self) -> int:
-        """Episodes written so far."""
-        return self._writer.num_episodes if self._writer is not None else 0
+        """Episodes saved so far, as the dataset's ``meta/info.json`` counts them (what loads,
+        whatever happened to the writer); the writer's own count before that file exists."""
+        if self._writer is None:
+            return 0
+        status = folder_status(self._writer.root)
+        return status.episodes if status.readable and status.episodes else self._writer.num_episodes
+
+    @property
+    def lost_episodes(self) -> int:
+        """Finished episodes handed to a writer process that died before writing them."""
+        return len(self._writer_process.lost_episodes) if self._writer_process is not None else 0
 
     @property
     def saved_frames(self) -> int:
@@ -282,6 +291,7 @@ class LeRobotRecorder(DatasetFunctor):
             "streaming_encoding": p.streaming_encoding,
             "encoder_threads": p.encoder_threads,
             "lossless_keys": self._spec.lossless_videos(p.use_videos),
+            "env_meta": env_meta_text(self._env),  # written by the writer, under its recording marker
         }
         try:
             if self._writer_process is not None:  # not waited for: an error comes with the first episode
@@ -290,7 +300,6 @@ class LeRobotRecorder(DatasetFunctor):
                 self._writer = self._writer_process
             else:
                 self._writer = DatasetWriter(root, *args, *more, **kwargs)
-            write_env_meta(root, self._env)  # what a replay rebuilds the env from
         except BaseException:
             shutil.rmtree(root, ignore_errors=True)
             raise

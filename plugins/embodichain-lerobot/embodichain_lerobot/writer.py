@@ -51,6 +51,7 @@ from typing import Any, Iterable, Iterator, Optional, Sequence
 
 import numpy as np
 
+from embodichain_lerobot.env_meta import write_env_meta_text
 from embodichain_lerobot.encoding import (
     batched_image_embedding,
     planar_rgb_channels,
@@ -142,6 +143,9 @@ class DatasetWriter:
         encoder_threads: threads per video encoder (``None``: the codec decides).
         lossless_keys: video features encoded losslessly (packed depth and masks,
             :mod:`~embodichain_lerobot.lossless_video`); they need ``streaming_encoding``.
+        env_meta: the text of ``meta/embodichain_env.json``
+            (:func:`~embodichain_lerobot.env_meta.env_meta_text`), written once the marker is
+            taken: the recorder writes nothing into the folder before it.
     """
 
     def __init__(
@@ -157,6 +161,7 @@ class DatasetWriter:
         streaming_encoding: bool = True,
         encoder_threads: Optional[int] = None,
         lossless_keys: Sequence[str] = (),
+        env_meta: Optional[str] = None,
     ):
         if lossless_keys and not (use_videos and streaming_encoding):
             raise ValueError(
@@ -190,6 +195,8 @@ class DatasetWriter:
             if self.dataset._streaming_encoder is not None:  # lerobot's, for colour; ours for lossless_keys
                 self.dataset._streaming_encoder = RoutedEncoder(self.dataset._streaming_encoder, lossless_keys)
             atomic_copy(self.staging / "meta/info.json", self.root / "meta/info.json")
+            if env_meta is not None:  # what a replay rebuilds the env from
+                write_env_meta_text(self.root, env_meta)
         except BaseException:
             self._lock.release()
             raise

@@ -21,7 +21,9 @@ terminal, or a ``kill`` of the process group, reaches it too; the recording proc
 decides what happens). When the recording process dies (even by ``SIGKILL``), the child
 sees the socket close, writes every episode and frame message it had already received
 (in order, as if the recording process lived), then finalizes the dataset: an episode
-that left the recording process is never dropped.
+that left the recording process is never dropped. Its last line says how many episodes the
+dataset holds (its ``meta/info.json``); it prints nothing once the shell has taken the
+terminal back (the prompt is shown: the dataset on disk tells the rest).
 """
 
 from __future__ import annotations
@@ -225,8 +227,9 @@ def _picklable(err: BaseException) -> BaseException:
 def _orphaned(state: ChildWriter, inbox: "Inbox") -> None:
     """The recording process is gone: write every message already received (episodes, their
     streamed frames), then finalize. Every episode that left the recording process is saved,
-    exactly as if it had lived; nothing is half-written."""
-    saved = 0
+    exactly as if it had lived; nothing is half-written. The farewell line states the episodes
+    that ``meta/info.json`` counts (what loads), not just the ones written after the parent died."""
+    written = 0
     while True:
         try:
             command, payload = inbox.get()
@@ -237,23 +240,34 @@ def _orphaned(state: ChildWriter, inbox: "Inbox") -> None:
         try:
             value = state.handle(command, payload)
         except BaseException as err:  # the episodes published before stay intact
-            print(
-                f"embodichain writer process: {command} failed after the recording process died: {err!r}",
-                file=sys.stderr,
-            )
+            _say(f"embodichain writer process: {command} failed after the recording process died: {err!r}")
             if command == "episode":
                 break  # a broken writer accepts nothing more
             continue
-        saved += command == "episode" and int(value) >= 0
-    print(
-        f"embodichain writer process: the recording process is gone; saved the {saved} episode(s) it had "
-        "already sent, finalizing",
-        file=sys.stderr,
-    )
+        written += command == "episode" and int(value) >= 0
+    root = state.writer.root if state.writer is not None else None
     try:
         state.finalize()
     except Exception:  # its published episodes are intact either way
         pass
+    if root is not None:
+        from embodichain_lerobot.folders import folder_status
+
+        _say(
+            f"embodichain writer process: the recording process is gone; {folder_status(root).episodes} "
+            f"episode(s) are saved in {root} ({written} of them written after it died), finalized"
+        )
+
+
+def _say(line: str) -> None:
+    """Print ``line`` on stderr, unless stderr is a terminal that the shell has taken back
+    (the recording process is gone and the prompt is back: the dataset on disk says the rest)."""
+    try:
+        if os.isatty(2) and os.tcgetpgrp(2) != os.getpgrp():
+            return
+    except OSError:
+        pass
+    print(line, file=sys.stderr, flush=True)
 
 
 class Inbox:

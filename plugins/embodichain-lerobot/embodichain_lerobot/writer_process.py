@@ -36,6 +36,8 @@ from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
+from embodichain_core.errors import RunError
+
 from embodichain_lerobot.storage import finish_orphaned
 
 _REPLY_TIMEOUT_S = 600.0  # importing lerobot and saving an episode on a loaded machine
@@ -46,8 +48,11 @@ MAX_QUEUED_MESSAGES = 64
 _STOP = object()
 
 
-class WriterProcessError(RuntimeError):
-    """The writer process failed in a way that has no exception of its own (it died, or its error did not pickle)."""
+class WriterProcessError(RunError):
+    """The writer process failed in a way that has no exception of its own (it died, or its error did not pickle).
+
+    A :class:`~embodichain_core.errors.RunError`: ``run-env`` prints its message (which
+    says what is saved, what was lost and what to do) without a traceback."""
 
 
 def to_columns(frames: Iterable[dict], skip: Iterable[str] = ()) -> tuple[dict[str, Any], int]:
@@ -99,6 +104,9 @@ class WriterProcess:
         self.num_frames = 0
         self.sent_episodes = 0  # episodes handed to the child (saved or not yet)
         self.lost_episodes: list[int] = []  # env ids of episodes sent to a child that died before saving them
+        self.exit_code: Optional[int] = None  # the child's, once it died
+        self.saved_at_death = 0  # episodes the dataset held when the child died
+        self.dead_reported = False  # the recorder raised the child's death: finalize() does not raise it again
         self.streamed: frozenset[str] = frozenset()  # colour features sent with stream_frames
         self._subtasks: dict[str, int] = {}
         self._proc: Optional[subprocess.Popen] = None
@@ -155,6 +163,11 @@ class WriterProcess:
             self._proc.kill()
             self._stop()
             return None
+        if self._dead is not None and self.dead_reported:  # said once already: finish the folder quietly
+            self._stop()
+            finish_orphaned(self.root)
+            self._result = self.root if self.root.is_dir() else None
+            return self._result
         try:
             path = self.submit("finalize", None).result(_REPLY_TIMEOUT_S)
             self._result = Path(path) if path else None
@@ -279,25 +292,34 @@ class WriterProcess:
             except subprocess.TimeoutExpired:
                 pass
         code = self._proc.poll() if self._proc is not None else None
-        err = WriterProcessError(
-            f"the dataset writer process exited (code {code}; its own error, if any, is on stderr above); "
-            + (f"the episodes published before are intact in {self.root}" if self.root != Path() else "no dataset yet")
-        )
         with self._lock:
-            self._dead = err
             waiting, self._waiting = list(self._waiting), collections.deque()
-        lost = [f for f in waiting if getattr(f, "frames", 0)]
-        self.lost_episodes = [int(getattr(f, "env_id", -1)) for f in lost]
-        if lost:
-            print(
-                f"embodichain writer: {len(lost)} finished episode(s) (env ids {self.lost_episodes}) were not saved: "
-                f"the writer process died before writing them; the {self.num_episodes} episode(s) saved before are "
-                f"intact in {self.root}",
-                file=sys.stderr,
-            )
+            self.lost_episodes = [int(getattr(f, "env_id", -1)) for f in waiting if getattr(f, "frames", 0)]
+            self.exit_code = code
+            err = WriterProcessError(self.death_message())
+            self._dead = err
         for future in waiting:
             if not future.done():
                 future.set_exception(err)
+
+    def death_message(self) -> str:
+        """One block: the child died, what is saved (``meta/info.json``), which finished episodes
+        were lost (as known now), and what to do."""
+        from embodichain_lerobot.folders import folder_status
+
+        text = f"the dataset writer process exited (code {self.exit_code}; its own error, if any, is on stderr above)"
+        if self.root == Path():
+            return text + "; no dataset yet"
+        self.saved_at_death = folder_status(self.root).episodes
+        text += f": {self.saved_at_death} episode(s) are saved in {self.root} and load as they are"
+        if self.lost_episodes:
+            first, count = self.saved_at_death, len(self.lost_episodes)
+            numbers = f"episode {first}" if count == 1 else f"episodes {first}-{first + count - 1}"
+            text += (
+                f"; {count} finished episode(s) (env ids {self.lost_episodes}) were not saved: the writer process "
+                f"died before writing them (they would have been {numbers} of the dataset)"
+            )
+        return text + "; run the command again to record more (into a new folder beside it)"
 
     def _stop(self) -> None:
         self._outbox.put(_STOP)

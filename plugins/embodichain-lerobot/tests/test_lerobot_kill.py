@@ -93,7 +93,14 @@ def test_a_killed_recording_process_loses_no_episode_it_handed_to_the_writer(tmp
     assert ds.num_episodes >= rec.seen["SENT"] >= 3
     assert len(ds) == sum(int(n) for n in ds.meta.episodes["length"])
     assert not (path / STAGING).exists()
-    assert "saved the" in rec.errors()  # the writer process said what it did after the parent died
+    # the writer process's last word counts what loads, not only what it wrote after the parent died
+    said = re.search(
+        r"the recording process is gone; (\d+) episode\(s\) are saved in (\S+) \((\d+) of them", rec.errors()
+    )
+    assert said, rec.errors()
+    assert int(said.group(1)) == ds.num_episodes
+    assert said.group(2) == str(path)
+    assert 1 <= int(said.group(3)) <= ds.num_episodes - 1  # the gate let it write one before the kill
 
 
 def test_a_killed_writer_process_leaves_every_saved_episode_and_names_the_lost_ones(tmp_path: Path) -> None:
@@ -158,3 +165,77 @@ def test_sigterm_closes_run_env_like_ctrl_c_and_its_summary_matches_the_dataset(
     assert load(path).num_episodes == saved >= 2
     assert not (path / MARKER).exists()
     assert not (path / STAGING).exists()
+
+
+def _writer_of(pid: int) -> int:
+    """The pid of the writer process of recording process ``pid``."""
+    for entry in Path("/proc").iterdir():
+        try:
+            stat = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            command = (entry / "cmdline").read_bytes()
+        except (OSError, IndexError):
+            continue
+        if int(stat[1]) == pid and b"embodichain_lerobot.writer_child" in command:
+            return int(entry.name)
+    raise AssertionError(f"process {pid} has no writer process")
+
+
+def test_a_dead_writer_reads_as_one_block_and_the_summary_keeps_saved_failed_and_lost_apart(tmp_path: Path) -> None:
+    gate = tmp_path / "gate"
+    gate.write_text("2")
+    proc = _run_env(tmp_path, gate)
+    deadline = time.monotonic() + 180
+    while (_published(tmp_path / "data") or 0) < 2:
+        assert proc.poll() is None, proc.communicate()[1][-3000:]
+        assert time.monotonic() < deadline, "run-env saved no episode in time"
+        time.sleep(0.05)
+    held = Path(f"{gate}.held")
+    while not held.exists():  # the writer holds the 3rd finished episode: it is lost with the writer
+        assert time.monotonic() < deadline, "the writer never held an episode"
+        time.sleep(0.05)
+    os.kill(_writer_of(proc.pid), signal.SIGKILL)
+    out, err = proc.communicate(timeout=180)
+    assert proc.returncode == 1, err[-3000:]
+    assert "Traceback" not in err, err[-3000:]  # understood: no traceback, told once
+    said = re.findall(r"the dataset writer process exited \(code -9[^\n]*", err)
+    assert len(said) == 1, err[-3000:]
+    assert "2 episode(s) are saved in" in said[0]
+    assert "run the command again" in said[0]
+    (path,) = [p for p in (tmp_path / "data").iterdir() if p.is_dir()]
+    assert load(path).num_episodes == 2
+    assert "saved        2 episode(s)\n" in out, out
+    lost = re.search(r"lost\s+(\d+) finished episode\(s\) were not saved", out)
+    assert lost, out
+    assert f"{lost.group(1)} finished episode(s) (env ids" in said[0], said[0] + out
+    assert f"they would have been episodes 2-{1 + int(lost.group(1))} of the dataset" in said[0]
+    assert not (path / MARKER).exists()
+    assert not (path / STAGING).exists()
+
+
+def test_a_second_ctrl_c_of_run_env_still_prints_what_is_saved(tmp_path: Path) -> None:
+    gate = tmp_path / "gate"
+    gate.write_text("2")
+    proc = _run_env(tmp_path, gate)
+    deadline = time.monotonic() + 180
+    while not Path(f"{gate}.held").exists():  # two episodes saved, the 3rd held in the writer
+        assert proc.poll() is None, proc.communicate()[1][-3000:]
+        assert time.monotonic() < deadline, "the writer never held an episode"
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    closing = ""
+    while "closing (committed episodes are kept)" not in closing:  # the close waits for the held writer
+        assert time.monotonic() < deadline, closing
+        closing += proc.stderr.readline()
+    time.sleep(1.0)  # it waits in env.close() for the held writer
+    proc.send_signal(signal.SIGINT)
+    code = proc.wait(timeout=180)  # its pipes stay open: the orphaned writer process shares them
+    gate.write_text("10000")  # the orphaned writer finishes what it holds, then finalizes
+    out, err = proc.communicate(timeout=180)
+    assert code == 130, err[-3000:]
+    assert "interrupted (Ctrl-C) again: stopped closing" in err, err[-3000:]
+    assert "Traceback" not in err, err[-3000:]
+    assert "saved        2 episode(s)\n" in out, out  # what the dataset held when the summary was printed
+    assert "stopped      early: interrupted (Ctrl-C)" in out, out
+    (path,) = [p for p in (tmp_path / "data").iterdir() if p.is_dir()]
+    _wait_finalized(path)
+    assert load(path).num_episodes >= 3
