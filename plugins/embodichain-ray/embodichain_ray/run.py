@@ -10,6 +10,7 @@ dataset holds; an episode a worker had reported but no shard holds is listed as 
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 import traceback
@@ -24,6 +25,7 @@ from embodichain_ray.driver import (
 )
 from embodichain_ray.faults import GenerateError
 from embodichain_ray.local_ray import init_ray
+from embodichain_ray.reaper import Reaper
 from embodichain_ray.plan import GeneratePlan
 from embodichain_ray.progress import progress
 from embodichain_ray.spec import WORKER_DIR, GenerateSpec, seed_table
@@ -83,7 +85,6 @@ def _run_workers(
     spec: GenerateSpec, plan: GeneratePlan, prog: str, state: RunState, on_start: Callable[[list], None] | None
 ) -> int:
     """Start Ray and the workers, run every episode, end the workers and Ray; the exit code so far."""
-    import ray
 
     from embodichain_core.cli.run_env import _interrupt_code
 
@@ -103,11 +104,12 @@ def _run_workers(
             scheduler.run()
     except KeyboardInterrupt as err:
         code, state.error = _interrupt_code(err)
-        print(
-            f"{prog}: {state.error}; the workers finish their writes and close (at most "
-            f"{spec.close_timeout:.0f} s), then the saved episodes are merged",
-            file=sys.stderr,
-        )
+        with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C this soon: the workers still close
+            print(
+                f"{prog}: {state.error}; the workers finish their writes and close (at most "
+                f"{spec.close_timeout:.0f} s), then the saved episodes are merged",
+                file=sys.stderr,
+            )
     except GenerateError as err:  # understood: one line, no traceback
         print(f"{prog}: {err}", file=sys.stderr)
         state.error, code = str(err), 1
@@ -117,11 +119,23 @@ def _run_workers(
     finally:
         state.run_s = time.perf_counter() - state.start_s
         _end_workers(spec, actors, scheduler, state)
-        ray.shutdown()
-        if reaper is not None:
-            reaper.stop()
+        _shutdown(reaper)
         state.close_s = time.perf_counter() - state.start_s - state.run_s
     return code
+
+
+def _shutdown(reaper: Reaper | None) -> None:
+    """Shut Ray down; a Ctrl-C meanwhile leaves what is left of it to the watchdog, and the
+    merge and the summary still follow."""
+    import ray
+
+    try:
+        ray.shutdown()
+    except KeyboardInterrupt:
+        print("interrupted again: the watchdog ends what is left of Ray", file=sys.stderr)
+    finally:
+        if reaper is not None:
+            reaper.stop()
 
 
 def _end_workers(spec: GenerateSpec, actors: list, scheduler: Scheduler | None, state: RunState) -> None:
