@@ -73,6 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     add("--num_workers", type=int, default=0, help="lerobot-train data loader processes (default 0)")
     add("--val_episodes", type=int, default=50, help="validation episodes per checkpoint (default 50)")
     add("--val_seed", type=int, default=1_000_000, help="validation reset seed (default 1000000)")
+    add("--val_from", type=int, default=0, help="validate the checkpoints from this step on (default: all)")
     add("--test_episodes", type=int, default=100, help="test episodes of the chosen checkpoint (default 100)")
     add("--test_seed", type=int, default=2_000_000, help="test reset seed (default 2000000)")
     add("--max_steps", type=int, help="step limit of evaluated episodes (default: the config's max_episode_steps)")
@@ -196,7 +197,12 @@ def _results(stages: _Stages, validation: list[dict], test: dict, shared: dict, 
         "cameras": list(a.cameras) if a.policy == "camera" else [],
         "demos": {"path": str(stages.demos), "episodes": len(trained), "seed": a.seed},
         "policy": {"type": "act", "flags": list(train_flags(a.policy)), "steps": a.steps, "batch_size": a.batch_size},
-        "validation": {"episodes": a.val_episodes, "seed": a.val_seed, "max_steps": a.max_steps},
+        "validation": {
+            "episodes": a.val_episodes,
+            "seed": a.val_seed,
+            "from_step": a.val_from,
+            "max_steps": a.max_steps,
+        },
         "test_split": {"episodes": a.test_episodes, "seed": a.test_seed, "max_steps": a.max_steps},
         "seeds_shared": shared,
         "seconds": stages.seconds,
@@ -229,7 +235,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     stages.config.write_text(json.dumps(config, indent=1), encoding="utf-8")
     stages.timed("generate", stages.generate)
     stages.timed("train", stages.train_policy)
-    ckpts = _checkpoints(stages.train)
+    ckpts = [(s, p) for s, p in _checkpoints(stages.train) if s >= args.val_from]
+    if not ckpts:
+        raise SystemExit(f"no checkpoint at step {args.val_from} or later in {stages.train / 'checkpoints'}")
     validation = [
         stages.timed("validate", stages.evaluate, p, "val", s, args.val_episodes, args.val_seed) for s, p in ckpts
     ]
