@@ -62,6 +62,10 @@ def test_the_camera_recipe_keeps_the_named_camera_and_records_no_object_pose() -
     assert params["use_videos"] is True
     flags = train_flags("camera")
     assert "--policy.pretrained_backbone_weights=null" in flags  # nothing is downloaded
+    names = [f.split("=", 1)[0] for f in flags]
+    assert len(names) == len(set(names))  # each flag once: the camera recipe replaces n_action_steps
+    assert "--policy.n_action_steps=1" in flags
+    assert "--policy.temporal_ensemble_coeff=0.01" in flags
     assert any(f.startswith("--dataset.image_transforms.tfs=") for f in flags)
     assert not any("image_transforms" in f for f in train_flags("state"))
 
@@ -129,6 +133,7 @@ def test_the_camera_pipeline_runs_end_to_end(tmp_path: Path) -> None:
     assert {"observation.state", "observation.images.policy_cam"} <= set(inputs)
     assert "observation.environment_state" not in inputs  # no object pose
     assert inputs["observation.images.policy_cam"]["shape"] == [3, 96, 96]
+    assert policy_cfg["temporal_ensemble_coeff"] == 0.01
     assert (out / "success_curve.png").stat().st_size > 10_000
 
 
