@@ -120,7 +120,6 @@ def video_frame_count(path: Path) -> int:
     return count
 
 
-@functools.lru_cache(maxsize=None)
 def quiet_encoder_statistics() -> None:
     """Keep FFmpeg's informational messages off the terminal in this process: libx264 (the
     ``h264`` codec) prints ten lines of statistics each time a video is closed. Warnings and
@@ -131,6 +130,7 @@ def quiet_encoder_statistics() -> None:
     av.logging.set_libav_level(av.logging.WARNING)
 
 
+@functools.lru_cache(maxsize=None)
 def resolve_vcodec(vcodec: str) -> str:
     """``vcodec``, with ``"auto"`` resolved to a hardware encoder that opens here, else ``"libsvtav1"``.
 
