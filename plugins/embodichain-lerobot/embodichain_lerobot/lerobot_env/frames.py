@@ -57,7 +57,9 @@ class SceneFrames:
         mujoco.mj_kinematics(model, self.data)
         with self.renderer.current():
             self.renderer.update_scene(model, self.data)
-            rgb, _ = self.renderer.render()
+            rgb, _ = self.renderer.render(color=True)
+        if rgb is None:  # render(color=True) always returns the colour image
+            raise RuntimeError("the scene renderer returned no colour image")
         return np.array(rgb[::-1], copy=True)
 
     def close(self) -> None:
