@@ -146,8 +146,8 @@ def _published(save_path: Path) -> Optional[int]:
     return None
 
 
-def test_sigterm_closes_run_env_like_ctrl_c_and_its_summary_matches_the_dataset(tmp_path: Path) -> None:
-    gate = tmp_path / "gate"
+def _run_env_until_two_saved(tmp_path: Path, gate: Path) -> tuple[subprocess.Popen, float]:
+    """Start run-env gated at 2 episodes; return it once 2 are published, and the deadline."""
     gate.write_text("2")
     proc = _run_env(tmp_path, gate)
     deadline = time.monotonic() + 180
@@ -155,6 +155,12 @@ def test_sigterm_closes_run_env_like_ctrl_c_and_its_summary_matches_the_dataset(
         assert proc.poll() is None, proc.communicate()[1][-3000:]
         assert time.monotonic() < deadline, "run-env saved no episode in time"
         time.sleep(0.05)
+    return proc, deadline
+
+
+def test_sigterm_closes_run_env_like_ctrl_c_and_its_summary_matches_the_dataset(tmp_path: Path) -> None:
+    gate = tmp_path / "gate"
+    proc, _ = _run_env_until_two_saved(tmp_path, gate)
     proc.send_signal(signal.SIGTERM)
     gate.write_text("10000")
     out, err = proc.communicate(timeout=180)
@@ -182,13 +188,7 @@ def _writer_of(pid: int) -> int:
 
 def test_a_dead_writer_reads_as_one_block_and_the_summary_keeps_saved_failed_and_lost_apart(tmp_path: Path) -> None:
     gate = tmp_path / "gate"
-    gate.write_text("2")
-    proc = _run_env(tmp_path, gate)
-    deadline = time.monotonic() + 180
-    while (_published(tmp_path / "data") or 0) < 2:
-        assert proc.poll() is None, proc.communicate()[1][-3000:]
-        assert time.monotonic() < deadline, "run-env saved no episode in time"
-        time.sleep(0.05)
+    proc, deadline = _run_env_until_two_saved(tmp_path, gate)
     held = Path(f"{gate}.held")
     while not held.exists():  # the writer holds the 3rd finished episode: it is lost with the writer
         assert time.monotonic() < deadline, "the writer never held an episode"
