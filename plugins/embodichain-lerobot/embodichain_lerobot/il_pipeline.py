@@ -61,7 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     add = p.add_argument
     add("--out", type=Path, required=True, help="output folder (config, demos, train, eval, results)")
     add("--policy", choices=POLICIES, default="state", help="what the policy reads (default: state)")
-    add("--config", type=Path, help="gym config with a LeRobot recorder (default: the recipe's PickFork-v1 config)")
+    add(
+        "--config",
+        type=Path,
+        help="gym config with a LeRobot recorder, a path or the name of one embodichain-tasks ships "
+        "(e.g. open_drawer_record.json; default: the recipe's PickFork-v1 config)",
+    )
     add("--cameras", nargs="+", default=["policy_cam"], help="camera recipe: the cameras it reads (default policy_cam)")
     add("--demos", type=int, default=100, help="demonstrations to generate (default 100)")
     add("--workers", type=int, default=2, help="Ray workers of embodichain generate (default 2)")
@@ -95,6 +100,22 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         args.config = CAMERA_CONFIG if args.policy == "camera" else MAIN_JOB
     if args.config is None:
         parser.error("--config is required: embodichain-tasks (the default PickFork-v1 configs) is not installed")
+    args.config = _resolve_config(parser, args.config)
+
+
+def _resolve_config(parser: argparse.ArgumentParser, config: Path) -> Path:
+    """``config`` itself when it is a file, else the embodichain-tasks config of that name."""
+    if config.is_file():
+        return config
+    shipped = _tasks_config(config.name) if config.parent == Path(".") else None
+    if shipped is not None and shipped.is_file():
+        return shipped
+    folder = _tasks_config("")
+    names = sorted(p.name for p in folder.glob("*.json")) if folder is not None and folder.is_dir() else []
+    parser.error(
+        f"--config: no file {str(config)!r}"
+        + (f"; the configs embodichain-tasks ships: {', '.join(names)}" if names else "")
+    )
 
 
 def _run(cmd: list[str], log: list[str]) -> None:

@@ -12,10 +12,10 @@ transformer, 2 encoder layers, 1 decoder layer). The camera recipe trains its Re
 scratch (nothing is downloaded), at the transformer's learning rate (lerobot's default
 backbone rate, 1e-5, suits ImageNet weights being fine-tuned, not a backbone learning from
 nothing), with colour jitter and small random shifts of the images (the augmentation that
-matters most for small image datasets). At inference the camera policy plans a chunk every
-step and averages the overlapping predictions (ACT's temporal ensembling): on PickFork-v1 the
-same checkpoint succeeded in 0.58 of 50 validation episodes with it, 0.34 executing 10 actions
-of each chunk open loop (docs/learning.md, section 12).
+matters most for small image datasets). At inference both plan a chunk every step and
+average the overlapping predictions (ACT's temporal ensembling): on PickFork-v1 the same
+camera checkpoint succeeded in 0.58 of 50 validation episodes with it, 0.34 executing 10
+actions of each chunk open loop (docs/learning.md, section 12).
 
 Example:
     >>> config = pipeline_config(Path("pick_fork_camera.json"), "camera", ["policy_cam"])  # doctest: +SKIP
@@ -33,11 +33,15 @@ __all__ = ["POLICIES", "ACT_FLAGS", "CAMERA_FLAGS", "pipeline_config", "train_fl
 #: The recipes ``--policy`` accepts.
 POLICIES = ("state", "camera")
 
-#: ACT settings shared by both recipes (lerobot-train flags).
+#: ACT settings shared by both recipes (lerobot-train flags). ``n_action_steps=1`` with
+#: ``temporal_ensemble_coeff``: a chunk is planned every step and the overlapping predictions
+#: of the same step are averaged, the older ones weighted by ``exp(-0.01 * age)``; both are
+#: inference settings (they do not enter the loss).
 ACT_FLAGS = (
     "--policy.type=act",
     "--policy.chunk_size=20",
-    "--policy.n_action_steps=10",
+    "--policy.n_action_steps=1",
+    "--policy.temporal_ensemble_coeff=0.01",
     "--policy.dim_model=256",
     "--policy.dim_feedforward=1024",
     "--policy.n_encoder_layers=2",
@@ -57,13 +61,9 @@ IMAGE_TRANSFORMS = {
     "shift": {"weight": 1.0, "type": "RandomAffine", "kwargs": {"degrees": 0, "translate": [0.04, 0.04]}},
 }
 
-#: What the camera recipe adds to :data:`ACT_FLAGS` (replacing a flag of the same name): ACT's temporal
-#: ensembling at inference (a chunk is planned every step and the overlapping predictions of
-#: the same step are averaged, the older ones weighted by ``exp(-0.01 * age)``), and the
-#: image encoder's training settings.
+#: What the camera recipe adds to :data:`ACT_FLAGS` (replacing a flag of the same name): the
+#: image encoder's training settings and the augmentation.
 CAMERA_FLAGS = (
-    "--policy.n_action_steps=1",
-    "--policy.temporal_ensemble_coeff=0.01",
     "--policy.pretrained_backbone_weights=null",
     "--policy.optimizer_lr_backbone=1e-4",
     "--dataset.image_transforms.enable=true",

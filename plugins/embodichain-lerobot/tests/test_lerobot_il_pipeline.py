@@ -63,11 +63,11 @@ def test_the_camera_recipe_keeps_the_named_camera_and_records_no_object_pose() -
     flags = train_flags("camera")
     assert "--policy.pretrained_backbone_weights=null" in flags  # nothing is downloaded
     names = [f.split("=", 1)[0] for f in flags]
-    assert len(names) == len(set(names))  # each flag once: the camera recipe replaces n_action_steps
-    assert "--policy.n_action_steps=1" in flags
-    assert "--policy.temporal_ensemble_coeff=0.01" in flags
+    assert len(names) == len(set(names))  # each flag once
     assert any(f.startswith("--dataset.image_transforms.tfs=") for f in flags)
     assert not any("image_transforms" in f for f in train_flags("state"))
+    for recipe in ("state", "camera"):  # both plan every step and average the chunks (temporal ensembling)
+        assert {"--policy.n_action_steps=1", "--policy.temporal_ensemble_coeff=0.01"} <= set(train_flags(recipe))
 
 
 def test_bad_camera_input_names_the_sensor_key_and_the_cameras_there(tmp_path: Path) -> None:
@@ -92,6 +92,29 @@ def test_the_pipeline_stops_before_any_step_on_a_config_without_a_camera(tmp_pat
     assert err.value.code == 2
     assert "sensor: the config has no camera" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()  # nothing half-built
+
+
+def test_the_open_drawer_state_recipe_reads_the_handle_and_the_opening_and_renders_nothing() -> None:
+    config = MAIN_JOB.parent / "open_drawer_record.json"
+    data = pipeline_config(config, "state")
+    assert data["sensor"] == []
+    params = data["env"]["dataset"]["lerobot"]["params"]
+    assert params["environment_state"] == ["handle_pose", "drawer_opening"]
+    assert params["use_videos"] is False
+
+
+def test_config_by_shipped_name_and_a_wrong_name_lists_the_shipped_ones(tmp_path: Path, capsys) -> None:
+    from embodichain_lerobot.il_pipeline import _check_args, build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["--out", str(tmp_path), "--config", "open_drawer_record.json"])
+    _check_args(parser, args)
+    assert args.config == MAIN_JOB.parent / "open_drawer_record.json"
+    with pytest.raises(SystemExit):
+        _check_args(parser, parser.parse_args(["--out", str(tmp_path), "--config", "open_drawer_recrd.json"]))
+    err = capsys.readouterr().err
+    assert "--config: no file 'open_drawer_recrd.json'" in err
+    assert "open_drawer_record.json" in err  # the closest valid choice is listed
 
 
 def test_the_success_curve_is_a_plot_with_interval_bars(tmp_path: Path) -> None:
