@@ -14,8 +14,9 @@ import pytest
 
 from embodichain_core.cli import list_cmd
 from embodichain_core.cli.main import main
-from embodichain_core.plugins import PluginLoadWarning, hookimpl, manager
+from embodichain_core.plugins import PluginLoadWarning, hookimpl
 from embodichain_core.plugins.manager import isolated_plugins
+from embodichain_core.testing import patch_entry_points
 from embodichain_core.testing.pytest_plugin import plugin_manager, register_plugin  # noqa: F401
 
 REPO = Path(__file__).resolve().parents[1]
@@ -103,7 +104,7 @@ def test_list_plugins_shows_failures(monkeypatch: pytest.MonkeyPatch, capsys: py
         raise ImportError("no module named 'missing_dep'")
 
     ep = types.SimpleNamespace(name="broken-plugin", value="broken.plugin", dist=None, load=broken)
-    monkeypatch.setattr(manager, "_iter_entry_points", lambda: [ep])
+    patch_entry_points(monkeypatch, lambda installed: [ep])
     with pytest.warns(PluginLoadWarning), isolated_plugins(load_entry_points=True):
         out = _list(capsys, "plugins")
     assert "embodichain-core" in out

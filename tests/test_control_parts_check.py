@@ -18,7 +18,7 @@ from embodichain_core.cli import run_env
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.config.joint_check import check_robot_joints, match_part_patterns
 from embodichain_core.envs import EmbodiedEnv
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+from embodichain_core.envs.registration import register_env
 from embodichain_core.sim.cfg import RobotCfg
 
 
@@ -78,7 +78,6 @@ def task_id() -> Iterator[str]:
     register_env(uid)(EmbodiedEnv)
     yield uid
     gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 def test_run_env_reports_it_as_a_config_error_and_exits_2(

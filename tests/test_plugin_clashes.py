@@ -28,9 +28,9 @@ from embodichain_core.plugins import (
     get_registry,
     isolated_plugins,
     list_plugins,
-    manager,
     unregister_plugin,
 )
+from embodichain_core.testing import patch_entry_points
 
 DISTS = ("alpha", "beta")
 ORDERS = [DISTS, DISTS[::-1]]
@@ -152,10 +152,7 @@ def clean_state(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
 def only_fixture_entry_points(monkeypatch: pytest.MonkeyPatch) -> None:
     """Real ``importlib.metadata`` discovery, restricted to the fixture distributions
     (core tests use no installed plugin)."""
-    real = manager._iter_entry_points
-    monkeypatch.setattr(
-        manager, "_iter_entry_points", lambda: [ep for ep in real() if ep.dist.name.startswith("ecclash")]
-    )
+    patch_entry_points(monkeypatch, lambda installed: [ep for ep in installed if ep.dist.name.startswith("ecclash")])
 
 
 def install(monkeypatch: pytest.MonkeyPatch, roots: dict[str, Path], order: tuple[str, ...]) -> list[str]:
@@ -163,7 +160,7 @@ def install(monkeypatch: pytest.MonkeyPatch, roots: dict[str, Path], order: tupl
     for name in reversed(order):
         monkeypatch.syspath_prepend(str(roots[name]))
     only_fixture_entry_points(monkeypatch)
-    return [ep.dist.name for ep in manager._iter_entry_points()]
+    return [ep.dist.name for ep in importlib.metadata.entry_points(group="embodichain")]
 
 
 @pytest.mark.parametrize("order", ORDERS, ids=["alpha-first", "beta-first"])
@@ -231,7 +228,7 @@ def test_configs_resolve_qualified_names(
 ) -> None:
     from embodichain_core.managers.manager_base import resolve_func
     from embodichain_core.sim.cfg import RobotCfg, SensorCfg
-    from embodichain_core.plugins import asset_roots, get_asset_root
+    from embodichain_core.plugins import asset_registry, get_asset_root
     from embodichain_core.sim.data import get_data_path
 
     install(monkeypatch, dist_roots, order)
@@ -249,14 +246,14 @@ def test_configs_resolve_qualified_names(
         # the old spelling of a qualified name says what to write instead
         with pytest.raises(ConfigError, match="'ecclash-beta' is a plugin: .* written 'ecclash-beta/shared_event'"):
             resolve_func("ecclash-beta:shared_event", "event", "env.events.e")
-        with pytest.raises(ConfigError, match=r"robot\.class_type.*use 'ecclash-beta/ClashArm'"):
+        with pytest.raises(ConfigError, match=r"robot\.class_type.*unknown robot 'ecclash-beta:ClashArm'"):
             RobotCfg.from_dict({"class_type": "ecclash-beta:ClashArm"}, "robot")
         assert type(RobotCfg.from_dict({"class_type": "ecclash-beta/ClashArm"}, "robot")) is beta.ArmCfg
         cam = SensorCfg.from_dict({"sensor_type": "ecclash-beta/ClashCam", "uid": "cam"}, "sensor")
         assert type(cam) is beta.CamCfg
         assert Path(get_data_path("ecclash-beta:shared.txt")).read_text() == "ecclash_beta"
         assert Path(get_data_path("ecclash-alpha:shared.txt")).read_text() == "ecclash_alpha"
-        assert set(asset_roots()) == {"ecclash-alpha/data", "ecclash-beta/data"}
+        assert asset_registry().qualified_names() == ["ecclash-alpha/data", "ecclash-beta/data"]
         assert get_asset_root("ecclash-beta/data") == Path(beta.DATA)
         with pytest.raises(AmbiguousNameError, match="asset root 'data' is ambiguous"):
             get_asset_root("data")
@@ -353,7 +350,10 @@ def test_register_env_never_replaces_a_plugin_id(monkeypatch: pytest.MonkeyPatch
         class Intruder(BaseEnv):
             pass
 
-        with pytest.warns(UserWarning, match="'ClashTask-v0' is provided by installed plugins"):
+        with pytest.warns(
+            UserWarning,
+            match="task 'ClashTask-v0' is provided by ecclash-alpha, ecclash-beta; register_env keeps theirs",
+        ):
             register_env("ClashTask-v0", override=True)(Intruder)
         assert gym.registry["ClashTask-v0"] is spec
 
@@ -395,7 +395,7 @@ def test_entry_point_name_declared_by_two_distributions(
     )
     monkeypatch.syspath_prepend(str(squatter))
     install(monkeypatch, dist_roots, DISTS)
-    names = [ep.name for ep in manager._iter_entry_points()]
+    names = [ep.name for ep in importlib.metadata.entry_points(group="embodichain")]
     assert names.count("ecclash-alpha") == 2  # pluggy would have kept only one of them
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # installing a third plugin breaks nothing: no failure, no warning

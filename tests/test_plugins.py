@@ -29,11 +29,11 @@ from embodichain_core.plugins import (
     isolated_plugins,
     list_plugins,
     load_plugins,
-    manager,
     register_plugin,
     unregister_plugin,
 )
 from embodichain_core.envs import EmbodiedEnv
+from embodichain_core.testing import patch_entry_points
 from embodichain_core.testing.pytest_plugin import plugin_manager  # noqa: F401  (fixture)
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,11 +81,6 @@ class MisspelledPlugin:
         pass
 
 
-class UnmarkedMisspelledPlugin:
-    def embodichain_register_task(self, register: Any) -> None:  # no @hookimpl, missing "s"
-        pass
-
-
 class WrongArgumentPlugin:
     @hookimpl
     def embodichain_register_robots(self, reg: Any) -> None:  # the argument must be "register"
@@ -104,7 +99,7 @@ def _fail_import() -> Any:
 
 
 def _entry_points(monkeypatch: pytest.MonkeyPatch, *eps: FakeEntryPoint) -> None:
-    monkeypatch.setattr(manager, "_iter_entry_points", lambda: list(eps))
+    patch_entry_points(monkeypatch, lambda installed: list(eps))
 
 
 def _load_with(monkeypatch: pytest.MonkeyPatch, *eps: FakeEntryPoint) -> Any:
@@ -119,6 +114,13 @@ def test_builtins_and_idempotent_load(plugin_manager: Any) -> None:  # noqa: F81
     assert commands.entry("list").provider == CORE_PLUGIN_NAME
     assert commands.entry("run-env").lazy
     assert not commands.entry("run-env").resolved
+    demo = plugin_manager.registry("tasks").entry("EmbodiChainDemo-v0")  # the demo task: the core's tasks hook
+    assert (demo.provider, demo.target, demo.resolved) == (
+        CORE_PLUGIN_NAME,
+        "embodichain_core.demo:DemoSceneEnv",
+        False,
+    )
+    assert Path(demo.meta["config"]).name == "demo_scene.json"
     assert [i.name for i in list_plugins()] == [CORE_PLUGIN_NAME]
     plugin_manager.check_pending()
 
@@ -214,9 +216,8 @@ def test_block_env_var(monkeypatch: pytest.MonkeyPatch) -> None:
             assert {i.name: i.status for i in list_plugins()}["blocked-plugin"] == "blocked"
 
 
-@pytest.mark.parametrize("plugin_cls", [MisspelledPlugin, UnmarkedMisspelledPlugin])
-def test_misspelled_hook_entry_point(monkeypatch: pytest.MonkeyPatch, plugin_cls: type) -> None:
-    eps = FakeEntryPoint("typo-plugin", plugin_cls), FakeEntryPoint("good", FunctorPlugin)
+def test_misspelled_hook_entry_point(monkeypatch: pytest.MonkeyPatch) -> None:
+    eps = FakeEntryPoint("typo-plugin", MisspelledPlugin), FakeEntryPoint("good", FunctorPlugin)
     with pytest.warns(PluginLoadWarning, match="plugin 'typo-plugin' implements unknown hook") as rec:
         with _load_with(monkeypatch, *eps) as pm:
             pm.check_pending()  # the bad plugin was removed
@@ -258,11 +259,16 @@ def test_module_plugin_and_helpers(plugin_manager: Any, tmp_path: Path) -> None:
     def embodichain_register_sensors(register: Any) -> None:
         register("Camera", "json:JSONDecoder", "json:JSONEncoder")
 
-    def embodichain_register_assets(register: Any) -> None:  # unmarked: still a hook
+    @hookimpl
+    def embodichain_register_assets(register: Any) -> None:
         register("pack", lambda: calls.append(1) or tmp_path)
+
+    def embodichain_register_robots(register: Any) -> None:  # not marked @hookimpl: not a hook
+        raise AssertionError("an unmarked function was called as a hook")
 
     module.embodichain_register_sensors = embodichain_register_sensors
     module.embodichain_register_assets = embodichain_register_assets
+    module.embodichain_register_robots = embodichain_register_robots
     assert register_plugin(module) == "ec_test_module_plugin"
     import json
 
@@ -355,10 +361,11 @@ def test_trace_env_var(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFi
 
 
 def test_plugin_modules_import_cheaply() -> None:
+    # gymnasium is imported: the core's demo task is written into its registry at load
     code = (
         "import sys, embodichain_core.plugins, embodichain_core.cli.main, embodichain_core.testing;"
         "embodichain_core.plugins.load_plugins();"
-        "heavy = [m for m in ('torch', 'mujoco', 'gymnasium') if m in sys.modules];"
+        "heavy = [m for m in ('torch', 'mujoco', 'embodichain_core.demo', 'embodichain_core.envs') if m in sys.modules];"
         "assert not heavy, heavy"
     )
     env = {**os.environ, "EMBODICHAIN_BLOCK_PLUGINS": "*", "PYTHONPATH": str(REPO)}
@@ -378,7 +385,8 @@ def test_register_env_runs_the_tasks_hook(plugin_manager: Any) -> None:  # noqa:
     import gymnasium
 
     from embodichain_core.envs import register_env
-    from embodichain_core.plugins import task_episode_limit
+    from embodichain_core.envs.env_build import task_episode_limit
+    from embodichain_core.plugins.registry import DuplicateRegistrationError
 
     register_env("EcShimTask-v0", max_episode_steps=7)(ShimFirst)
     entry = plugin_manager.registry("tasks").entry("EcShimTask-v0")
@@ -389,7 +397,7 @@ def test_register_env_runs_the_tasks_hook(plugin_manager: Any) -> None:  # noqa:
     assert gymnasium.registry["EcShimTask-v0"].kwargs == {}  # no hidden keyword: the limit is the registry's
     assert task_episode_limit(ShimFirst) == 7
     assert task_episode_limit(ShimSecond) is None
-    with pytest.warns(UserWarning, match="already registered by .*ShimFirst; keeping it"):
+    with pytest.raises(DuplicateRegistrationError, match="registered twice .*ShimFirst.*override=True to replace it"):
         register_env("EcShimTask-v0")(ShimSecond)
     assert plugin_manager.registry("tasks").entry("EcShimTask-v0").target is ShimFirst
     register_env("EcShimTask-v0", override=True)(ShimSecond)

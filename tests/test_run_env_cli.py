@@ -16,7 +16,7 @@ from scenes import ARM_MJCF
 from embodichain_core.cli import run_env
 from embodichain_core.cli.main import main as embodichain
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+from embodichain_core.envs.registration import register_env
 from embodichain_core.managers.functor import DatasetFunctor
 from embodichain_core.sim.cfg import RobotCfg
 from embodichain_core.utils.configclass import configclass
@@ -78,7 +78,6 @@ def task() -> Iterator[Callable[[type], str]]:
     yield register
     for uid in ids:
         gym.registry.pop(uid, None)
-        REGISTERED_ENVS.pop(uid, None)
 
 
 def write_config(path: Path, task_id: str, **top: Any) -> Path:

@@ -17,7 +17,7 @@ from scenes import ARM_MJCF
 from embodichain_core.cli import run_env
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs import EmbodiedEnv
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+from embodichain_core.envs.registration import register_env
 from embodichain_core.managers.functor import DatasetFunctor
 
 BUILT: list[str] = []
@@ -66,7 +66,6 @@ def task_id() -> Iterator[str]:
     FINALIZED.clear()
     yield uid
     gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 def write_config(path: Path, task: str, events: dict, dataset: dict) -> Path:

@@ -17,7 +17,7 @@ from scenes import ARM_MJCF
 from embodichain_core.cli import run_env
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs import EmbodiedEnv, EmbodiedEnvCfg
-from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+from embodichain_core.envs.registration import register_env
 from embodichain_core.utils.configclass import configclass
 
 CAMERA = {"sensor_type": "Camera", "uid": "cam", "width": 64, "height": 48, "init_pos": [1.0, 0.0, 1.0]}
@@ -40,7 +40,6 @@ def task_id() -> Iterator[str]:
     register_env(uid)(LooseSensorTask)
     yield uid
     gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 def test_run_env_preview_names_the_entry_the_declaration_and_the_fix(

@@ -250,18 +250,15 @@ def _config_arg(args: argparse.Namespace) -> Optional[str]:
 def prepare(args: argparse.Namespace) -> RunPlan:
     """Resolve what to run: a config file, the task's default config, or a bare task id."""
     from embodichain_core.config.loader import load_config_file, load_gym_config, resolve_relative_paths
-    from embodichain_core.demo import DEMO_CONFIG, register_demo_task
-    from embodichain_core.plugins import load_plugins
+    from embodichain_core.plugins.builtin import DEMO_TASK_ID
 
-    load_plugins()
-    register_demo_task()
     config = _config_arg(args)
     task_id = args.task if args.task != config else None
     config = config or _task_default_config(task_id)
     overrides = overrides_from_args(args)
     if not config and task_id:  # a task without a config file
         return _bare_task_plan(task_id, overrides)
-    config = config or str(DEMO_CONFIG)
+    config = config or _task_default_config(DEMO_TASK_ID)  # neither a task nor a config: the demo
     if isinstance(config, (str, os.PathLike)):
         data = load_config_file(config)
         resolve_relative_paths(data, os.path.dirname(os.path.abspath(config)))
@@ -307,26 +304,21 @@ def _bare_task_plan(task_id: str, overrides: dict) -> RunPlan:
 def _check_task(task_id: Any) -> None:
     import gymnasium as gym
 
-    from embodichain_core.envs.registration import REGISTERED_ENVS
     from embodichain_core.plugins import task_registry
 
     if not isinstance(task_id, str) or not task_id:
         raise ConfigError("id", "no task id: give TASK_ID or an 'id' in the gym config")
     if task_id not in gym.registry:
-        ours = sorted({*task_registry().names(), *REGISTERED_ENVS})
+        ours = task_registry().names()
         raise ConfigError("id", f"unknown task {task_id!r}.{did_you_mean(task_id, ours or gym.registry)}")
 
 
 def _task_default_config(task_id: Optional[str]) -> Any:
-    """The config a task ships: the demo's, or a plugin task's ``config=`` meta."""
-    from embodichain_core.demo import DEMO_CONFIG, DEMO_TASK_ID
-    from embodichain_core.plugins import task_registry
+    """The config a task registers (its ``config=``), if any."""
+    from embodichain_core.plugins import AmbiguousNameError, task_registry
 
     if not task_id:
         return None
-    if task_id == DEMO_TASK_ID:
-        return str(DEMO_CONFIG)
-    from embodichain_core.plugins import AmbiguousNameError
 
     try:
         entry = task_registry().find(task_id)

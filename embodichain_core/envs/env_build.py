@@ -29,7 +29,17 @@ from embodichain_core.managers.env_keys import check_env_keys
 from embodichain_core.managers.event_manager import EventManager
 from embodichain_core.managers.observation_manager import ObservationManager
 from embodichain_core.managers.reward_manager import RewardManager
+from embodichain_core.plugins import task_registry
+from embodichain_core.plugins.registry import describe_target
 from embodichain_core.utils.suggest import did_you_mean
+
+
+def task_episode_limit(env_cls: type) -> Optional[int]:
+    """The ``max_episode_steps`` the tasks of ``env_cls`` register (``None``: none, or they differ)."""
+    target = describe_target(env_cls)
+    limits = {e.meta["max_episode_steps"] for e in task_registry().entries() if e.target_repr == target}
+    limits.discard(None)
+    return limits.pop() if len(limits) == 1 else None
 
 
 def resolve_cfg(env_cls: Any, cfg: Any, overrides: dict) -> Any:
@@ -41,8 +51,6 @@ def resolve_cfg(env_cls: Any, cfg: Any, overrides: dict) -> Any:
     Raises:
         ConfigError: an override names no config field.
     """
-    from embodichain_core.plugins import task_episode_limit
-
     cfg_cls = env_cls.cfg_cls
     registered_limit = task_episode_limit(env_cls)
     if cfg is None:

@@ -1,10 +1,10 @@
 """``register_env``: register an env class as a task from a script, through the tasks hook.
 
-A task is registered one way: the ``embodichain_register_tasks`` hook (see
-docs/plugins.md). ``register_env`` is a decorator for scripts and notebooks that runs that
-hook for you: the module defining the class becomes a runtime plugin (named after the
-module) registering the task, so ``gym.make``, ``gym.make_vec``, ``embodichain list
-tasks`` and the episode limit behave as for an installed plugin's task.
+A task is registered one way: the ``embodichain_register_tasks`` hook (docs/plugins.md).
+``register_env`` is a decorator for scripts and notebooks that runs that hook for you: the
+module defining the class becomes a runtime plugin (named after the module) registering the
+task, so ``gym.make``, ``gym.make_vec``, ``embodichain list tasks``, ``embodichain run-env``
+and the episode limit treat it as an installed plugin's task.
 
 Example:
     >>> @register_env("MyTask-v0", max_episode_steps=200)
@@ -19,36 +19,41 @@ import json
 import warnings
 from typing import Any, Callable, Optional
 
-from embodichain_core.plugins.hookspecs import hookimpl
-from embodichain_core.plugins.registry import describe_target
+from embodichain_core.plugins import load_plugins, register_plugin, unregister_plugin
+from embodichain_core.plugins.hookspecs import TaskRegister, hookimpl
+from embodichain_core.plugins.registry import DuplicateRegistrationError, describe_target
 
-#: Task id -> the class ``register_env`` registered under it.
-REGISTERED_ENVS: dict[str, type] = {}
+#: A module's registrations: task id -> (env class, episode limit, default constructor kwargs).
+_Tasks = dict[str, tuple[type, Optional[int], dict[str, Any]]]
 
 
 class _ModuleTasks:
-    """The runtime plugin of one module's ``register_env`` calls."""
+    """The runtime plugin of one module's ``register_env`` calls: its tasks hook."""
 
-    def __init__(self) -> None:
-        self.tasks: dict[str, tuple[type, Optional[int], dict[str, Any]]] = {}
+    def __init__(self, tasks: _Tasks) -> None:
+        self.tasks = tasks
 
     @hookimpl
-    def embodichain_register_tasks(self, register: Any) -> None:
-        for uid, (target, limit, kwargs) in self.tasks.items():
-            register(uid, target, max_episode_steps=limit, kwargs=kwargs)
+    def embodichain_register_tasks(self, register: TaskRegister) -> None:
+        for uid, (env_cls, limit, kwargs) in self.tasks.items():
+            register(uid, env_cls, max_episode_steps=limit, kwargs=kwargs)
 
 
 def register_env(
     uid: str, max_episode_steps: Optional[int] = None, override: bool = False, **kwargs: Any
 ) -> Callable[[type], type]:
-    """Class decorator registering the env class as the task ``uid``.
+    """Class decorator registering a top-level ``BaseEnv`` subclass as the task ``uid``.
 
-    An id that an installed plugin (or another module) provides is never replaced, even
-    with ``override=True``: a warning names the provider and the class is left out (the
-    same class registered again is a silent no-op). The module's own earlier class under
-    ``uid`` is replaced with ``override=True`` (a warning and no change otherwise); so is an
-    id gymnasium has from outside the plugins. ``kwargs`` are JSON-serialisable default
-    constructor arguments.
+    An id an installed plugin (or another module) provides stays theirs: the class is left
+    out, with a warning naming the provider unless that provider registers this very class
+    (as ``embodichain-tasks`` does for the tutorial module that calls ``register_env``). A
+    module registering a second class under one of its ids is an error, as for any plugin,
+    unless ``override=True`` replaces its earlier class. ``kwargs`` are JSON-serialisable
+    default constructor arguments.
+
+    Raises:
+        TypeError: not a ``BaseEnv`` subclass, or defined inside a function.
+        DuplicateRegistrationError: the module registered another class as ``uid`` already.
     """
     try:
         json.dumps(kwargs)
@@ -67,26 +72,18 @@ def register_env(
 
 
 def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any], override: bool) -> None:
-    import gymnasium
-
-    from embodichain_core.plugins import load_plugins, register_plugin, unregister_plugin
-
     pm = load_plugins()
-    # the class itself is the target: its module may not be importable by name (a test file
-    # in a folder with a hyphen, a script run as __main__); ``target`` is how it is shown
+    # the class itself is the target: its module may not be importable by name (a script run
+    # as __main__, a test file in a folder with a hyphen)
     name, target = cls.__module__, describe_target(cls)
-    others = [
-        e
-        for e in pm.registry("tasks").ordered_entries()
-        if e.name == uid and e.provider not in (name, f"{name}.register_env")
-    ]
+    if pm.get_plugin(name) is not None and not isinstance(pm.get_plugin(name), _ModuleTasks):
+        name += ".register_env"  # the module is a plugin of its own
+    others = [e for e in pm.registry("tasks").ordered_entries() if e.name == uid and e.provider != name]
     if others:
         if all(e.target_repr != target for e in others):
             providers = ", ".join(sorted({e.provider for e in others}))
             warnings.warn(
-                f"env id {uid!r} is provided by installed plugins ({providers}); register_env keeps theirs and "
-                f"ignores {target}",
-                stacklevel=3,
+                f"task {uid!r} is provided by {providers}; register_env keeps theirs and ignores {target}", stacklevel=3
             )
         return
     if "<locals>" in cls.__qualname__:
@@ -95,21 +92,15 @@ def _register(uid: str, cls: type, limit: Optional[int], kwargs: dict[str, Any],
             f"workers, dataset replay) find a task by 'module:Class', so define the class at the top level of "
             f"its module"
         )
-    if pm.get_plugin(name) is not None and not isinstance(pm.get_plugin(name), _ModuleTasks):
-        name += ".register_env"  # the module is a plugin of its own
-    plugin = pm.get_plugin(name) or _ModuleTasks()
-    old = plugin.tasks.get(uid)
-    if old is not None and describe_target(old[0]) != target and not override:
-        warnings.warn(
-            f"env id {uid!r} is already registered by {describe_target(old[0])}; keeping it (pass override=True to replace it)",
-            stacklevel=3,
+    plugin = pm.get_plugin(name)
+    tasks: _Tasks = dict(plugin.tasks) if plugin is not None else {}
+    old = describe_target(tasks[uid][0]) if uid in tasks else target
+    if old != target and not override:
+        raise DuplicateRegistrationError(
+            f"task {uid!r} is registered twice by {name!r} (with {old!r} and {target!r}); one provider cannot "
+            f"register a name twice (pass override=True to replace it)"
         )
-        return
-    foreign = gymnasium.registry.get(uid)
-    if foreign is not None and not getattr(foreign, "embodichain_task", False) and override:
-        del gymnasium.registry[uid]
-    plugin.tasks[uid] = (cls, limit, kwargs)
-    if pm.get_plugin(name) is not None:
+    tasks[uid] = (cls, limit, kwargs)
+    if plugin is not None:
         unregister_plugin(name)
-    register_plugin(plugin, name=name)
-    REGISTERED_ENVS[uid] = cls
+    register_plugin(_ModuleTasks(tasks), name=name)

@@ -30,7 +30,6 @@ from embodichain_core.plugins.manager import register_plugin as register_plugin
 from embodichain_core.plugins.manager import unregister_plugin as unregister_plugin
 from embodichain_core.plugins.registry import AmbiguousNameError as AmbiguousNameError
 from embodichain_core.plugins.registry import Entry
-from embodichain_core.plugins.registry import describe_target as describe_target
 
 # Each accessor returns the registry of one kind (loading the plugins first). Entry meta:
 # functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
@@ -71,25 +70,16 @@ def get_sensor_classes(sensor_type: str) -> tuple[Any, Any]:
 def get_asset_root(name: str | Entry) -> Path:
     """The data root registered as ``name`` (or by an ``assets`` entry); a callable root is called once."""
     entry = name if isinstance(name, Entry) else asset_registry().entry(name)
-    if "root_path" not in entry.meta:
-        root = entry.resolve()
-        root = root() if callable(root) else root
-        if not root:
-            raise TypeError(f"asset root {entry.name!r} from {entry.provider!r} is {root!r}, not a directory")
-        entry.meta["root_path"] = Path(root)
-    return entry.meta["root_path"]
-
-
-def asset_roots() -> dict[str, Path]:
-    """Every registered data root by name (a clashing name once per plugin, qualified)."""
-    registry = asset_registry()
-    clashing = registry.clashes()
-    return {registry.qualified_name(e) if e.name in clashing else e.name: get_asset_root(e) for e in registry.entries()}
+    root = entry.resolve()
+    root = root() if callable(root) else root
+    if not root:
+        raise TypeError(f"asset root {entry.name!r} from {entry.provider!r} is {root!r}, not a directory")
+    return Path(root)
 
 
 def is_visual_randomization(name: str) -> bool:
-    """True for a ``randomize_*`` functor of category ``"randomization.visual"`` (an ambiguous
-    name is not; it fails when resolved)."""
+    """True for a registered ``randomize_*`` functor of category ``"randomization.visual"`` (an
+    ambiguous name is not; it fails when resolved)."""
     try:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
@@ -100,11 +90,3 @@ def is_visual_randomization(name: str) -> bool:
 def name_clashes(provider: str | None = None) -> list[NameClash]:
     """Bare names several installed plugins register (only ``provider``'s when given)."""
     return load_plugins().name_clashes(provider)
-
-
-def task_episode_limit(env_cls: type) -> int | None:
-    """The ``max_episode_steps`` the tasks of ``env_cls`` register (``None``: none, or they differ)."""
-    target = describe_target(env_cls)
-    limits = {e.meta["max_episode_steps"] for e in task_registry().entries() if e.target_repr == target}
-    limits.discard(None)
-    return limits.pop() if len(limits) == 1 else None

@@ -1,13 +1,16 @@
 """The core's own registrations: a plugin module like any other.
 
 Registered by :func:`~embodichain_core.plugins.manager.load_plugins` under the
-name ``"embodichain-core"``. Every target is a lazy ``"module:function"`` string,
-so ``embodichain --help`` imports none of the command modules.
+name ``"embodichain-core"``: the ``embodichain`` subcommands and the demo task.
+Every target is a lazy ``"module:attr"`` string, so ``embodichain --help``
+imports none of the command modules and no env class.
 """
 
 from __future__ import annotations
 
-from embodichain_core.plugins.hookspecs import CommandRegister, hookimpl
+from pathlib import Path
+
+from embodichain_core.plugins.hookspecs import CommandRegister, TaskRegister, hookimpl
 
 #: name -> (target, help) of the built-in CLI commands.
 BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
@@ -23,6 +26,10 @@ BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
     "new": ("embodichain_core.cli.new_cmd:main", "Create a new task or functor plugin from a template"),
     "bench": ("embodichain_core.cli.bench:main", "Measure env throughput and overhead"),
 }
+#: The demo task (``embodichain_core.demo``): its gym id and its gym config, which
+#: ``embodichain run-env`` runs when given neither a task id nor a config.
+DEMO_TASK_ID = "EmbodiChainDemo-v0"
+DEMO_CONFIG = Path(__file__).resolve().parents[1] / "demo" / "demo_scene.json"
 
 
 @hookimpl
@@ -30,3 +37,10 @@ def embodichain_register_commands(register: CommandRegister) -> None:
     """Register the built-in ``embodichain`` subcommands."""
     for name, (target, help_text) in BUILTIN_COMMANDS.items():
         register(name, target, help=help_text)
+
+
+@hookimpl
+def embodichain_register_tasks(register: TaskRegister) -> None:
+    """Register the demo task: a 7-DoF arm at a table with three cubes and a point light."""
+    description = "The built-in demo: a 7-DoF arm at a table with three cubes and a point light"
+    register(DEMO_TASK_ID, "embodichain_core.demo:DemoSceneEnv", config=str(DEMO_CONFIG), description=description)

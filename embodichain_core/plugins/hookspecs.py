@@ -3,6 +3,7 @@ register class names its registry kind, and :data:`KINDS` lists them in hook-cal
 
 from __future__ import annotations
 
+import functools
 import os
 from typing import Any, ClassVar
 
@@ -55,7 +56,8 @@ class CommandRegister(BaseRegister):
 
 
 class AssetRegister(BaseRegister):
-    """``register(name, root)``: a data root directory or a zero-argument callable."""
+    """``register(name, root)``: a data root directory or a zero-argument callable (called
+    once, on first use)."""
 
     kind, noun = "assets", "asset root"
 
@@ -64,7 +66,7 @@ class AssetRegister(BaseRegister):
             raise TypeError(
                 f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
             )
-        return self._add(name, root, lazy=False)
+        return self._add(name, functools.cache(root) if callable(root) else root, lazy=False)
 
 
 class RobotRegister(BaseRegister):

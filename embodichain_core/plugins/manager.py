@@ -7,6 +7,7 @@ that fails contributes nothing and is reported in one line (:class:`PluginLoadWa
 from __future__ import annotations
 
 import functools
+import importlib.metadata
 import inspect
 import os
 import re
@@ -74,8 +75,7 @@ class NameClash:
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
-    """pluggy manager owning the registries; any ``embodichain_register*`` function is a hook
-    (with or without ``@hookimpl``), so a misspelled one is caught."""
+    """pluggy manager owning the registries (hooks are marked with ``@hookimpl``)."""
 
     def __init__(self) -> None:
         super().__init__(PROJECT_NAME)
@@ -86,13 +86,6 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         self.lock = threading.RLock()
         self.tracing = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
         self.gym_specs: dict[str, Any] = {}  # gym id -> the spec this manager wrote
-        self.gym_foreign: set[str] = set()  # ids gymnasium has from elsewhere, each reported once
-
-    def parse_hookimpl_opts(self, plugin: Any, name: str) -> Any:
-        opts = super().parse_hookimpl_opts(plugin, name)
-        if opts is None and name.startswith("embodichain_register") and inspect.isroutine(getattr(plugin, name)):
-            return {}
-        return opts
 
     def registry(self, kind: str) -> Registry:
         """The registry of ``kind`` (``"functors"``, ``"robots"``, ...)."""
@@ -147,17 +140,10 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
     return pm
 
 
-def _iter_entry_points() -> list[Any]:
-    """Every ``"embodichain"`` entry point (a test seam)."""
-    import importlib.metadata
-
-    return list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
-
-
 def named_entry_points() -> list[tuple[str, Any]]:
-    """``(plugin name, entry point)`` in load order: the distribution's (PEP 503-normalized)
-    name, ``<dist>.<entry point>`` for a distribution with several."""
-    eps = _iter_entry_points()
+    """``(plugin name, entry point)`` of every ``"embodichain"`` entry point in load order: the
+    distribution's (PEP 503-normalized) name, ``<dist>.<entry point>`` for a distribution with several."""
+    eps = list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
     dists = [re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps]
     named = []
     for ep, dist in zip(eps, dists):
@@ -276,16 +262,16 @@ def isolated_plugins(
                 sync_gym(manager, release=release)
 
 
-def _ambiguous_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
-    """gymnasium entry point of a bare id several plugins provide: raises the ambiguity error."""
-    registry.entry(task_id)
-    raise LookupError(f"task {task_id!r} is no longer ambiguous; make it again")
+def _make_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
+    """gymnasium entry point of a bare id several plugins provide: the env of the task the id
+    names when made (so making it while ambiguous raises the :class:`AmbiguousNameError`)."""
+    return registry.get(task_id)(*args, **kwargs)
 
 
 def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) -> Any:
     from embodichain_core.gym_vector import BatchedEnvSpec, make_vec_env
 
-    target: Any = functools.partial(_ambiguous_task, pm.registries["tasks"], gym_id)
+    target: Any = functools.partial(_make_task, pm.registries["tasks"], gym_id)
     vector, kwargs = target, {}
     if len(entries) == 1:
         target, kwargs = entries[0].target, dict(entries[0].meta["kwargs"])
@@ -305,7 +291,7 @@ def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) 
 def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
     """Make gymnasium's registry show ``pm``'s tasks (none with ``release``) by qualified and bare
     id, removing the ids ``pm`` wrote that it no longer has; an id gymnasium has from elsewhere is
-    left as it is (a :class:`NameClashWarning`)."""
+    left as it is (a :class:`NameClashWarning` unless it names the same class)."""
     tasks, wanted = pm.registries["tasks"], {}
     for entry in [] if release else tasks.ordered_entries():
         wanted[tasks.qualified_name(entry)] = [entry]
@@ -320,25 +306,19 @@ def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
     for gym_id, entries in wanted.items():
         current = gymnasium.registry.get(gym_id)
         if current is not None and not getattr(current, "embodichain_task", False):
-            _report_foreign(pm, gym_id, current.entry_point, entries)
+            theirs, ids = describe_target(current.entry_point), [tasks.qualified_name(e) for e in entries]
+            if [e.target_repr for e in entries] != [theirs]:
+                warnings.warn(
+                    f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins (entry point "
+                    f"{theirs!r}); it is left as it is. Use {join_names(ids)} for the plugin task"
+                    f"{'s' if len(ids) > 1 else ''}.",
+                    NameClashWarning,
+                    stacklevel=3,
+                )
             continue
         if getattr(pm.gym_specs.get(gym_id), "embodichain_entries", None) != entries:
             pm.gym_specs[gym_id] = _task_spec(pm, gym_id, entries)
         gymnasium.registry[gym_id] = pm.gym_specs[gym_id]
-
-
-def _report_foreign(pm: EmbodichainPluginManager, gym_id: str, theirs: Any, entries: list[Entry]) -> None:
-    theirs, ours = describe_target(theirs), [e.target_repr for e in entries]
-    if ours == [theirs] or f"{gym_id}={ours}" in pm.gym_foreign:
-        return  # the same class, registered by its own module; or reported already
-    pm.gym_foreign.add(f"{gym_id}={ours}")
-    ids = join_names([pm.registries["tasks"].qualified_name(e) for e in entries])
-    warnings.warn(
-        f"gymnasium id {gym_id!r} is already registered outside the embodichain plugins (entry point "
-        f"{theirs!r}); it is left as it is. Use {ids} for the plugin task{'s' if len(entries) > 1 else ''}.",
-        NameClashWarning,
-        stacklevel=3,
-    )
 
 
 def list_plugins() -> list[PluginInfo]:

@@ -16,18 +16,11 @@ from embodichain_core.utils.suggest import closest, did_you_mean
 SEPARATOR = "/"
 
 
-class RegistryError(Exception):
-    """Base class of registry errors (``str()`` is the message, also for the ``KeyError`` ones)."""
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
-
-
-class DuplicateRegistrationError(RegistryError, ValueError):
+class DuplicateRegistrationError(ValueError):
     """One provider registered a name twice with different targets."""
 
 
-class AmbiguousNameError(RegistryError, LookupError, ValueError):
+class AmbiguousNameError(LookupError, ValueError):
     """A bare name several plugins provide: ``providers`` and the qualified ``choices``."""
 
     def __init__(self, message: str, name: str, providers: Sequence[str], choices: Sequence[str]):
@@ -35,15 +28,18 @@ class AmbiguousNameError(RegistryError, LookupError, ValueError):
         self.name, self.providers, self.choices = name, list(providers), list(choices)
 
 
-class UnknownNameError(RegistryError, KeyError, ValueError):
+class UnknownNameError(KeyError, ValueError):
     """An unknown name was looked up; ``matches`` holds the closest known names."""
 
     def __init__(self, message: str, name: str = "", matches: Sequence[str] = ()):
         super().__init__(message)
         self.name, self.matches = name, list(matches)
 
+    def __str__(self) -> str:  # the message, not KeyError's quoted repr of it
+        return str(self.args[0])
 
-class TargetImportError(RegistryError, ImportError):
+
+class TargetImportError(ImportError):
     """A lazy ``"module:attr"`` target could not be imported."""
 
 
@@ -179,20 +175,12 @@ class Registry:
 
     def find(self, name: str) -> Entry | None:
         """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
-        for a bare name several plugins provide or a qualified name spelled with ``:``."""
+        for a bare name several plugins provide."""
         if not isinstance(name, str):
             return None
         provider, bare = self._split(name)
         if provider is not None:
             return self._entries.get((provider, self._key(bare)))
-        provider, bare = self._split(name, ":")
-        if provider is not None:
-            choice = f"{namespace(provider)}{SEPARATOR}{bare}"
-            message = (
-                f"{self.noun} {name!r}: ':' separates an import path ('module:attr'); the qualified name of "
-                f"{provider!r}'s {self.noun} {bare!r} is written with '/': use {choice!r}"
-            )
-            raise AmbiguousNameError(message, name, [provider], [choice])
         candidates = sorted(self._candidates(name), key=lambda e: e.provider)
         if len(candidates) > 1:
             providers, choices = [e.provider for e in candidates], [self.qualified_name(e) for e in candidates]
@@ -207,10 +195,10 @@ class Registry:
         key = self._key(name)
         return [e for (_, k), e in self._entries.items() if k == key]
 
-    def _split(self, name: str, sep: str = SEPARATOR) -> tuple[str | None, str]:
-        """``(provider, bare)`` when ``name`` is ``"<plugin><sep><bare>"`` for a provider of
-        this registry, else ``(None, name)``."""
-        prefix, found, bare = name.partition(sep)
+    def _split(self, name: str) -> tuple[str | None, str]:
+        """``(provider, bare)`` when ``name`` is ``"<plugin>/<bare>"`` for a provider of this
+        registry, else ``(None, name)``."""
+        prefix, found, bare = name.partition(SEPARATOR)
         providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
         return (providers[prefix], bare) if found and bare and prefix in providers else (None, name)
 
@@ -234,8 +222,9 @@ class Registry:
         elif sep:  # an unknown plugin: suggest among the plugins
             typed, pool = prefix, self.providers()
             message = f"unknown {self.noun} {name!r}: no plugin named {prefix!r} provides {self.kind}"
-        else:
-            message, typed, pool = f"unknown {self.noun} {name!r}", name, self.names()
+        else:  # a qualified name written with ':' (an import path's separator) gets the '/' form
+            message, typed = f"unknown {self.noun} {name!r}", name
+            pool = self.qualified_names() if ":" in name else self.names()
         listing = f"embodichain list {self.kind}" + (f" --provider {provider}" if provider else "")
         hint = did_you_mean(typed, pool) or f" See `{listing}`."
         return UnknownNameError(f"{message}.{hint}", name, closest(typed, pool))

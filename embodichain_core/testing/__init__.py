@@ -5,6 +5,8 @@ Public helpers (imported lazily, so ``import embodichain_core.testing`` is cheap
 * :func:`isolated_plugins`: context manager with a fresh plugin manager and empty
   registries (built-ins only), restoring the global state afterwards.
 * :func:`register_plugin`: register a plugin object or module at runtime.
+* :func:`patch_entry_points`: choose the installed plugins (entry points) a test's
+  plugin loading sees, e.g. stand-ins for a plugin that fails to import.
 * :func:`check_name_clashes`: register a plugin next to the *installed* plugins and
   report (raise :class:`NameClashError`) every name it shares with them, e.g.
   ``check_name_clashes(my_plugin, name="embodichain-myplugin")``.
@@ -26,6 +28,7 @@ _PLUGIN_HELPERS = {
     "unregister_plugin": "embodichain_core.plugins.manager",
     "check_name_clashes": "embodichain_core.testing.clashes",
     "NameClashError": "embodichain_core.testing.clashes",
+    "patch_entry_points": "embodichain_core.testing.entry_points",
 }
 _ENV_HELPERS = ("make_env", "check_batched_env")
 

@@ -61,10 +61,9 @@ def task_id() -> Iterator[str]:
     import gymnasium as gym
     from test_lerobot_run_env import DemoPush
 
-    from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+    from embodichain_core.envs.registration import register_env
 
     uid = f"LeRobotDemo{uuid.uuid4().hex[:8]}-v0"
     register_env(uid)(DemoPush)
     yield uid
     gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)

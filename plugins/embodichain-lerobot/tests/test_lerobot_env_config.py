@@ -54,8 +54,6 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Pat
     the same robot and camera."""
     import gymnasium as gym
 
-    from embodichain_core.envs.registration import REGISTERED_ENVS
-
     root = tmp_path_factory.mktemp("lerobot_env")
     demo, win = _register(DemoPush), _register(SeedWin)
     config = write_config(root / "gen.json", demo, root / "data")
@@ -67,7 +65,6 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Pat
     yield {"config": eval_config, "dataset": dataset, "gen_config": config, "root": root}
     for uid in (demo, win):
         gym.registry.pop(uid, None)
-        REGISTERED_ENVS.pop(uid, None)
 
 
 @pytest.fixture(scope="module")

@@ -213,13 +213,12 @@ def quick_win() -> Any:
 
     import gymnasium as gym
 
-    from embodichain_core.envs.registration import REGISTERED_ENVS, register_env
+    from embodichain_core.envs.registration import register_env
 
     uid = f"QuickWin{uuid.uuid4().hex[:8]}-v0"
     register_env(uid)(QuickWin)
     yield uid
     gym.registry.pop(uid, None)
-    REGISTERED_ENVS.pop(uid, None)
 
 
 def test_results_per_episode_as_the_envs_finish_them(quick_win: str, tmp_path: Path) -> None:

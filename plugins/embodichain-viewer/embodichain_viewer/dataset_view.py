@@ -112,12 +112,10 @@ def view_episode(
     Raises:
         IndexError: no such episode. ValueError: the episode cannot be replayed.
     """
-    from embodichain_core.demo import register_demo_task
     from embodichain_core.viewing import force_viewer
     from embodichain_lerobot.episode_reader import EpisodeFiles
     from embodichain_lerobot.replay import Replayer
 
-    register_demo_task()  # datasets of the core's demo scene rebuild too
     files = EpisodeFiles(path, episode)
     frames = recorded_frames(files)
     replayer = Replayer(files.root)

@@ -23,11 +23,8 @@ def demo_env(viewer: str = "none", port: int = 0, dataset: Optional[Path] = None
     ``"none"`` builds it with ``headless: false``; ``dataset``: record there (LeRobotRecorder)."""
     from embodichain_core.cli.run_env import RunPlan, make_env
     from embodichain_core.config.loader import load_config_file, load_gym_config, resolve_relative_paths
-    from embodichain_core.demo import DEMO_CONFIG, register_demo_task
-    from embodichain_core.plugins import load_plugins
+    from embodichain_core.demo import DEMO_CONFIG
 
-    load_plugins()
-    register_demo_task()
     data = load_config_file(str(DEMO_CONFIG))
     resolve_relative_paths(data, str(Path(DEMO_CONFIG).parent))
     data["sensor"] = [

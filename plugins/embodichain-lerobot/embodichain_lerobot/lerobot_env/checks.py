@@ -20,16 +20,12 @@ def check_task(task: Optional[str]) -> None:
     """Raise :class:`ConfigError` ``env.task`` naming the task, the closest and all tasks."""
     import gymnasium as gym
 
-    from embodichain_core.demo import register_demo_task
-    from embodichain_core.envs.registration import REGISTERED_ENVS
-    from embodichain_core.plugins import load_plugins, task_registry
+    from embodichain_core.plugins import task_registry
     from embodichain_core.utils.suggest import did_you_mean
 
-    load_plugins()
-    register_demo_task()
+    ours = task_registry().names()  # loads the plugins, which put their tasks into gymnasium
     if task is not None and task in gym.registry:
         return
-    ours = sorted({*task_registry().names(), *REGISTERED_ENVS})
     what = "no task: give --env.task=<task id> or --env.gym_config=<file>" if task is None else f"unknown task {task!r}"
     hint = did_you_mean(task, ours) if task is not None else ""
     raise ConfigError("env.task", f"{what}.{hint} Available tasks: {', '.join(ours)}")
