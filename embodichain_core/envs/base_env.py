@@ -116,7 +116,7 @@ class BaseEnv(TaskApi, gym.Env):
         self.device = torch.device(sim_device if sim_device != "cuda" or on_warp else "cpu")
         self._seed_rng(self.cfg.seed)
         self.max_episode_steps = int(self.cfg.max_episode_steps) if self.cfg.max_episode_steps > 0 else 2**31 - 1
-        self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32)
+        self._elapsed_steps = torch.zeros(self.num_envs, dtype=torch.int32, device=self.device)
         # the dones ask the task for truncations only when it overrides check_truncated (the default has none)
         self._task_truncates = type(self).check_truncated is not TaskApi.check_truncated
 
@@ -196,21 +196,28 @@ class BaseEnv(TaskApi, gym.Env):
         return self.get_obs(), self.get_info()
 
     def _dones(
-        self, obs: Any, info: dict, diverged: list[int]
+        self, obs: Any, info: dict, diverged: Any
     ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """``terminated = success | fail`` (none with ``ignore_terminations``); ``truncated =
-        check_truncated | time limit | diverged``; ``dones`` (None: no env is done)."""
+        check_truncated | time limit | diverged`` (``diverged``: a bool mask, or env ids);
+        ``dones`` (None: no env is done). The step's one host read: the done and diverged
+        flags, copied together."""
         success, fail = info["success"], info["fail"]
         terminated = torch.zeros_like(success) if self.cfg.ignore_terminations else success | fail
-        truncated = self._elapsed_steps >= self.max_episode_steps
-        info["diverged"] = torch.zeros(self.num_envs, dtype=torch.bool)
-        if diverged:
-            truncated[diverged] = info["diverged"][diverged] = True
-            warnings.warn(f"simulation diverged in env(s) {diverged}; resetting them", RuntimeWarning, stacklevel=3)
+        if not isinstance(diverged, torch.Tensor):  # ids, from a task's own step_physics
+            ids, diverged = diverged, torch.zeros(self.num_envs, dtype=torch.bool)
+            diverged[list(ids)] = True
+        diverged = diverged.to(terminated.device)
+        info["diverged"] = diverged
+        truncated = (self._elapsed_steps >= self.max_episode_steps).to(terminated.device) | diverged
         if self._task_truncates:
             truncated = self.check_truncated(obs, info).to(truncated.device) | truncated
-        dones = terminated | truncated.to(terminated.device)
-        return terminated, truncated, dones if bool(dones.any()) else None
+        dones = terminated | truncated
+        flags = torch.stack((dones, diverged)).cpu()
+        if bool(flags[1].any()):
+            ids = torch.nonzero(flags[1]).flatten().tolist()
+            warnings.warn(f"simulation diverged in env(s) {ids}; resetting them", RuntimeWarning, stacklevel=3)
+        return terminated, truncated, dones if bool(flags[0].any()) else None
 
     # -- the overrides of a BaseEnv task ---------------------------------------------------------
     def design_scene(self, scene: Scene) -> None:
@@ -227,9 +234,10 @@ class BaseEnv(TaskApi, gym.Env):
         the simulation, e.g. as joint targets. Required."""
         raise NotImplementedError(f"{type(self).__name__} must override apply_action(action)")
 
-    def step_physics(self) -> list[int]:
-        """``sim_steps_per_control`` physics steps of every env; returns the diverged envs."""
-        return self.scene.sim.step(self.sim_steps_per_control)
+    def step_physics(self) -> Any:
+        """``sim_steps_per_control`` physics steps of every env; returns the diverged envs: a
+        ``(num_envs,)`` bool mask (``sim.advance``, no host wait on a GPU) or a list of ids."""
+        return self.scene.sim.advance(self.sim_steps_per_control)
 
     def get_obs(self, **kwargs: Any) -> Any:
         """The batched observation: a tensor or a (nested) dict of tensors, leading ``num_envs``. Required."""

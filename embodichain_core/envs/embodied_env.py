@@ -87,7 +87,7 @@ class EmbodiedEnv(BaseEnv):
         # config, timing, device, seed, counters (BaseEnv)
         self._init_run(cfg, num_envs, render_mode, kwargs)
         self._default_reward = type(self).get_reward is TaskApi.get_reward  # zeros: phase 8 skips it
-        self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool)
+        self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
         # scene, managers, spaces, the action check
         env_build.build_managers(self, env_build.setup_scene(self, build_scene))
         # which manager phases have work (managers are fixed once built): one flag test per step
@@ -122,7 +122,7 @@ class EmbodiedEnv(BaseEnv):
         # 2. apply the command: joint targets / efforts into the simulation
         self._apply_command(command)
         # 3. physics: sim_steps_per_control physics steps of every env
-        diverged = self.sim.step(self.sim_steps_per_control)
+        diverged = self.sim.advance(self.sim_steps_per_control)
         # 4. interval events
         self.event_manager.apply("interval")
         # 5. counters: this step counts from here on
@@ -236,7 +236,7 @@ class EmbodiedEnv(BaseEnv):
         return reward if reward.dtype is torch.float32 else reward.float()
 
     def _dones(
-        self, obs: Any, info: dict, diverged: list[int]
+        self, obs: Any, info: dict, diverged: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """Phase 10: :meth:`BaseEnv._dones` (``terminated = success | fail``, none with
         ``ignore_terminations``; ``truncated = check_truncated | time limit | diverged``;
@@ -260,7 +260,8 @@ class EmbodiedEnv(BaseEnv):
         if manager.save_failed_episodes:
             keep = torch.ones(len(env_ids), dtype=torch.bool)
         else:
-            keep = self._episode_success[env_ids] | self.is_task_success()[env_ids]
+            rows = env_ids.to(self.device)
+            keep = (self._episode_success[rows] | self.is_task_success()[rows]).cpu()
         manager.commit(env_ids[keep])
         manager.discard(env_ids[~keep])
 

@@ -69,7 +69,23 @@ class RobotIO:
             self._bind_host_views()
             self._write, self._observe = self._write_host, self._observe_host
         else:
+            self._bind_device_indices()
             self._write, self._observe = self._write_tensor, self._observe_tensor
+
+    def _bind_device_indices(self) -> None:
+        """The indices of the tensor route, on the sim's device once (a slice where the
+        addresses are one strided run): no host index is copied to the device per call."""
+        device = self.sim.device
+
+        def on_device(adr: torch.Tensor) -> Union[slice, torch.Tensor]:
+            sel = _selector(adr.numpy())
+            return sel if isinstance(sel, slice) else torch.as_tensor(sel, dtype=torch.long, device=device)
+
+        self._qpos_idx, self._dof_idx = on_device(self.qpos_adr), on_device(self.dof_adr)
+        self._drive_dev = {
+            key: (None if bool(cols.all()) else on_device(torch.nonzero(cols).flatten()), on_device(acts))
+            for key, (cols, acts) in self.drive_targets.items()
+        }
 
     def _bind_host_views(self) -> None:
         """The numpy views of the host route, made once (the backend's views are persistent):
@@ -121,10 +137,10 @@ class RobotIO:
         sim = self.sim
         value = value.to(device=sim.device, dtype=sim.dtype)
         if key == "qf":
-            sim.qfrc_applied[:, self.dof_adr] = value
+            sim.qfrc_applied[:, self._dof_idx] = value
             return
-        columns, actuators = self.drive_targets[key]
-        sim.ctrl[:, actuators] = value[:, columns]
+        columns, actuators = self._drive_dev[key]
+        sim.ctrl[:, actuators] = value if columns is None else value[:, columns]
 
     def _write_host(self, key: str, value: torch.Tensor) -> None:
         array = value.numpy()
@@ -157,9 +173,9 @@ class RobotIO:
         }
 
     def _observe_tensor(self) -> dict[str, torch.Tensor]:
-        sim, dof = self.sim, self.dof_adr
+        sim, dof = self.sim, self._dof_idx
         return {
-            "qpos": sim.qpos[:, self.qpos_adr].float(),
+            "qpos": sim.qpos[:, self._qpos_idx].float(),
             "qvel": sim.qvel[:, dof].float(),
             "qf": (sim.qfrc_actuator[:, dof] + sim.qfrc_applied[:, dof]).float(),
         }

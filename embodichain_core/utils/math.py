@@ -69,6 +69,10 @@ __all__ = [
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 _VIEWABLE = frozenset((torch.float32, torch.float64))
+#: Whether CPU tensors take the numpy fast path (the device audit turns it off, so that on
+#: the CPU the functions run the torch code a GPU runs:
+#: :class:`~embodichain_core.sim.backend.device_audit.HostWaitAudit`).
+NUMPY_VIEWS = True
 
 
 def _numpy_views(fn: _F) -> _F:
@@ -76,7 +80,7 @@ def _numpy_views(fn: _F) -> _F:
 
     @functools.wraps(fn)
     def run(*args: Any, **kwargs: Any) -> Any:
-        if isinstance(args[0], np.ndarray) or not isinstance(args[0], torch.Tensor):
+        if not NUMPY_VIEWS or isinstance(args[0], np.ndarray) or not isinstance(args[0], torch.Tensor):
             return fn(*args, **kwargs)
         tensors = [a for a in args if isinstance(a, torch.Tensor)]
         if not all(t.is_cpu and not t.requires_grad and t.dtype in _VIEWABLE for t in tensors):

@@ -10,6 +10,7 @@ abstract). Reading a derived field runs that forward first; reading a state fiel
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import Any
 
 import torch
 
@@ -21,6 +22,22 @@ class FieldViews(ABC):
 
     _views: dict[str, torch.Tensor]
     _maybe_dirty: bool
+    num_envs: int
+    device: torch.device
+
+    @abstractmethod
+    def step(self, nstep: int = 1, env_ids: Any = None) -> list[int]:
+        """Advance ``env_ids`` by ``nstep`` physics steps; the envs that diverged."""
+
+    def advance(self, nstep: int = 1) -> torch.Tensor:
+        """Step every env by ``nstep`` (as :meth:`step`); return a ``(num_envs,)`` bool tensor
+        on the sim's device, True where the env diverged. A backend on a GPU answers
+        without waiting for the device; this default builds the mask from :meth:`step`'s ids."""
+        failed = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
+        ids = self.step(nstep)
+        if ids:
+            failed[torch.as_tensor(ids, dtype=torch.long, device=self.device)] = True
+        return failed
 
     @abstractmethod
     def _forward_dirty(self) -> None:

@@ -113,6 +113,12 @@ class SimBackend(Protocol):
         loop truncates and resets them there) unless the env was reset in between."""
         ...
 
+    def advance(self, nstep: int = 1) -> torch.Tensor:
+        """Advance every env by ``nstep`` physics steps, as ``step(nstep)``; return a
+        ``(num_envs,)`` bool tensor on ``device``, True where the env diverged (the env loop's
+        call: on a GPU it does not wait for the device)."""
+        ...
+
     def forward(self, env_ids: Any = None) -> None:
         """Make the derived views of (at least) ``env_ids`` current."""
         ...

@@ -26,7 +26,6 @@ so entities, managers, functors and tasks run on it unchanged. What differs from
 from __future__ import annotations
 
 import copy
-import warnings
 from typing import Any, Iterable, Optional
 
 import mujoco
@@ -38,15 +37,18 @@ from embodichain_core.sim.backend.field_views import FieldViews
 from embodichain_core.sim.backend.env_rows import np_ids
 from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
 from embodichain_core.sim.backend.warp_device import StepGraphs, init_warp, resolve_device, torch_device
+from embodichain_core.sim.backend.warp_failures import WarpFailures
 from embodichain_core.sim.backend.warp_model import WarpModelFields
 from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
 
 _AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+#: :meth:`WarpSim.advance` checks MuJoCo Warp's contact-overflow flags (a host read) every this many calls.
+CONTACT_CHECK_PERIOD = 64
 #: State (and acceleration-level outputs) a subset step puts back for the envs outside the subset.
 _KEPT = "qpos qvel act qacc_warmstart time history plastic qacc qfrc_actuator actuator_force cfrc_ext".split()
 
 
-class WarpSim(FieldViews):
+class WarpSim(WarpFailures, FieldViews):
     """``num_envs`` MuJoCo Warp worlds of one compiled model.
 
     Args:
@@ -100,8 +102,8 @@ class WarpSim(FieldViews):
         self._dirty = np.zeros(self.num_envs, dtype=bool)
         self._maybe_dirty = False
         self._pending_failed: list[int] = []
-        self._errors: dict[int, str] = {}
         self._warned_overflow = False
+        self._advances = 0
         self.reset(None)
 
     # -- construction ------------------------------------------------------------------------------
@@ -193,24 +195,22 @@ class WarpSim(FieldViews):
         self._maybe_dirty = False
         return self._failed()
 
-    def _failed(self) -> list[int]:
-        """Worlds with a non-finite state or a constraint overflow (sticky until reset)."""
-        state = torch.cat([self._views["qpos"], self._views["qvel"], self._kept["act"]], dim=1)
-        bad = ~torch.isfinite(state).all(dim=1)
-        kinds = self.mjw.OverflowType
-        overflow = (self._overflow & int(kinds.NEFC)) != 0
-        ids = torch.nonzero(bad | overflow).flatten().tolist()
-        for i in ids:
-            self._errors[i] = "non-finite state" if bad[i] else "constraint rows over njmax (raise WarpSim(njmax=...))"
-        contacts = int(kinds.BROADPHASE | kinds.NARROWPHASE | kinds.CCD)
-        if not self._warned_overflow and bool((self._overflow & contacts).any()):
-            self._warned_overflow = True
-            warnings.warn(
-                "MuJoCo Warp's contact buffers overflowed; some contacts were dropped (raise WarpSim(nconmax=...))",
-                RuntimeWarning,
-                stacklevel=3,
-            )
-        return ids
+    def advance(self, nstep: int = 1) -> torch.Tensor:
+        """Step every env (as ``step(nstep)``); the ``(num_envs,)`` bool mask of the envs that
+        diverged, computed on the device without a host wait (:meth:`error` says why)."""
+        self.flush_const()
+        n = int(nstep) * self.substeps
+        self.graphs.run(("step", n), lambda: self._advance(n))
+        self._dirty[:] = False
+        self._maybe_dirty = False
+        failed = self._failed_mask()
+        if self._pending_failed:  # failures of a subset step (off the hot path)
+            failed[torch.as_tensor(self._pending_failed, device=self.device)] = True
+            self._pending_failed = []
+        self._advances += 1
+        if self._advances % CONTACT_CHECK_PERIOD == 0:
+            self._warn_contact_overflow()
+        return failed
 
     def forward(self, env_ids: Any = None) -> None:
         """Recompute derived views (of every world: MuJoCo Warp has no subset)."""
@@ -240,12 +240,6 @@ class WarpSim(FieldViews):
         self.mark_dirty(rows)
         reset = set(rows.tolist())
         self._pending_failed = [i for i in self._pending_failed if i not in reset]
-        for i in reset & set(self._errors):
-            del self._errors[i]
-
-    def error(self, env_id: int) -> str:
-        """Why env ``env_id`` last failed ('' if it did not)."""
-        return self._errors.get(int(env_id), "")
 
     # -- model fields: the interface's methods, answered by :attr:`fields` ------------------------
     def declare_per_env(self, names: Iterable[str]) -> None:

@@ -135,14 +135,30 @@ class Articulation(JointModelFields, Entity):
         return torch.from_numpy(self._jids_np(joint_ids).copy())
 
     # -- joint state ------------------------------------------------------------------------------
+    def _sim_index(self, name: str) -> torch.Tensor:
+        """A constant index of this entity on the sim's device, copied there once:
+        ``qpos``/``dof`` (the joints' addresses), ``pos``/``vel`` + ``_cols``/``_acts``
+        (the joints with a position/velocity drive, and those actuators)."""
+        cache = self.__dict__.setdefault("_sim_indices", {})
+        out = cache.get(name)
+        if out is None:
+            kind, part = name.split("_", 1) if "_" in name else (name, "adr")
+            if part == "adr":
+                host = getattr(self, f"{kind}_adr")
+            else:
+                act = self.pos_act if kind == "pos" else self.vel_act
+                host = torch.nonzero(act >= 0).flatten() if part == "cols" else act[act >= 0]
+            out = cache[name] = host.to(self.sim.device, copy=True)
+        return out
+
     def get_qpos(self, target: bool = False) -> torch.Tensor:
         """(N, dof) joint positions, or the drive targets with ``target=True``."""
+        sim = self.sim
+        out = sim.qpos[:, self._sim_index("qpos")]
         if target:
-            out = self.sim.qpos[:, self.qpos_adr].clone()
-            mask = self.pos_act >= 0
-            out[:, mask] = self.sim.ctrl[:, self.pos_act[mask]]
-            return self._out(out)
-        return self._out(self.sim.qpos[:, self.qpos_adr])
+            out = out.clone()
+            out[:, self._sim_index("pos_cols")] = sim.ctrl[:, self._sim_index("pos_acts")]
+        return self._out(out)
 
     def set_qpos(self, qpos: Any, joint_ids: Any = None, env_ids: Any = None, target: bool = True) -> None:
         """Set drive targets (``target=True``) or teleport the joints (``target=False``).
@@ -176,12 +192,12 @@ class Articulation(JointModelFields, Entity):
 
     def get_qvel(self, target: bool = False) -> torch.Tensor:
         """(N, dof) joint velocities, or velocity targets with ``target=True``."""
+        sim = self.sim
         if target:
-            out = torch.zeros(self.num_envs, self.dof, dtype=torch.float64)
-            mask = self.vel_act >= 0
-            out[:, mask] = self.sim.ctrl[:, self.vel_act[mask]]
+            out = torch.zeros(self.num_envs, self.dof, dtype=sim.dtype, device=sim.device)
+            out[:, self._sim_index("vel_cols")] = sim.ctrl[:, self._sim_index("vel_acts")]
             return self._out(out)
-        return self._out(self.sim.qvel[:, self.dof_adr])
+        return self._out(sim.qvel[:, self._sim_index("dof")])
 
     def set_qvel(self, qvel: Any, joint_ids: Any = None, env_ids: Any = None, target: bool = True) -> None:
         """Set velocity targets of the drives, or the joint velocities (``target=False``)."""
@@ -197,7 +213,7 @@ class Articulation(JointModelFields, Entity):
 
     def get_qf(self) -> torch.Tensor:
         """(N, dof) joint efforts: drive forces plus applied forces."""
-        dof = self.dof_adr
+        dof = self._sim_index("dof")
         return self._out(self.sim.qfrc_actuator[:, dof] + self.sim.qfrc_applied[:, dof])
 
     def set_qf(self, qf: Any, joint_ids: Any = None, env_ids: Any = None) -> None:

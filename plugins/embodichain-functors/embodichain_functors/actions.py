@@ -58,10 +58,19 @@ class _Term(ActionTerm):
         self.scale = float(scale)
         self.robot = env.robot
         self.joints = torch.as_tensor(env.active_joint_ids, dtype=torch.long)
+        self._joints = self.joints.to(env.device, copy=True)  # the same, on the env's device
+        self._limits: torch.Tensor | None = None
 
     def limits(self) -> torch.Tensor:
-        """(N, n_active, 2) position limits of the active joints."""
-        return self.robot.get_qpos_limits()[:, self.joints]
+        """(N, n_active, 2) position limits of the active joints, on the env's device; read
+        once and again after every reset (reset events may randomize them)."""
+        if self._limits is None:
+            self._limits = self.robot.get_qpos_limits()[:, self._joints]
+        return self._limits
+
+    def reset(self, env_ids: Any = None) -> None:
+        """Read the joint limits again at the next :meth:`limits` (after the reset events)."""
+        self._limits = None
 
     def _columns(self, key: str = "joint_ids") -> torch.Tensor:
         ids = self.params.get(key)
@@ -99,7 +108,7 @@ class DeltaQposTerm(_Term):
         return torch.full((self.action_dim,), -limit), torch.full((self.action_dim,), limit)
 
     def process_action(self, action: torch.Tensor) -> torch.Tensor:
-        target = self.robot.get_qpos()[:, self.joints] + self.scale * torch.as_tensor(action, dtype=torch.float32)
+        target = self.robot.get_qpos()[:, self._joints] + self.scale * torch.as_tensor(action, dtype=torch.float32)
         if self.params["clip"]:
             lim = self.limits()
             target = torch.maximum(torch.minimum(target, lim[..., 1]), lim[..., 0])

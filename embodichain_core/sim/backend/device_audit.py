@@ -1,0 +1,275 @@
+"""Device audit: count, on any device, the calls that would make the host wait for a GPU.
+
+On a CUDA device every read of device memory by the host (``.item()``, ``.tolist()``,
+``.cpu()``, ``.numpy()``, ``bool(tensor)``, ``nonzero``, indexing with a boolean mask) waits
+until the queued kernels finish, and so does every blocking copy of host data into an op
+on the device (an index list, a numpy array, a CPU tensor). :class:`HostWaitAudit` counts
+those calls by call site while a block runs, so a test on Warp's CPU device catches a wait
+that would stall the GPU.
+
+It tells device tensors from host tensors by where they came from, since on the CPU both
+live in the same memory: Warp's arrays as torch tensors (``wp.to_torch``: the simulation's
+views) are device tensors, and so is the result of any op on a device tensor, of a factory
+given a ``torch.device`` (``torch.zeros(n, device=env.device)``) and of ``.to(env.device)``;
+every other tensor is a host tensor, and the string ``"cpu"`` (``.to("cpu")``) names the
+host. So the audit spans the env's build. Build the env so that it takes its device code
+paths (backend ``warp`` with ``WarpSim.host_arrays_on_cpu = False``;
+:meth:`HostWaitAudit.check_env` refuses a backend whose state is host memory).
+
+Example:
+    >>> with HostWaitAudit("cpu") as audit:  # doctest: +SKIP
+    ...     env = gym.make("PushCube-v1", cfg=cfg, num_envs=2).unwrapped
+    ...     action = torch.zeros(env.action_space.shape, device=env.device)
+    ...     env.reset(seed=0)
+    ...     audit.clear()
+    ...     for _ in range(10):
+    ...         env.step(action)
+    >>> audit.per_step(10)["per_step"]  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+import traceback
+import weakref
+from collections import Counter
+from typing import Any, Callable, Iterator
+
+import numpy as np
+import torch
+from torch.overrides import TorchFunctionMode
+
+#: Reads of device memory by the host.
+_READS = {
+    torch.Tensor.item: "item",
+    torch.Tensor.tolist: "tolist",
+    torch.Tensor.__bool__: "bool",
+    torch.Tensor.__int__: "int",
+    torch.Tensor.__float__: "float",
+    torch.Tensor.__index__: "index",
+    torch.Tensor.numpy: "numpy",
+    torch.Tensor.__array__: "numpy",
+    torch.Tensor.cpu: "cpu",
+    torch.Tensor.nonzero: "nonzero",
+    torch.nonzero: "nonzero",
+    torch.argwhere: "nonzero",
+    torch.masked_select: "masked_select",
+    torch.Tensor.masked_select: "masked_select",
+    torch.unique: "unique",
+    torch.Tensor.unique: "unique",
+}
+_INDEXING = {torch.Tensor.__getitem__, torch.Tensor.__setitem__}
+_MOVES = {torch.Tensor.to, torch.as_tensor, torch.tensor, torch.Tensor.new_tensor}
+_WARP_WAITS = ("synchronize", "synchronize_device", "synchronize_stream", "synchronize_event")
+_PROJECT = re.compile(r"(embodichain_\w+)/(.+\.py)$")
+
+
+def call_site(depth: int = 3) -> str:
+    """The innermost frames (up to ``depth``) of the project's code on the current stack,
+    ``path:line  code <- caller <- ...``."""
+    sites: list[str] = []
+    for frame in reversed(traceback.extract_stack()[:-2]):
+        match = _PROJECT.search(frame.filename.replace("\\", "/"))
+        if match is None or frame.filename.endswith("device_audit.py"):
+            continue
+        where = f"{match.group(1)}/{match.group(2)}:{frame.lineno}"
+        sites.append(where + ("" if sites else f"  {(frame.line or '').strip()}"))
+        if len(sites) == depth:
+            break
+    return " <- ".join(sites) if sites else "(outside the project)"
+
+
+class HostWaitAudit(TorchFunctionMode):
+    """Count host waits (device-to-host reads, blocking host-to-device copies) by call site.
+
+    Enter it before the env is built, so that the tensors the env makes on its device at
+    build and reset are known as device tensors, and call :meth:`clear` before the block
+    to measure.
+
+    Args:
+        device: the device the audit stands for (the env's ``sim_device``; ``"cpu"`` for
+            Warp's CPU device). A ``torch.device`` equal to it, or any ``cuda`` name, is
+            "the device" wherever code names one; the string ``"cpu"`` names the host.
+    """
+
+    def __init__(self, device: Any = "cpu"):
+        super().__init__()
+        self.device = torch.device(device)
+        self.waits: Counter[tuple[str, str]] = Counter()
+        self._device: dict[int, weakref.ref] = {}
+        self._storages: set[int] = set()
+        self._undo: list[Callable[[], None]] = []
+
+    @staticmethod
+    def check_env(env: Any) -> None:
+        """Raise ``ValueError`` when ``env``'s backend exposes host views of its state
+        (``capabilities.host_arrays``): the env then takes host code paths a GPU never runs."""
+        sim = getattr(env, "unwrapped", env).sim
+        if sim.capabilities.host_arrays:
+            raise ValueError(
+                "HostWaitAudit: the backend exposes host views (capabilities.host_arrays); build "
+                "backend 'warp' with WarpSim.host_arrays_on_cpu = False so the env takes its device paths"
+            )
+
+    def clear(self) -> None:
+        """Forget the waits counted so far (the device tensors stay known)."""
+        self.waits.clear()
+
+    # -- which tensors are on the device -----------------------------------------------------------
+    def mark_device(self, *tensors: Any) -> None:
+        """Declare ``tensors`` device tensors (a policy's actions on the GPU, say)."""
+        for t in tensors:
+            if isinstance(t, torch.Tensor):
+                self._device[id(t)] = weakref.ref(t)
+
+    def mark_storage(self, t: Any) -> None:
+        """Declare ``t``'s memory device memory: every tensor viewing it is a device tensor
+        (Warp's arrays, whatever views and subclasses the backend makes of them)."""
+        if isinstance(t, torch.Tensor):
+            self._storages.add(t.untyped_storage().data_ptr())
+
+    def is_device(self, t: Any) -> bool:
+        """Whether ``t`` is a device tensor (see the module docstring)."""
+        if not isinstance(t, torch.Tensor):
+            return False
+        ref = self._device.get(id(t))
+        if ref is not None and ref() is t:
+            return True
+        return bool(self._storages) and t.untyped_storage().data_ptr() in self._storages
+
+    def _names_device(self, device: Any) -> bool:
+        if isinstance(device, str):
+            return device.startswith("cuda")
+        return isinstance(device, torch.device) and (device == self.device or device.type == "cuda")
+
+    def _target(self, args: tuple, kwargs: dict) -> Any:
+        """The device a move/factory call names (``None``: it names none)."""
+        if "device" in kwargs:
+            return kwargs["device"]
+        for a in args:
+            if isinstance(a, (str, torch.device)):
+                return a
+            if isinstance(a, torch.Tensor):
+                return self.device if self.is_device(a) else "cpu"
+        return None
+
+    # -- counting ------------------------------------------------------------------------------------
+    def record(self, kind: str) -> None:
+        """Count one wait of ``kind`` at the current project call site."""
+        self.waits[(kind, call_site())] += 1
+
+    def _host_operands(self, values: Iterator[Any]) -> bool:
+        """Whether a host tensor (not a scalar), a numpy array or an index list is among them."""
+        for v in values:
+            if isinstance(v, torch.Tensor) and v.dim() > 0 and not self.is_device(v):
+                return True
+            if isinstance(v, (np.ndarray, list)) and np.ndim(v) > 0:
+                return True
+        return False
+
+    def _classify(self, func: Any, args: tuple, kwargs: dict) -> tuple[str | None, bool]:
+        """``(wait kind or None, whether the result is a device tensor)``."""
+        tensors = [a for a in _flat(args) if isinstance(a, torch.Tensor)] + list(_flat(kwargs.values()))
+        on_device = any(self.is_device(t) for t in tensors)
+        if func in _MOVES:
+            target = self._target(args[1:] if func is torch.Tensor.to else (), kwargs)
+            if target is None:
+                return None, on_device
+            to_device = self._names_device(target)
+            if on_device and not to_device:
+                return "to_host", False
+            if to_device and not on_device:
+                return "to_device", True
+            return None, on_device
+        if "device" in kwargs:  # a factory: zeros(..., device=sim.device)
+            return None, self._names_device(kwargs["device"])
+        if not on_device:
+            return None, False
+        if func in _READS:
+            return _READS[func], False
+        if func in _INDEXING:
+            key = args[1]
+            keys = key if isinstance(key, tuple) else (key,)
+            if any(isinstance(k, torch.Tensor) and k.dtype == torch.bool for k in keys):
+                return "bool_mask", True
+            if self._host_operands(_flat(args[1:])):
+                return "host_index", True
+            return None, True
+        return None, True  # a host operand in a device op is an error on CUDA, not a wait
+
+    def __torch_function__(self, func: Any, types: Any, args: tuple = (), kwargs: Any = None) -> Any:
+        kwargs = kwargs or {}
+        kind, on_device = self._classify(func, args, kwargs)
+        if kind is not None:
+            self.record(kind)
+        out = func(*args, **kwargs)
+        if kind in ("cpu", "to_host") and any(out is a for a in args):
+            out = out.clone()  # on the CPU a move to the host returns its input: keep the copy apart
+        if on_device:
+            self.mark_device(*_flat((out,)))
+        return out
+
+    # -- Warp ----------------------------------------------------------------------------------------
+    def _patch_warp(self) -> None:
+        try:
+            import warp as wp
+        except ImportError:
+            return
+        for name in _WARP_WAITS:
+            self._wrap(wp, name, functools.partial(self._record_after, f"warp.{name}"))
+        self._wrap(wp.array, "numpy", functools.partial(self._record_after, "warp.numpy"))
+        self._wrap(wp, "to_torch", self.mark_storage)
+
+    def _record_after(self, kind: str, out: Any) -> None:
+        self.record(kind)
+
+    def _wrap(self, owner: Any, name: str, after: Callable[[Any], None]) -> None:
+        original = getattr(owner, name, None)
+        if original is None:
+            return
+
+        def wrapped(*args: Any, **kwargs: Any) -> Any:
+            out = original(*args, **kwargs)
+            after(out)
+            return out
+
+        setattr(owner, name, wrapped)
+        self._undo.append(lambda: setattr(owner, name, original))
+
+    def __enter__(self) -> "HostWaitAudit":
+        from embodichain_core.utils import math as math_utils
+
+        was = math_utils.NUMPY_VIEWS
+        math_utils.NUMPY_VIEWS = False  # the torch code a GPU runs, not the CPU's numpy fast path
+        self._undo.append(lambda: setattr(math_utils, "NUMPY_VIEWS", was))
+        self._patch_warp()
+        super().__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        super().__exit__(*exc)
+        while self._undo:
+            self._undo.pop()()
+
+    def per_step(self, steps: int) -> dict[str, Any]:
+        """Waits per step in all, by kind, and by call site (most frequent first)."""
+        kinds: Counter[str] = Counter()
+        for (kind, _), n in self.waits.items():
+            kinds[kind] += n
+        return {
+            "per_step": sum(kinds.values()) / steps,
+            "by_kind": {k: n / steps for k, n in kinds.most_common()},
+            "sites": [{"kind": k, "site": s, "per_step": n / steps} for (k, s), n in self.waits.most_common()],
+        }
+
+
+def _flat(values: Any) -> Iterator[Any]:
+    """Tensors and other leaves of (one level of nested) tuples, lists and dicts."""
+    for v in values:
+        if isinstance(v, (tuple, list)):
+            yield from v
+        elif isinstance(v, dict):
+            yield from v.values()
+        else:
+            yield v

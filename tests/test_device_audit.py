@@ -1,0 +1,93 @@
+"""Host waits per env step on the ``warp`` backend, counted on Warp's CPU device by the device
+audit (:class:`~embodichain_core.sim.backend.device_audit.HostWaitAudit`).
+
+On a GPU every device-to-host read and every blocking host-to-device copy in the step stalls
+the stream. PushCube-v1 (joint-delta actions, reward terms, a TCP observation) steps with at
+most 2 of them per step: the done/divergence flags are the one read. The first tests show the
+audit counts the kinds of wait it claims to, so the budget test cannot pass by counting nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Iterator
+
+import pytest
+import torch
+
+from embodichain_core.sim.backend.device_audit import HostWaitAudit
+from embodichain_core.sim.backend.warp_sim import WarpSim
+
+#: The most host waits an env step of PushCube-v1 may make on the device route.
+WAIT_BUDGET = 2
+STEPS = 6
+
+
+@pytest.fixture(scope="module")
+def audited() -> Iterator[tuple[Any, HostWaitAudit]]:
+    """PushCube-v1 on backend warp (Warp's CPU device, 2 envs, the device code paths), built
+    and reset inside the audit so that the tensors it makes on its device are known."""
+    import gymnasium as gym
+
+    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
+    from embodichain_tasks.rl.push_cube import PushCubeCfg
+
+    patch = pytest.MonkeyPatch()
+    patch.setattr(WarpSim, "host_arrays_on_cpu", False)
+    cfg = PushCubeCfg()
+    cfg.sim_cfg.backend = "warp"
+    cfg.sim_cfg.sim_device = "cpu"
+    audit = HostWaitAudit("cpu")
+    with audit:
+        env = gym.make("PushCube-v1", cfg=cfg, num_envs=2, seed=0, verbose=False).unwrapped
+        env.reset(seed=0)
+        try:
+            yield env, audit
+        finally:
+            env.close()
+            patch.undo()
+
+
+def _count(audit: HostWaitAudit, fn: Any) -> dict[str, float]:
+    audit.clear()
+    fn()
+    return audit.per_step(1)["by_kind"]
+
+
+def test_the_audit_counts_reads_and_host_copies(audited: tuple) -> None:
+    env, audit = audited
+    sim = env.sim
+    assert _count(audit, lambda: float(sim.qpos[0, 0])) == {"float": 1.0}
+    assert _count(audit, lambda: bool(sim.qvel.abs().max() > 1.0)) == {"bool": 1.0}
+    assert _count(audit, lambda: sim.qpos[:, [0, 1]]) == {"host_index": 1.0}  # the index list is copied over
+    assert _count(audit, lambda: torch.ones(3).to(env.device)) == {"to_device": 1.0}
+    assert _count(audit, lambda: torch.nonzero(sim.qpos[:, 0] > 0)) == {"nonzero": 1.0}
+    on_device = torch.zeros(2, device=env.device)
+    assert _count(audit, lambda: (on_device + sim.qpos[:, 0]) * 2.0) == {}  # device ops wait for nothing
+    assert _count(audit, lambda: torch.zeros(2)[torch.tensor([1])]) == {}  # host ops neither
+
+
+def test_the_audit_refuses_an_env_on_host_views(audited: tuple) -> None:
+    env, _ = audited
+    HostWaitAudit.check_env(env)  # the device route: accepted
+    device_route = env.sim.capabilities
+    env.sim.capabilities = dataclasses.replace(device_route, host_arrays=True)
+    try:
+        with pytest.raises(ValueError, match="host_arrays_on_cpu = False"):
+            HostWaitAudit.check_env(env)
+    finally:
+        env.sim.capabilities = device_route
+
+
+def test_an_env_step_waits_for_the_device_at_most_twice(audited: tuple) -> None:
+    env, audit = audited
+    action = torch.full(env.action_space.shape, 0.5, device=env.device)
+    env.step(action)  # first-step work (lazy caches) stays out of the count
+    audit.clear()
+    for _ in range(STEPS):
+        env.step(action)
+    report = audit.per_step(STEPS)
+    sites = "\n".join(f"{s['per_step']:.2f} {s['kind']}: {s['site']}" for s in report["sites"])
+    assert report["per_step"] <= WAIT_BUDGET, f"{report['per_step']} host waits per step:\n{sites}"
+    assert report["per_step"] >= 1, "the done flags are read every step: the audit counted nothing"
+    assert env.sim.qpos.abs().sum() > 0
