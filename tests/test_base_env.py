@@ -232,3 +232,18 @@ def test_summary_lists_the_scene(capsys: pytest.CaptureFixture[str]) -> None:
     assert "Environment initialized: CartReach" in out
     assert "Robots  cart" in out
     assert "Managers" not in out
+
+
+def test_the_shared_generators_are_seeded_from_cfg_seed() -> None:
+    draws = []
+    for _ in range(2):
+        built = make(num_envs=2)
+        assert built.np_random_seed == built.cfg.seed == 0  # gymnasium's own generator, reported as seeded
+        draws.append((built.np_random.random(3).tolist(), torch.rand(3, generator=built.generator).tolist()))
+        built.reset(seed=5)
+        assert built.np_random_seed == 5
+        draws.append((built.np_random.random(3).tolist(), torch.rand(3, generator=built.generator).tolist()))
+        built.close()
+    assert draws[0] == draws[2]
+    assert draws[1] == draws[3]
+    assert draws[0] != draws[1]

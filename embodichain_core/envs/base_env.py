@@ -50,6 +50,17 @@ class BaseEnv(TaskApi, gym.Env):
     ``step_physics``, ``compute_task_state``, ``get_reward``, ``check_truncated``,
     ``reset_envs`` (optional). See docs/embodied_env.md, "BaseEnv".
 
+    Random generators, all seeded from ``cfg.seed`` (docs/embodied_env.md, "Seeding and
+    determinism"):
+
+    * ``rng``: the per-env, per-episode streams (:class:`EpisodeRandom`, one row per env of
+      ``env_ids``). Use it for what a reset or a functor draws: an episode replays from its
+      seed whatever the other envs do.
+    * ``generator``: one shared CPU ``torch.Generator``, for torch draws that are not per env
+      and episode (a script's random actions).
+    * ``np_random``: gymnasium's ``numpy.random.Generator`` of the env (``gym.Env.np_random``),
+      the same kind of shared stream for numpy.
+
     Example:
         >>> env = MySliderEnv(EnvCfg(num_envs=4, seed=0))  # doctest: +SKIP
         >>> obs, info = env.reset()  # doctest: +SKIP
@@ -127,13 +138,13 @@ class BaseEnv(TaskApi, gym.Env):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
 
     def _seed_rng(self, seed: Optional[int]) -> None:
-        """Seed ``env.generator``, ``env.np_random`` and the episode streams ``env.rng``."""
+        """Seed the episode streams ``env.rng``, ``env.generator`` and ``env.np_random`` (see the
+        class docstring for which to use for what)."""
         if seed is None or seed == -1:
             seed = int.from_bytes(os.urandom(4), "little") >> 1
         self.cfg.seed = int(seed)
         self.generator = torch.Generator().manual_seed(int(seed))
-        self.np_random_generator = np.random.default_rng(int(seed))
-        self._np_random = self.np_random_generator
+        self._np_random, self._np_random_seed = np.random.default_rng(int(seed)), int(seed)  # gym.Env.np_random
         if getattr(self, "rng", None) is None:
             self.rng = EpisodeRandom(self.num_envs, int(seed))
         else:
@@ -195,9 +206,7 @@ class BaseEnv(TaskApi, gym.Env):
         self._elapsed_steps[ids.cpu()] = 0
         return self.get_obs(), self.get_info()
 
-    def _dones(
-        self, obs: Any, info: dict, diverged: Any
-    ) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
+    def _dones(self, obs: Any, info: dict, diverged: Any) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """``terminated = success | fail`` (none with ``ignore_terminations``); ``truncated =
         check_truncated | time limit | diverged`` (``diverged``: a bool mask, or env ids);
         ``dones`` (None: no env is done). The step's one host read: the done and diverged
