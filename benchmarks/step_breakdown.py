@@ -8,7 +8,7 @@ the managers and the entity API the functors call). From that split it derives a
 **ceiling**: the ratio to raw stepping the env would reach if the framework's Python took
 no time at all, with the task's physics and functors as they are. A target above the
 ceiling cannot be met by making the framework faster. Everything is instrumented in place
-(the batch object, ``FunctorEntry.func``, entity methods as instance attributes) and
+(the batch object, ``BuiltFunctor.func``, entity methods as instance attributes) and
 restored afterwards; each timer adds ~0.2 µs.
 
 Script use: ``--task`` (``PushCube-v1`` by default) on ``--backend``/``--device``, per

@@ -20,7 +20,7 @@ import argparse
 import json
 from typing import Any, Callable, Sequence
 
-from embodichain_core.plugins.registry import Entry, TargetImportError, describe_target
+from embodichain_core.plugins.registry import RegistryEntry, TargetImportError, describe_target
 
 WHAT = ("plugins", "tasks", "functors", "robots", "solvers", "sensors", "assets", "commands", "viewers")
 
@@ -208,7 +208,7 @@ def _print_failures(rows: list[dict[str, Any]], *, verbose: bool) -> None:
         print("(run with -v for the tracebacks)")
 
 
-def _description(entry: Entry, resolve: bool) -> str:
+def _description(entry: RegistryEntry, resolve: bool) -> str:
     if resolve and not entry.resolved:
         try:
             entry.resolve()
@@ -217,11 +217,11 @@ def _description(entry: Entry, resolve: bool) -> str:
     return entry.description
 
 
-def _base(entry: Entry) -> dict[str, Any]:
+def _base(entry: RegistryEntry) -> dict[str, Any]:
     return {"name": entry.name, "provider": entry.provider}
 
 
-def _task_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _task_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {
         **_base(entry),
         "entry_point": entry.target_repr,
@@ -232,7 +232,7 @@ def _task_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     }
 
 
-def _functor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _functor_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {
         **_base(entry),
         "kind": entry.meta.get("kind"),
@@ -242,15 +242,15 @@ def _functor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     }
 
 
-def _robot_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _robot_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "cfg_class": entry.target_repr}
 
 
-def _solver_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _solver_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "solver_class": entry.target_repr}
 
 
-def _sensor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _sensor_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {
         **_base(entry),
         "cfg_class": entry.target_repr,
@@ -258,20 +258,20 @@ def _sensor_row(entry: Entry, resolve: bool) -> dict[str, Any]:
     }
 
 
-def _asset_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _asset_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     root = entry.target
     return {**_base(entry), "root": f"{describe_target(root)}()" if callable(root) else str(root)}
 
 
-def _command_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _command_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "target": entry.target_repr, "help": entry.meta.get("help") or entry.description}
 
 
-def _viewer_row(entry: Entry, resolve: bool) -> dict[str, Any]:
+def _viewer_row(entry: RegistryEntry, resolve: bool) -> dict[str, Any]:
     return {**_base(entry), "target": entry.target_repr, "description": _description(entry, resolve)}
 
 
-_ROWS: dict[str, Callable[[Entry, bool], dict[str, Any]]] = {
+_ROWS: dict[str, Callable[[RegistryEntry, bool], dict[str, Any]]] = {
     "tasks": _task_row,
     "functors": _functor_row,
     "robots": _robot_row,

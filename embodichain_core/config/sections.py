@@ -24,7 +24,7 @@ def check_sections(cfg: Any, warn: bool = False) -> dict[str, dict[str, Any]]:
             never fires); the env's build passes ``True``.
 
     Returns:
-        ``{section: {name: CheckedFunctor}}``: each functor resolved once, as the env
+        ``{section: {name: ValidatedFunctor}}``: each functor resolved once, as the env
         builds its scene and managers from them.
 
     Raises:

@@ -6,11 +6,11 @@ import inspect
 from typing import Any, Mapping, Optional
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.managers.manager_base import CheckedFunctor
+from embodichain_core.managers.manager_base import ValidatedFunctor
 from embodichain_core.sim.scene import Scene
 
 
-def build_scene(env: Any, events: dict[str, CheckedFunctor]) -> Scene:
+def build_scene(env: Any, events: dict[str, ValidatedFunctor]) -> Scene:
     """Add every configured entity, let the event functors edit the spec, compile, reset.
 
     ``events`` is the checked events section (``check_sections``, after :func:`filter_functors`)."""
@@ -62,7 +62,7 @@ def _make_sensor(sensor_cfg: Any, scene: Scene, path: str) -> Any:
     return sensor_cls(sensor_cfg, scene)
 
 
-def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, CheckedFunctor]) -> None:
+def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, ValidatedFunctor]) -> None:
     """Class functors with ``modify_scene(cfg, scene)`` edit the spec before compile."""
     for checked in events.values():
         hook = getattr(checked.func, "modify_scene", None)
@@ -70,7 +70,7 @@ def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, CheckedFunctor]) 
             hook(checked.cfg, scene)
 
 
-def filter_functors(cfg: Any, functors: Mapping[str, Optional[dict[str, CheckedFunctor]]]) -> dict:
+def filter_functors(cfg: Any, functors: Mapping[str, Optional[dict[str, ValidatedFunctor]]]) -> dict:
     """The checked sections (``check_sections``) the env builds: ``events`` without the
     visual randomization when ``cfg.filter_visual_rand``; ``dataset`` ``None`` when
     ``cfg.filter_dataset_saving``."""
@@ -82,7 +82,7 @@ def filter_functors(cfg: Any, functors: Mapping[str, Optional[dict[str, CheckedF
     return out
 
 
-def is_visual_randomization(checked: CheckedFunctor) -> bool:
+def is_visual_randomization(checked: ValidatedFunctor) -> bool:
     """A ``randomize_*`` functor of category ``randomization.visual``, as its registry
     entry says (a registered name) or as the functor declares it (``embodichain_category``,
     for a callable or an import path)."""

@@ -16,7 +16,7 @@ import torch
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ActionTermCfg
 from embodichain_core.managers.functor import ActionTerm
-from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase
+from embodichain_core.managers.manager_base import ValidatedFunctor, ManagerBase
 
 
 class ActionManager(ManagerBase[ActionTermCfg]):
@@ -29,7 +29,7 @@ class ActionManager(ManagerBase[ActionTermCfg]):
     modes = ("pre", "post")
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """An ``ActionTerm`` class and a known ``mode``."""
         func = checked.func
         if not (isinstance(func, type) and issubclass(func, ActionTerm)):

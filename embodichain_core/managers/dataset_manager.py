@@ -15,7 +15,7 @@ import torch
 from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import DatasetFunctorCfg
-from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase, tag_functor_error
+from embodichain_core.managers.manager_base import ValidatedFunctor, ManagerBase, tag_functor_error
 
 
 class DatasetManager(ManagerBase[DatasetFunctorCfg]):
@@ -28,7 +28,7 @@ class DatasetManager(ManagerBase[DatasetFunctorCfg]):
     modes = ("save",)
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """A known ``mode``; ``save_failed_episodes`` true or false."""
         cls.check_mode(checked.cfg.mode, checked.path)
         if not isinstance(checked.cfg.save_failed_episodes, bool):

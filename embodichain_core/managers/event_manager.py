@@ -26,7 +26,7 @@ import torch
 from embodichain_core.config.checks import check_int, describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import EventCfg
-from embodichain_core.managers.manager_base import OWN_SECTION, CheckedFunctor, FunctorEntry, ManagerBase
+from embodichain_core.managers.manager_base import OWN_SECTION, ValidatedFunctor, BuiltFunctor, ManagerBase
 from embodichain_core.sim.backend.env_rows import np_ids
 from embodichain_core.utils.suggest import closest, did_you_mean
 
@@ -60,13 +60,13 @@ class EventManager(ManagerBase[EventCfg]):
                     self._phases[name] = _Phases(env.num_envs, int(entry.cfg.interval_step))
 
     @classmethod
-    def validate_section(cls, env_cfg: Any, section: Any = OWN_SECTION, **kwargs: Any) -> dict[str, CheckedFunctor]:
+    def validate_section(cls, env_cfg: Any, section: Any = OWN_SECTION, **kwargs: Any) -> dict[str, ValidatedFunctor]:
         """:meth:`ManagerBase.validate_section`, after ``env.custom_event_modes``."""
         check_declared_modes(getattr(env_cfg, "custom_event_modes", None))
         return super().validate_section(env_cfg, section, **kwargs)
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """A known or declared ``mode``; ``interval_step`` and ``is_global``."""
         declared = [*(getattr(env_cfg, "custom_event_modes", None) or []), *getattr(checked.func, "event_modes", ())]
         check_event_mode(checked.cfg.mode, checked.path, declared)
@@ -97,7 +97,7 @@ class EventManager(ManagerBase[EventCfg]):
         self._tick += 1
         tick = self._tick
         for name in self._modes["interval"]:
-            entry: FunctorEntry = self.entries[name]
+            entry: BuiltFunctor = self.entries[name]
             phases = self._phases.get(name)
             if phases is None:  # global
                 if (tick - self._global_start[name]) % entry.cfg.interval_step == 0:

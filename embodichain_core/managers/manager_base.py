@@ -26,8 +26,8 @@ from embodichain_core.utils.configclass import MISSING
 from embodichain_core.utils.suggest import closest, did_you_mean
 
 __all__ = [
-    "CheckedFunctor",
-    "FunctorEntry",
+    "ValidatedFunctor",
+    "BuiltFunctor",
     "ManagerBase",
     "OWN_SECTION",
     "functor_path_of",
@@ -42,8 +42,10 @@ CfgT = TypeVar("CfgT", bound=FunctorCfg)
 
 
 @dataclass
-class FunctorEntry(Generic[CfgT]):
-    """One resolved functor of a manager (``cfg`` is the manager's functor cfg type)."""
+class BuiltFunctor(Generic[CfgT]):
+    """A functor as its manager calls it: built from a :class:`ValidatedFunctor` when the
+    manager is made (a class functor instantiated; ``cfg`` is the manager's functor cfg type,
+    its entity params resolved). Calling it calls ``func(*args, **cfg.params)``."""
 
     name: str
     cfg: CfgT
@@ -90,15 +92,17 @@ def functor_path_of(err: BaseException) -> Optional[str]:
 
 
 @dataclass(frozen=True)
-class CheckedFunctor(Generic[CfgT]):
-    """One entry of a manager section that passed :meth:`ManagerBase.validate_section`.
+class ValidatedFunctor(Generic[CfgT]):
+    """One entry of a manager section that passed :meth:`ManagerBase.validate_section`:
+    checked and resolved, not built yet (the manager builds a :class:`BuiltFunctor` from it).
 
     Attributes:
         name: the entry's key in its section.
         path: its config path (``env.events.fork_mass``).
         cfg: the entry as configured (``func`` as given).
         func: the resolved function or class.
-        entry: the registry entry when ``func`` was given by a registered name, else ``None``.
+        entry: the plugin registry's :class:`~embodichain_core.plugins.registry.RegistryEntry`
+            when ``func`` was given by a registered name, else ``None``.
         entities: the params naming scene entities -> whether each takes a list of them.
     """
 
@@ -112,7 +116,7 @@ class CheckedFunctor(Generic[CfgT]):
 
 def is_checked(section: Any) -> bool:
     """True for a section :meth:`ManagerBase.validate_section` returned."""
-    return isinstance(section, dict) and all(isinstance(v, CheckedFunctor) for v in section.values())
+    return isinstance(section, dict) and all(isinstance(v, ValidatedFunctor) for v in section.values())
 
 
 #: ``validate_section``'s default: the manager's own section of the env config.
@@ -143,7 +147,7 @@ class ManagerBase(Generic[CfgT]):
         if not is_checked(cfg):
             uids = getattr(getattr(env, "scene", None), "asset_uids", None)
             cfg = self.validate_section(getattr(env, "cfg", None), cfg, uids=uids, path=self.path, warn=True)
-        self.entries: dict[str, FunctorEntry[CfgT]] = {n: self._build_entry(c) for n, c in cfg.items()}
+        self.entries: dict[str, BuiltFunctor[CfgT]] = {n: self._build_functor(c) for n, c in cfg.items()}
 
     @classmethod
     def validate_section(
@@ -154,7 +158,7 @@ class ManagerBase(Generic[CfgT]):
         uids: Optional[list[str]] = None,
         path: Optional[str] = None,
         warn: bool = False,
-    ) -> dict[str, CheckedFunctor[CfgT]]:
+    ) -> dict[str, ValidatedFunctor[CfgT]]:
         """Check every entry of this manager's section, before anything is built.
 
         Each ``func`` is resolved (once: the env builds from the result), its params are
@@ -170,7 +174,7 @@ class ManagerBase(Generic[CfgT]):
             warn: warn about valid values that look like mistakes.
 
         Returns:
-            ``{name: CheckedFunctor}`` in config order.
+            ``{name: ValidatedFunctor}`` in config order.
 
         Raises:
             ConfigError: at the config path of the first bad value.
@@ -178,7 +182,7 @@ class ManagerBase(Generic[CfgT]):
         path = path or join_path("env", cls.section)
         if section is OWN_SECTION:
             section = getattr(env_cfg, cls.section, None)
-        checked: dict[str, CheckedFunctor[CfgT]] = {}
+        checked: dict[str, ValidatedFunctor[CfgT]] = {}
         for name, fcfg in iter_section(section, cls.cfg_type, path):
             checked[name] = cls._check_functor(name, fcfg, join_path(path, name), uids)
             cls.check_entry(checked[name], env_cfg, warn)
@@ -186,7 +190,7 @@ class ManagerBase(Generic[CfgT]):
         return checked
 
     @classmethod
-    def _check_functor(cls, name: str, fcfg: Any, where: str, uids: Optional[list[str]]) -> CheckedFunctor:
+    def _check_functor(cls, name: str, fcfg: Any, where: str, uids: Optional[list[str]]) -> ValidatedFunctor:
         """The rules every section shares: ``func`` resolves, the params fit it."""
         given = fcfg.func
         if given is None or isinstance(given, type(MISSING)) or (isinstance(given, str) and not given.strip()):
@@ -207,15 +211,15 @@ class ManagerBase(Generic[CfgT]):
         check_data_paths(func, params, where, cls.min_argc)
         entities = entity_params(func, cls.min_argc, params)
         check_entity_params(params, entities, join_path(where, "params"), uids)
-        return CheckedFunctor(name, where, fcfg, func, entry, entities)
+        return ValidatedFunctor(name, where, fcfg, func, entry, entities)
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """The manager's own rules for one entry (by default: its ``mode``)."""
         cls.check_mode(checked.cfg.mode, checked.path)
 
     @classmethod
-    def check_entries(cls, checked: dict[str, CheckedFunctor], path: str) -> None:
+    def check_entries(cls, checked: dict[str, ValidatedFunctor], path: str) -> None:
         """The manager's rules across the entries of its section (none by default)."""
 
     @classmethod
@@ -227,7 +231,7 @@ class ManagerBase(Generic[CfgT]):
         choices = " or ".join(map(repr, cls.modes))
         raise ConfigError(join_path(where, "mode"), f"mode must be {choices}, got {describe(mode)}.{hint}")
 
-    def _build_entry(self, checked: CheckedFunctor) -> FunctorEntry[CfgT]:
+    def _build_functor(self, checked: ValidatedFunctor) -> BuiltFunctor[CfgT]:
         cfg, func, where = copy.deepcopy(checked.cfg), checked.func, checked.path
         cfg.params = resolve_entities(dict(cfg.params), self._env.scene, join_path(where, "params"), checked.entities)
         cfg.func = func
@@ -242,7 +246,7 @@ class ManagerBase(Generic[CfgT]):
                 raise
             except Exception as err:
                 raise ConfigError(where, f"building functor {cfg.func.__name__} failed: {err}") from err
-        return FunctorEntry(checked.name, cfg, func, is_class, where)
+        return BuiltFunctor(checked.name, cfg, func, is_class, where)
 
     def _run_param_check(self, func: Any, cfg: CfgT, where: str) -> None:
         """A function functor may carry ``check_params(env, **params)``; it runs
@@ -288,6 +292,6 @@ class ManagerBase(Generic[CfgT]):
         return [(getattr(e.cfg, "mode", ""), n, _func_name(e)) for n, e in self.entries.items()]
 
 
-def _func_name(entry: FunctorEntry) -> str:
+def _func_name(entry: BuiltFunctor) -> str:
     func = entry.cfg.func
     return getattr(func, "__name__", type(func).__name__)

@@ -7,7 +7,7 @@ from typing import Any
 from embodichain_core.config.checks import describe
 from embodichain_core.config.errors import ConfigError, join_path
 from embodichain_core.managers.cfg import ObservationCfg
-from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase
+from embodichain_core.managers.manager_base import ValidatedFunctor, ManagerBase
 
 #: Observation groups the env itself fills (``robot``: joint state; ``sensor``: sensor data).
 OBSERVATION_GROUPS = ("robot", "sensor")
@@ -51,7 +51,7 @@ class ObservationManager(ManagerBase[ObservationCfg]):
     modes = ("add", "modify")
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """A known ``mode`` and a ``name`` (``a/b/c``, no empty level)."""
         cls.check_mode(checked.cfg.mode, checked.path)
         name = checked.cfg.name  # not ``is MISSING``: a deep-copied config holds a copy of the sentinel
@@ -62,7 +62,7 @@ class ObservationManager(ManagerBase[ObservationCfg]):
             )
 
     @classmethod
-    def check_entries(cls, checked: dict[str, CheckedFunctor], path: str) -> None:
+    def check_entries(cls, checked: dict[str, ValidatedFunctor], path: str) -> None:
         """An ``add`` observation must not replace a whole group: a built-in one (``robot``,
         ``sensor``) or a group other observations are added under (``object`` when another
         entry adds ``object/cube_pose``)."""

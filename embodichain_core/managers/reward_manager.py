@@ -9,7 +9,7 @@ import torch
 from embodichain_core.config.checks import check_number
 from embodichain_core.config.errors import join_path
 from embodichain_core.managers.cfg import RewardCfg
-from embodichain_core.managers.manager_base import CheckedFunctor, ManagerBase, tag_functor_error
+from embodichain_core.managers.manager_base import ValidatedFunctor, ManagerBase, tag_functor_error
 
 
 class RewardManager(ManagerBase[RewardCfg]):
@@ -22,7 +22,7 @@ class RewardManager(ManagerBase[RewardCfg]):
     modes = ("add", "replace")
 
     @classmethod
-    def check_entry(cls, checked: CheckedFunctor, env_cfg: Any, warn: bool) -> None:
+    def check_entry(cls, checked: ValidatedFunctor, env_cfg: Any, warn: bool) -> None:
         """A known ``mode`` and a finite ``weight``."""
         cls.check_mode(checked.cfg.mode, checked.path)
         check_number(checked.cfg.weight, join_path(checked.path, "weight"))

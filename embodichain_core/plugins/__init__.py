@@ -29,9 +29,9 @@ from embodichain_core.plugins.manager import load_plugins as load_plugins
 from embodichain_core.plugins.manager import register_plugin as register_plugin
 from embodichain_core.plugins.manager import unregister_plugin as unregister_plugin
 from embodichain_core.plugins.registry import AmbiguousNameError as AmbiguousNameError
-from embodichain_core.plugins.registry import Entry
+from embodichain_core.plugins.registry import RegistryEntry
 
-# Each accessor returns the registry of one kind (loading the plugins first). Entry meta:
+# Each accessor returns the registry of one kind (loading the plugins first). RegistryEntry meta:
 # functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
 # ``max_episode_steps``/``kwargs``/``config``/``description``; commands ``help``; viewers
 # ``description``. Robot,
@@ -67,9 +67,9 @@ def get_sensor_classes(sensor_type: str) -> tuple[Any, Any]:
     return entry.resolve(), entry.resolve_meta("sensor_class")
 
 
-def get_asset_root(name: str | Entry) -> Path:
+def get_asset_root(name: str | RegistryEntry) -> Path:
     """The data root registered as ``name`` (or by an ``assets`` entry); a callable root is called once."""
-    entry = name if isinstance(name, Entry) else asset_registry().entry(name)
+    entry = name if isinstance(name, RegistryEntry) else asset_registry().entry(name)
     root = entry.resolve()
     root = root() if callable(root) else root
     if not root:

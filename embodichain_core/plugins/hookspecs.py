@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 
 import pluggy
 
-from embodichain_core.plugins.registry import Entry, Registry, check_target_string, is_lazy_target
+from embodichain_core.plugins.registry import RegistryEntry, Registry, check_target_string, is_lazy_target
 from embodichain_core.utils.suggest import did_you_mean
 
 PROJECT_NAME = "embodichain"
@@ -42,7 +42,9 @@ class BaseRegister:
     def __init__(self, registry: Registry, provider: str):
         self.registry, self.provider = registry, provider
 
-    def _add(self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None) -> Entry:
+    def _add(
+        self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None
+    ) -> RegistryEntry:
         return self.registry.add(name, target, self.provider, meta, lazy=lazy)
 
 
@@ -51,7 +53,7 @@ class CommandRegister(BaseRegister):
 
     kind, noun = "commands", "command"
 
-    def __call__(self, name: str, target: Any, help: str = "") -> Entry:  # noqa: A002
+    def __call__(self, name: str, target: Any, help: str = "") -> RegistryEntry:  # noqa: A002
         return self._add(name, target, {"help": help})
 
 
@@ -61,7 +63,7 @@ class AssetRegister(BaseRegister):
 
     kind, noun = "assets", "asset root"
 
-    def __call__(self, name: str, root: Any) -> Entry:
+    def __call__(self, name: str, root: Any) -> RegistryEntry:
         if not (isinstance(root, (str, os.PathLike)) or callable(root)):
             raise TypeError(
                 f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
@@ -74,7 +76,7 @@ class RobotRegister(BaseRegister):
 
     kind, noun, class_names = "robots", "robot", True
 
-    def __call__(self, name: str, cfg_class: Any) -> Entry:
+    def __call__(self, name: str, cfg_class: Any) -> RegistryEntry:
         return self._add(name, cfg_class)
 
 
@@ -83,7 +85,7 @@ class SolverRegister(BaseRegister):
 
     kind, noun, class_names = "solvers", "solver", True
 
-    def __call__(self, name: str, solver_class: Any, description: str = "") -> Entry:
+    def __call__(self, name: str, solver_class: Any, description: str = "") -> RegistryEntry:
         return self._add(name, solver_class, {"description": description})
 
 
@@ -92,7 +94,7 @@ class SensorRegister(BaseRegister):
 
     kind, noun, class_names = "sensors", "sensor", True
 
-    def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> Entry:
+    def __call__(self, sensor_type: str, cfg_class: Any, sensor_class: Any) -> RegistryEntry:
         if is_lazy_target(sensor_class):
             check_target_string(sensor_class, f"sensor {sensor_type!r} from {self.provider!r}")
         return self._add(sensor_type, cfg_class, {"sensor_class": sensor_class})
@@ -103,7 +105,9 @@ class FunctorRegister(BaseRegister):
 
     kind, noun = "functors", "functor"
 
-    def __call__(self, name: str, target: Any, *, kind: str, category: str = "", description: str = "") -> Entry:
+    def __call__(
+        self, name: str, target: Any, *, kind: str, category: str = "", description: str = ""
+    ) -> RegistryEntry:
         if kind not in FUNCTOR_KINDS:
             raise ValueError(
                 f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
@@ -125,7 +129,7 @@ class TaskRegister(BaseRegister):
         kwargs: dict[str, Any] | None = None,
         config: Any = None,
         description: str = "",
-    ) -> Entry:
+    ) -> RegistryEntry:
         if not (is_lazy_target(entry_point) or isinstance(entry_point, type)):
             raise ValueError(
                 f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string or the env "
@@ -144,7 +148,7 @@ class ViewerRegister(BaseRegister):
 
     kind, noun = "viewers", "viewer"
 
-    def __call__(self, name: str, opener: Any, description: str = "") -> Entry:
+    def __call__(self, name: str, opener: Any, description: str = "") -> RegistryEntry:
         if name not in VIEWER_NAMES:
             raise ValueError(
                 f"viewer {name!r} from {self.provider!r}: a viewer is registered as one of "

@@ -24,7 +24,7 @@ import pluggy
 
 from embodichain_core.plugins import hookspecs
 from embodichain_core.plugins.hookspecs import KINDS, PROJECT_NAME, hook_name, new_registries
-from embodichain_core.plugins.registry import Entry, Registry, describe_target, join_names
+from embodichain_core.plugins.registry import RegistryEntry, Registry, describe_target, join_names
 from embodichain_core.utils.suggest import did_you_mean
 
 ENTRY_POINT_GROUP = "embodichain"
@@ -268,7 +268,7 @@ def _make_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> A
     return registry.get(task_id)(*args, **kwargs)
 
 
-def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[Entry]) -> Any:
+def _task_spec(pm: EmbodichainPluginManager, gym_id: str, entries: list[RegistryEntry]) -> Any:
     from embodichain_core.gym_vector import BatchedEnvSpec, make_vec_env
 
     target: Any = functools.partial(_make_task, pm.registries["tasks"], gym_id)

@@ -88,8 +88,8 @@ def first_doc_line(obj: Any) -> str:
     return next((line.strip() for line in (inspect.getdoc(obj) or "").splitlines() if line.strip()), "")
 
 
-class Entry:
-    """``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``;
+class RegistryEntry:
+    """One registration of a plugin: ``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``;
     ``meta`` holds the kind's extra values (a functor's ``kind``, a task's ``kwargs``, ...)."""
 
     def __init__(self, name: str, target: Any, provider: str, meta: dict | None, lazy: bool | None, noun: str):
@@ -132,21 +132,21 @@ class Entry:
         return str(text or (first_doc_line(self._value) if self.resolved and callable(self._value) else ""))
 
     def __repr__(self) -> str:
-        return f"Entry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
+        return f"RegistryEntry({self.name!r}, {self.target_repr!r}, provider={self.provider!r})"
 
 
 class Registry:
-    """Names -> :class:`Entry` of one ``kind``; ``key`` maps a name to its lookup key."""
+    """Names -> :class:`RegistryEntry` of one ``kind``; ``key`` maps a name to its lookup key."""
 
     def __init__(self, kind: str, *, noun: str | None = None, key: Callable[[str], str] | None = None):
         self.kind, self.noun = kind, noun or kind.removesuffix("s")
         self._key: Callable[[str], str] = key or str
         #: (provider, key) -> entry, in registration order (plugins load sorted by name).
-        self._entries: dict[tuple[str, str], Entry] = {}
+        self._entries: dict[tuple[str, str], RegistryEntry] = {}
 
     def add(
         self, name: str, target: Any, provider: str, meta: dict | None = None, *, lazy: bool | None = None
-    ) -> Entry:
+    ) -> RegistryEntry:
         """Add an entry (an identical one again is a no-op); returns the stored one."""
         what = f"{self.noun} {name!r} from {provider!r}"
         if not isinstance(name, str) or not name or SEPARATOR in name or ":" in name:
@@ -154,12 +154,12 @@ class Registry:
                 f"{what}: names are non-empty strings without '/' or ':' "
                 f"('/' separates the plugin in qualified names, ':' an import path)"
             )
-        entry = Entry(name, target, provider, meta, lazy, self.noun)
+        entry = RegistryEntry(name, target, provider, meta, lazy, self.noun)
         if entry.lazy:
             check_target_string(target, what)
         return self.merge(entry)
 
-    def merge(self, entry: Entry) -> Entry:
+    def merge(self, entry: RegistryEntry) -> RegistryEntry:
         """Store a checked entry (see :meth:`add`); returns the stored one."""
         old = self._entries.setdefault((entry.provider, self._key(entry.name)), entry)
         if (old.target_repr, repr(old.meta)) != (entry.target_repr, repr(entry.meta)):
@@ -173,7 +173,7 @@ class Registry:
         """Remove every entry of ``provider``."""
         self._entries = {k: e for k, e in self._entries.items() if e.provider != provider}
 
-    def find(self, name: str) -> Entry | None:
+    def find(self, name: str) -> RegistryEntry | None:
         """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
         for a bare name several plugins provide."""
         if not isinstance(name, str):
@@ -191,7 +191,7 @@ class Registry:
             raise AmbiguousNameError(message, name, providers, choices)
         return candidates[0] if candidates else None
 
-    def _candidates(self, name: str) -> list[Entry]:
+    def _candidates(self, name: str) -> list[RegistryEntry]:
         key = self._key(name)
         return [e for (_, k), e in self._entries.items() if k == key]
 
@@ -202,7 +202,7 @@ class Registry:
         providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
         return (providers[prefix], bare) if found and bare and prefix in providers else (None, name)
 
-    def entry(self, name: str) -> Entry:
+    def entry(self, name: str) -> RegistryEntry:
         """The entry for ``name``; :class:`UnknownNameError` with the closest names."""
         found = self.find(name)
         if found is None:
@@ -233,7 +233,7 @@ class Registry:
         """The (imported) target registered as ``name``."""
         return self.entry(name).resolve()
 
-    def qualified_name(self, entry: Entry) -> str:
+    def qualified_name(self, entry: RegistryEntry) -> str:
         """The name that always resolves to ``entry`` (``"<plugin>/<name>"``)."""
         return f"{namespace(entry.provider)}{SEPARATOR}{entry.name}"
 
@@ -245,15 +245,15 @@ class Registry:
         """The qualified name of every entry, sorted."""
         return sorted(map(self.qualified_name, self._entries.values()))
 
-    def entries(self) -> list[Entry]:
+    def entries(self) -> list[RegistryEntry]:
         """Entries sorted by name, then provider."""
         return sorted(self._entries.values(), key=lambda e: (e.name, e.provider))
 
-    def ordered_entries(self) -> list[Entry]:
+    def ordered_entries(self) -> list[RegistryEntry]:
         """Entries in registration order."""
         return list(self._entries.values())
 
-    def by_provider(self, provider: str) -> list[Entry]:
+    def by_provider(self, provider: str) -> list[RegistryEntry]:
         """Entries registered by ``provider``."""
         return [e for e in self.entries() if e.provider == provider]
 
