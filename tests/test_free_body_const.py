@@ -85,7 +85,8 @@ def _sims(light_mode: str = "fixed", xml: str = SCENE) -> tuple[BatchSim, BatchS
     spec = _spec(light_mode, xml)
     model = spec.compile()
     fast = BatchSim(model, 6, nthread=1)
-    full = BatchSim(model, 6, nthread=1, fast_constants=False)  # always the full mj_setConst
+    full = BatchSim(model, 6, nthread=1)
+    full.constants.fast = False  # always the full mj_setConst
     return fast, full, model
 
 

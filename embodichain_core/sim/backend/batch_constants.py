@@ -32,14 +32,14 @@ class DeferredConstants:
     Args:
         model: the compiled model (the structure every env shares).
         batch: the ``mujoco.batch.Batch`` whose expanded fields the closed form writes.
-        fast: take the closed form where it applies (False: always the whole model's
-            ``mj_setConst``, e.g. as a reference in tests).
     """
 
-    def __init__(self, model: mujoco.MjModel, batch: Any, fast: bool = True):
+    def __init__(self, model: mujoco.MjModel, batch: Any):
         self.model = model
         self.batch = batch
-        self.fast = fast
+        self.fast = True
+        """Take the closed form where it applies (False: always the whole model's
+        ``mj_setConst``, the reference the closed form is tested against)."""
         self.pending = False
         """Whether any env's constants are due (checked before every step: one attribute read)."""
         self.free_const: Optional[FreeBodyConstants] = None

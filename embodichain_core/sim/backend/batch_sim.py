@@ -47,8 +47,6 @@ class BatchSim(FieldViews):
         substeps: MuJoCo steps per :meth:`step`.
         nthread: batch threads (0: one per core, at most ``num_envs``).
         persistent: keep the thread pool between calls.
-        fast_constants: derive what the closed form covers without ``mj_setConst``
-            (False: always the whole model's, e.g. as a reference in tests).
     """
 
     restores_state_rows = True
@@ -61,7 +59,6 @@ class BatchSim(FieldViews):
         substeps: int = 1,
         nthread: int = 0,
         persistent: bool = True,
-        fast_constants: bool = True,
     ):
         self.model = model
         self.num_envs = int(num_envs)
@@ -75,7 +72,7 @@ class BatchSim(FieldViews):
         self._maybe_dirty = False  # False: no env is dirty (skips the scan on every read)
         self._pending_failed: list[int] = []  # failures of forwards and subset steps, for the next full step
         self.batch = mjbatch.Batch(model, self.num_envs, nthread=self.nthread, persistent=persistent)
-        self.constants = DeferredConstants(model, self.batch, fast=fast_constants)
+        self.constants = DeferredConstants(model, self.batch)
         """The derived constants due after model-field writes (:mod:`.batch_constants`)."""
         self._views: dict[str, torch.Tensor] = {}
         self.arrays: dict[str, np.ndarray] = {}
