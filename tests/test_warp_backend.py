@@ -152,6 +152,7 @@ def test_without_mujoco_warp_the_error_says_how_to_install_it(monkeypatch: Any) 
         ({"backend": "wrap"}, "sim_cfg.backend", "Did you mean 'warp'"),
         ({"backend": "warp", "sim_device": "gpu"}, "sim_cfg.sim_device", "'cpu', 'cuda' or 'cuda:N'"),
         ({"backend": "warp", "solver": "PGS"}, "sim_cfg.physics_config.solver", "'Newton' or 'CG'"),
+        ({"backend": "warp", "sim_device": "cuda:64"}, "sim_cfg.sim_device", "'cuda:64': this machine has"),
     ],
 )
 def test_backend_settings_are_validated(changes: dict, path: str, message: str) -> None:
@@ -162,6 +163,24 @@ def test_backend_settings_are_validated(changes: dict, path: str, message: str) 
     with pytest.raises(ConfigError, match=message) as err:
         check_sim(sim, "sim_cfg")
     assert err.value.path == path
+
+
+def test_cuda_without_a_gpu_is_one_error_before_the_build(monkeypatch: Any, capsys: Any) -> None:
+    """``--device cuda`` on a machine without a GPU: the run stops at the config check,
+    naming the key and the device that works, before the scene is built."""
+    from embodichain_core.cli import run_env
+    from embodichain_core.demo import DEMO_CONFIG
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    monkeypatch.setattr(Scene, "build", lambda *a, **k: pytest.fail("the scene was built"))
+    sim = SimulationManagerCfg(backend="warp", sim_device="cuda")
+    with pytest.raises(ConfigError, match=r"'cuda': this machine has no CUDA GPU; use 'cpu'") as err:
+        check_sim(sim, "sim_cfg")
+    assert err.value.path == "sim_cfg.sim_device"
+    code = run_env.main(["--gym_config", str(DEMO_CONFIG), "--backend", "warp", "--device", "cuda", "--headless"])
+    out = capsys.readouterr()
+    assert code != 0
+    assert "sim_cfg.sim_device: 'cuda': this machine has no CUDA GPU; use 'cpu'" in out.out + out.err
 
 
 def test_backend_is_set_from_configs_and_the_command_line(tmp_path: Any) -> None:

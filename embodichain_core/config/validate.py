@@ -27,6 +27,8 @@ __all__ = [
     "validate_env_cfg",
     "check_run_settings",
     "check_sim",
+    "check_backend",
+    "check_cuda_device",
     "MAX_SIM_STEPS_PER_CONTROL",
     "MAX_PHYSICS_SUBSTEPS",
     "MAX_EPISODE_STEPS",
@@ -114,11 +116,26 @@ def check_backend(sim: Any, path: str) -> None:
             join_path(path, "sim_device"),
             f"{device!r} is not a device of backend 'warp'; use 'cpu', 'cuda' or 'cuda:N'",
         )
+    if device != "cpu":
+        check_cuda_device(device, join_path(path, "sim_device"))
     if sim.physics_config.solver == "PGS":
         raise ConfigError(
             join_path(path, "physics_config", "solver"),
             "'PGS' is not available on backend 'warp'; use 'Newton' or 'CG'",
         )
+
+
+def check_cuda_device(device: str, path: str) -> None:
+    """``cuda`` / ``cuda:N`` names a GPU torch sees (checked before anything is built)."""
+    import torch
+
+    count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+    index = int(device[5:]) if device.startswith("cuda:") else 0
+    if index < count:
+        return
+    have = "no CUDA GPU" if not count else f"{count} CUDA GPU(s) (cuda:0 to cuda:{count - 1})"
+    choice = "'cpu' (Warp's CPU device: the same code, slower)" if not count else "'cuda:0'"
+    raise ConfigError(path, f"{device!r}: this machine has {have}; use {choice}")
 
 
 def check_sleep(sim: Any, where: str) -> None:

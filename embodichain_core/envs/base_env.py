@@ -28,7 +28,7 @@ import numpy as np
 import torch
 from gymnasium.vector import AutoresetMode
 
-from embodichain_core.config.validate import check_run_settings, check_sim
+from embodichain_core.config.validate import check_backend, check_run_settings, check_sim
 from embodichain_core.envs import env_build
 from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.cfg import EnvCfg
@@ -116,6 +116,7 @@ class BaseEnv(TaskApi, gym.Env):
         self.affordance_datas: dict[str, Any] = {}
         self._detached_uids_for_reset: list[str] = []
         self.cfg = env_build.resolve_cfg(type(self), cfg, overrides)
+        check_backend(self.cfg.sim_cfg, "sim_cfg")  # backend and device, before anything uses the device
         self.metadata = dict(type(self).metadata)
         self.render_mode = render_mode
         self._num_envs = resolve_num_envs(self.cfg, num_envs)
