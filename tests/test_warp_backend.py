@@ -114,17 +114,6 @@ def test_unsupported_per_env_fields_name_field_and_backend(name: str, why: str) 
         sim.set_model_field("body_mas", [0], 1, 2.0)
 
 
-def test_mesh_variants_fail_at_build_on_warp(tmp_path: Any) -> None:
-    small, tall = tmp_path / "small.obj", tmp_path / "tall.obj"
-    trimesh.creation.box((0.04, 0.04, 0.04)).export(small)
-    trimesh.creation.box((0.04, 0.04, 0.2)).export(tall)
-    scene = Scene(SimulationManagerCfg(backend="warp"), num_envs=2)
-    scene.add_rigid_object(RigidObjectCfg(uid="obj", shape=MeshCfg(fpath=str(small)), init_pos=(0, 0, 0.3)))
-    scene.reserve_mesh_variants("obj", [str(small), str(tall)])
-    with pytest.raises(ConfigError, match=r"sim_cfg.backend: model field 'geom_contype' .*backend 'warp'"):
-        scene.build()
-
-
 def test_the_kernel_cache_is_the_project_folder_unless_named(monkeypatch: Any, tmp_path: Any) -> None:
     from pathlib import Path
 

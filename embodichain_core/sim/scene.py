@@ -158,8 +158,10 @@ class Scene:
             )
         self._sim = sim
         if any(rec.extra.get("variants") for rec in self.builder.records.values()):
-            # per-env meshes switch collision filters: a backend that cannot (warp) fails here
-            sim.declare_per_env(("geom_contype", "geom_conaffinity"))
+            from embodichain_core.sim.scene_build.variants import variant_fields
+
+            # per-env meshes switch collision filters (warp: park the unused geoms out of reach)
+            sim.declare_per_env(variant_fields(self.builder))
         for uid, rec in self.builder.records.items():
             self._make_entity(uid, rec)
         for sensor in self.sensors.values():

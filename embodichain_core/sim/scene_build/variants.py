@@ -36,6 +36,21 @@ from embodichain_core.sim.scene_build.builder import VISUAL_GROUP
 ALL_BITS = (1 << 30) - 1
 PARKED = 1 << 30  # collides with nothing, but compiled as a colliding geom
 HIDDEN_MATERIAL = "embodichain/hidden"
+#: Backend ``warp`` cannot switch collision bits per env (MuJoCo Warp fixes the colliding geom
+#: pairs for every world): it parks the unused variants' geoms this high above their body
+#: (plus ``PARK_SPACING`` per object with variants, so that two objects' parked geoms never meet).
+PARK_HEIGHT = 100.0
+PARK_SPACING = 10.0
+
+
+def parks_variants(builder: Any) -> bool:
+    """Whether the scene switches variants by parking geoms (backend ``warp``)."""
+    return getattr(getattr(builder, "sim_cfg", None), "backend", "mujoco_batch") == "warp"
+
+
+def variant_fields(builder: Any) -> tuple[str, ...]:
+    """The per-env model fields that switch collision geoms between variants."""
+    return ("geom_pos",) if parks_variants(builder) else ("geom_contype", "geom_conaffinity")
 
 
 def load_variant_parts(cfg: Any, fpath: str, factor: Optional[Sequence[float]] = None) -> tuple[Any, list]:
@@ -87,6 +102,7 @@ def add_variants(
             "collision": list(record.extra["collision_geoms"]),
         }
     _hidden_material(builder.spec)
+    park = _park_offset(builder, uid)
     body = builder.spec.body(uid)
     body.simple = False  # the inertial frame changes per env: keep a general mass matrix
     items = (
@@ -106,19 +122,34 @@ def add_variants(
             meshname=asset,
             material=HIDDEN_MATERIAL,
             rgba=[0, 0, 0, 0],
+            pos=park,
         )
         vgeom.contype = vgeom.conaffinity = 0
         vgeom.group, vgeom.density = VISUAL_GROUP, 0.0
         collision = add_collision_geoms(builder.spec, body, name, parts, cfg)
         for gname in collision:
             geom = builder.spec.geom(gname)
-            geom.contype, geom.conaffinity = PARKED, 0
+            if park is None:
+                geom.contype, geom.conaffinity = PARKED, 0
+            else:  # a colliding geom, parked out of reach
+                geom.pos = park
             geom.mass, geom.density = 0.0, 0.0
         variants[key] = {"visual": [vgeom.name], "collision": collision, "parts": parts, "factor": factor}
     if not record.extra.get("variant_hook"):
         record.extra["variant_hook"] = True
         builder.on_compile(lambda model: _inertials(builder, uid, model))
     return [key for key, _, _ in items]
+
+
+def _park_offset(builder: Any, uid: str) -> Any:
+    """Where ``uid``'s unused variants are parked (body frame), or ``None`` (collision bits)."""
+    if not parks_variants(builder):
+        return None
+    record = builder.record(uid)
+    if "park" not in record.extra:
+        others = sum(1 for r in builder.records.values() if "park" in r.extra)
+        record.extra["park"] = [0.0, 0.0, PARK_HEIGHT + PARK_SPACING * others]
+    return record.extra["park"]
 
 
 def _hidden_material(spec: mujoco.MjSpec) -> None:
@@ -153,6 +184,16 @@ def _inertials(builder: Any, uid: str, model: mujoco.MjModel) -> None:
 _INERTIAL = ("body_mass", "body_ipos", "body_iquat", "body_inertia")
 
 
+def _park(scene: Any, park: Sequence[float], geoms: list[tuple[int, int]], on: np.ndarray, env_ids: Any) -> None:
+    """Move the enabled variants' geoms home and park the others (variants after the first
+    were compiled parked)."""
+    offset = np.asarray(park, dtype=np.float64)
+    index = [g for _, g in geoms]
+    parked_at_compile = np.array([v > 0 for v, _ in geoms], dtype=np.float64)[:, None] * offset
+    home = scene.model.geom_pos[index] - parked_at_compile
+    scene.sim.set_model_field("geom_pos", env_ids, index, np.where(on[..., None], home, home + offset))
+
+
 def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> None:
     """Enable variant ``keys[i]`` (geoms and inertia) in env ``env_ids[i]``; disable the others."""
     record = scene.builder.record(uid)
@@ -172,10 +213,8 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
 
     mat = find(mujoco.mjtObj.mjOBJ_MATERIAL, record.extra["material"])
     hidden = find(mujoco.mjtObj.mjOBJ_MATERIAL, HIDDEN_MATERIAL)
-    for part, fields in (
-        ("collision", (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))),
-        ("visual", (("geom_matid", mat, hidden),)),
-    ):
+    collision = () if "park" in record.extra else (("geom_contype", 1, PARKED), ("geom_conaffinity", ALL_BITS, 0))
+    for part, fields in (("collision", collision), ("visual", (("geom_matid", mat, hidden),))):
         geoms = [(v, find(mujoco.mjtObj.mjOBJ_GEOM, g)) for v, name in enumerate(names) for g in variants[name][part]]
         on = choice[:, None] == np.array([v for v, _ in geoms])[None, :]
         index = [g for _, g in geoms]
@@ -183,6 +222,8 @@ def apply_variants(scene: Any, uid: str, keys: Sequence[str], env_ids: Any) -> N
             sim.set_model_field(field, env_ids, index, np.where(on, yes, no))
         if part == "visual":  # MuJoCo's default geom rgba lets the material's colour show
             sim.set_model_field("geom_rgba", env_ids, index, np.where(on[..., None], [0.5, 0.5, 0.5, 1.0], 0.0))
+        if "park" in record.extra:
+            _park(scene, record.extra["park"], geoms, on, env_ids)
     body = find(mujoco.mjtObj.mjOBJ_BODY, uid)
     for k, field in enumerate(_INERTIAL):
         stacked = np.stack([np.asarray(variants[name]["inertial"][k]) for name in names])
