@@ -18,12 +18,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_ray.spec import GenerateSpec
+from embodichain_ray.storage import TRANSPORTS, StorageError, probe_storage, storage_target
 
 PROG = "embodichain generate"
 EXIT_ERROR, EXIT_CONFIG, EXIT_INTERRUPTED, EXIT_TERMINATED = 1, 2, 130, 143
@@ -47,6 +49,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--shards", metavar="DIR", help="shard folder (default <output>.shards; shared storage on a cluster)"
+    )
+    p.add_argument(
+        "--transport",
+        default="shared",
+        metavar="HOW",
+        help="how shards reach the driver: shared (--shards is a folder every worker writes, the default), "
+        "ray (Ray's object store) or a storage URI or folder (s3://..., gs://..., file://...)",
+    )
+    p.add_argument(
+        "--scratch",
+        metavar="DIR",
+        help="with --transport ray or a URI: the folder each worker records into on its own node "
+        "(default: the node's EMBODICHAIN_GENERATE_SCRATCH, else its temp folder)",
     )
     p.add_argument("--ray-address", dest="ray_address", metavar="ADDR", help="join this Ray cluster")
     p.add_argument("--max-restarts", dest="max_restarts", type=int, default=3, help="restarts per worker")
@@ -97,6 +112,15 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
     output = Path(args.output or f"outputs/generated/{Path(source).stem}_s{args.seed}_n{args.episodes}")
     if output.exists():
         raise ConfigError("--output", f"{output} exists; the merged dataset needs a new folder")
+    check_writable_parent(output.absolute())
+    transport = storage_target(args.transport)
+    if transport not in TRANSPORTS:
+        try:
+            probe_storage(transport)
+        except StorageError as err:
+            raise ConfigError(
+                "--transport", f"{err}; use shared, ray, a folder or a URI every worker and the driver reach"
+            ) from None
     shards = Path(args.shards) if args.shards else output.with_name(output.name + ".shards")
     config = args.gym_config
     if config and Path(config).is_file():  # workers may start in another folder
@@ -118,7 +142,27 @@ def spec_from_args(args: argparse.Namespace) -> GenerateSpec:
         close_timeout=args.close_timeout,
         dashboard=args.ray_dashboard,
         progress_every=0.0 if args.quiet else args.progress_every,
+        transport=transport,
+        scratch=args.scratch,
     )
+
+
+def check_writable_parent(output: Path) -> None:
+    """Check that the driver can create ``output``: its nearest existing folder takes a file.
+
+    Raises:
+        ConfigError: (``--output``) that folder is a file or does not take a new file.
+    """
+    parent = output.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ConfigError("--output", f"cannot create {output}: {parent} is not a folder")
+    try:
+        with tempfile.NamedTemporaryFile(dir=parent, prefix=".embodichain-probe-"):
+            pass
+    except OSError as err:
+        raise ConfigError("--output", f"cannot create {output}: {parent} does not take a new file ({err.strerror})")
 
 
 def seconds_since_process_start() -> float:

@@ -24,11 +24,13 @@ import logging
 import sys
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from embodichain_ray.faults import PROG, GenerateError, death_reason, worker_death_note
 from embodichain_ray.spec import GenerateSpec
+from embodichain_ray.transport import TransferLost
 from embodichain_ray.worker import BatchResult
 
 log = logging.getLogger("embodichain_ray")
@@ -78,8 +80,9 @@ class RunState:
         return self.env_steps / busy if busy > 0 else 0.0
 
 
-def start_workers(spec: GenerateSpec) -> list:
-    """One restartable actor per worker (1 CPU each).
+def start_workers(spec: GenerateSpec, stop_flag: Any = None) -> list:
+    """One restartable actor per worker (1 CPU each); ``stop_flag``: a
+    :class:`~embodichain_ray.intake.StopFlag` actor the workers read (no shared folder).
 
     Raises:
         GenerateError: the cluster has fewer CPUs than workers (an actor would wait forever).
@@ -96,7 +99,7 @@ def start_workers(spec: GenerateSpec) -> list:
     from embodichain_ray.worker import EpisodeWorker
 
     cls = ray.remote(num_cpus=1, max_restarts=spec.max_restarts, max_task_retries=0)(EpisodeWorker)
-    return [cls.remote(spec, w) for w in range(spec.workers)]
+    return [cls.remote(spec, w, stop_flag) for w in range(spec.workers)]
 
 
 class Scheduler:
@@ -105,11 +108,25 @@ class Scheduler:
     A worker whose batch failed because its process died gets a ``pid`` probe instead
     of a batch; Ray answers it once the actor is back (restarted, counted once per
     failure), then the worker gets batches again. A worker past its
-    ``max_restarts`` is dead; when every worker is dead the run stops.
+    ``max_restarts`` is dead; when every worker is dead the run stops. ``take(result)``
+    takes each returned batch's episodes (:class:`~embodichain_ray.intake.Intake`) before
+    they count; a batch whose files are lost (:class:`~embodichain_ray.transport.TransferLost`)
+    is run again and its worker restarted (its incarnation's shard is not added to again).
+    The run ends when every episode is done, even while a worker waits for a node to restart on.
     """
 
-    def __init__(self, spec: GenerateSpec, actors: list, state: RunState, bar: Any, done: frozenset = frozenset()):
-        self.spec, self.actors, self.state, self.bar = spec, actors, state, bar
+    def __init__(
+        self,
+        spec: GenerateSpec,
+        actors: list,
+        state: RunState,
+        bar: Any,
+        done: frozenset = frozenset(),
+        take: Callable[[BatchResult], None] | None = None,
+        stop_flag: Any = None,
+    ):
+        self.spec, self.actors, self.state, self.bar, self.take = spec, actors, state, bar, take
+        self.stop_flag = stop_flag
         self.queue: deque = deque(k for k in range(spec.episodes) if k not in done)
         state.saved |= set(done)  # the bar starts at len(done)
         self.inflight: dict = {}  # ObjectRef -> (worker, batch); batch None: a pid probe
@@ -131,7 +148,7 @@ class Scheduler:
 
         for w in range(len(self.actors)):
             self._submit(w)
-        while self.inflight:
+        while self.inflight and (self.queue or any(batch is not None for _, batch in self.inflight.values())):
             ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=1.0)
             for ref in ready:
                 worker, batch = self.inflight.pop(ref)
@@ -139,10 +156,9 @@ class Scheduler:
                     self._submit(worker)
                 elif not self.state.workers[worker].dead:
                     self._probe(worker)
-            if not self.inflight and self.queue:
-                raise GenerateError(
-                    f"every worker is gone ({self.state.error}); {len(self.queue)} episode(s) were not run"
-                )
+        self.inflight = {ref: v for ref, v in self.inflight.items() if v[1] is not None}  # no probe to wait for
+        if self.queue:  # the loop only ends with episodes left when no worker is left
+            raise GenerateError(f"every worker is gone ({self.state.error}); {len(self.queue)} episode(s) were not run")
 
     def stop(self, timeout: float) -> None:
         """Ask every worker to stop (the stop file) and take the batches they return within
@@ -150,6 +166,8 @@ class Scheduler:
         import ray
 
         self.spec.stop_file.touch()
+        if self.stop_flag is not None:
+            self.stop_flag.set.remote()
         self.queue.clear()
         deadline = time.perf_counter() + timeout
         while self.inflight and time.perf_counter() < deadline:  # a second Ctrl-C propagates: no more waiting
@@ -167,6 +185,17 @@ class Scheduler:
         stats = self.state.workers[worker]
         try:
             value = ray.get(ref)
+            if batch is not None and self.take is not None:
+                self.take(value)
+        except TransferLost as err:  # its worker died before the driver had the files: run it again
+            if requeue:
+                self.queue.extendleft(reversed(batch or []))
+            print(
+                f"{PROG}: worker {worker}'s episode(s) {batch} were lost in transfer ({err}); they run again",
+                file=sys.stderr,
+            )
+            ray.kill(self.actors[worker], no_restart=False)  # a new incarnation, a new shard
+            return False
         except RayActorError as err:  # the worker died (killed, out of memory): run its batch again
             if batch is not None and requeue:
                 self.queue.extendleft(reversed(batch))

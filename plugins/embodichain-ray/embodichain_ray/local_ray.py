@@ -49,6 +49,7 @@ def init_ray(spec: GenerateSpec) -> Reaper | None:
         reaper = start_reaper()
         try:
             ray.init(
+                address="local",  # a new instance, whatever `ray start` or a test cluster left behind
                 num_cpus=spec.workers,
                 include_dashboard=spec.dashboard,
                 object_store_memory=80 * 2**20,

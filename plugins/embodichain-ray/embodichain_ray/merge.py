@@ -1,46 +1,39 @@
-"""Merge shard episodes into one LeRobot dataset ordered by run episode index, with lerobot.
+"""Merge shard episodes into one LeRobot dataset ordered by run episode index, with lerobot,
+while the run is still generating.
 
 Workers take episodes from a shared queue, so a shard holds an interleaved subset
 (worker 0: 0, 2, 5, ...). lerobot's ``aggregate_datasets`` appends whole datasets, so
-the merge feeds lerobot's own per-source steps (``aggregate_videos``,
-``aggregate_data``, ``aggregate_metadata``, ``finalize_aggregation`` of
-``lerobot.datasets.aggregate``) one *episode view* at a time, in episode order: a view
-is the shard's metadata restricted to one episode (the recorder writes one data, video
-and metadata file per episode, which is what makes a one-episode view exact).
-lerobot shifts ``episode_index``/``index`` by the destination's running totals; the
+the merge feeds lerobot's own per-source steps (``aggregate_videos``, ``aggregate_data``,
+``aggregate_metadata``, ``finalize_aggregation`` of ``lerobot.datasets.aggregate``) one
+*episode view* (:class:`~embodichain_ray.merge_parts.EpisodeView`) at a time, in episode
+order. lerobot shifts ``episode_index``/``index`` by the destination's running totals; the
 view's shard-local offsets are subtracted from those totals while it is copied.
+
+:class:`StreamingMerge` appends in a background thread: episode ``k`` is appended as soon
+as it and every episode before it are saved (or known to have failed), so when the last
+batch returns only its own episodes and the final metadata are left to write. The result
+is the dataset a merge of all episodes at the end gives (:func:`merge_episodes` is that
+merge): the same episodes, frames and files in the same order.
 
 Cost stays linear in the number of episodes: lerobot appends every source to the
 destination's *current* data, video and metadata files by reading and rewriting them
-(re-muxing, for a video), so one growing file makes a merge quadratic. The merge starts
-new destination files every ``per_file`` episodes (lerobot's own
-``update_chunk_file_indices``), which bounds the cost of every append. Nothing here writes
-LeRobot files by hand.
-
-lerobot computes the ``meta/episodes/chunk_index``/``file_index`` columns of a merged
-episode as the source's value plus the destination's (right only for a source whose
-metadata is one file); lerobot's loaders do not read them, and the merge leaves them as
-lerobot writes them.
-
-lerobot 0.4.4 copies data files through pandas, which cannot write back a column that
-pyarrow read as one of ``datasets``' ``Array2D``..``Array5D`` extension types (a
-matrix feature such as the main job's 4x4 ``fork_pose``): :func:`plain_nd_arrays` lets
-pyarrow read such columns as their plain nested-list storage while lerobot copies them;
-loading the merged dataset casts them back from the features in ``meta/info.json``.
+(re-muxing, for a video), so one growing file makes a merge quadratic. The merge starts new
+destination files every ``per_file`` episodes (lerobot's own ``update_chunk_file_indices``).
+lerobot computes the ``meta/episodes/chunk_index``/``file_index`` columns of a merged episode
+as the source's value plus the destination's (right only for a one-file source); lerobot's
+loaders do not read them, and the merge leaves them as lerobot writes them.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from embodichain_lerobot.env_meta import merge_env_meta
+from embodichain_ray.merge_parts import EpisodeView, ShardMeta, check_same_format, plain_nd_arrays
 from embodichain_ray.shards import ShardEpisode, remove_tree, write_sidecars
 
 #: Episodes per destination file: every append re-writes the current file, so a file of ``P``
@@ -51,139 +44,212 @@ DATA_MB = 32
 VIDEO_MB = 32
 
 
-@contextlib.contextmanager
-def plain_nd_arrays() -> Any:
-    """Unregister ``datasets``' N-d array extension types from pyarrow inside the block."""
-    import pyarrow as pa
-    from datasets.features import features as hf
+class _Destination:
+    """The dataset being built at ``root`` and lerobot's running file indices."""
 
-    kinds = [
-        hf.Array2DExtensionType((1, 2), "int64"),
-        hf.Array3DExtensionType((1, 2, 3), "int64"),
-        hf.Array4DExtensionType((1, 2, 3, 4), "int64"),
-        hf.Array5DExtensionType((1, 2, 3, 4, 5), "int64"),
-    ]
-    removed = []
-    for kind in kinds:
-        try:
-            pa.unregister_extension_type(kind.extension_name)
-            removed.append(kind)
-        except (KeyError, pa.ArrowKeyError):
-            pass
-    try:
-        yield
-    finally:
-        for kind in removed:
-            pa.register_extension_type(kind)
+    def __init__(self, first: ShardMeta, root: Path, per_file: int):
+        import pandas as pd
+        from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+
+        videos = [k for k, f in first.features.items() if f["dtype"] == "video"]
+        self.meta = LeRobotDatasetMetadata.create(
+            repo_id=f"local/{root.name}",
+            fps=first.fps,
+            robot_type=first.robot_type,
+            features=first.features,
+            root=root,
+            use_videos=bool(videos),
+            data_files_size_in_mb=DATA_MB,
+            video_files_size_in_mb=VIDEO_MB,
+        )
+        self.meta.tasks = pd.DataFrame({"task_index": []}, index=pd.Index([], dtype=object))
+        self.meta.episodes = {}
+        self.first, self.per_file = first, per_file
+        self.meta_idx, self.data_idx = {"chunk": 0, "file": 0}, {"chunk": 0, "file": 0}
+        self.videos_idx = {k: {"chunk": 0, "file": 0, "latest_duration": 0, "episode_duration": 0} for k in videos}
+        self.views: list[EpisodeView] = []
+        self.frames = 0
+
+    def _add_tasks(self, tasks: Any) -> None:
+        import pandas as pd
+
+        new = [t for t in tasks.index if t not in self.meta.tasks.index]
+        if new:
+            names = list(self.meta.tasks.index) + new
+            index = pd.Index(names, name=tasks.index.name)
+            self.meta.tasks = pd.DataFrame({"task_index": range(len(names))}, index=index)
+
+    def append(self, meta: ShardMeta, ep: ShardEpisode) -> None:
+        """Copy shard episode ``ep`` to the end of the dataset with lerobot's aggregation steps."""
+        from lerobot.datasets import aggregate as agg
+        from lerobot.datasets.utils import DEFAULT_CHUNK_SIZE, update_chunk_file_indices
+
+        position = len(self.views)
+        if position and position % self.per_file == 0:  # new destination files
+            for idx in (self.data_idx, self.meta_idx, *self.videos_idx.values()):
+                idx["chunk"], idx["file"] = update_chunk_file_indices(idx["chunk"], idx["file"], DEFAULT_CHUNK_SIZE)
+        view = EpisodeView(meta, ep.index)
+        self._add_tasks(view.tasks)
+        dst = self.meta
+        # lerobot adds the destination totals to the source's own indices: subtract the view's
+        dst.info["total_episodes"], dst.info["total_frames"] = position - ep.index, self.frames - view.from_index
+        self.videos_idx = agg.aggregate_videos(view, dst, self.videos_idx, VIDEO_MB, DEFAULT_CHUNK_SIZE)
+        self.data_idx = agg.aggregate_data(view, dst, self.data_idx, DATA_MB, DEFAULT_CHUNK_SIZE)
+        self.meta_idx = agg.aggregate_metadata(view, dst, self.meta_idx, self.data_idx, self.videos_idx)
+        self.data_idx.pop("src_to_dst", None)
+        self.frames += view.total_frames
+        self.views.append(view)
+
+    def finalize(self) -> None:
+        """Write the tasks, ``meta/info.json`` and the stats (lerobot's ``finalize_aggregation``)."""
+        from lerobot.datasets import aggregate as agg
+
+        self.meta.info["total_episodes"], self.meta.info["total_frames"] = len(self.views), self.frames
+        agg.finalize_aggregation(self.meta, self.views)
 
 
-def _array(value: Any) -> np.ndarray:
-    """A parquet cell (nested object arrays of lists) as one numeric numpy array."""
-    if isinstance(value, np.ndarray) and value.dtype == object:
-        return np.stack([_array(v) for v in value])
-    return np.asarray(value)
+class StreamingMerge:
+    """Builds the merged dataset at ``output`` while episodes arrive, in episode order.
 
+    Call :meth:`add` for every saved episode and :meth:`skip` for every episode that failed
+    all its attempts (in any order, from one thread); a background thread appends episode
+    ``k`` once every episode before it is added or skipped. :meth:`finish` appends the rest
+    in order (skipping the episodes never added) and moves the dataset into place;
+    :meth:`abort` removes what was built. The dataset grows in ``.<name>.merging`` beside
+    ``output``: nothing is at ``output`` until it is complete.
 
-class EpisodeView:
-    """Shard metadata restricted to one episode, as lerobot's aggregation steps read it.
+    Args:
+        output: the new dataset folder.
+        per_file: episodes per destination data/video/metadata file.
 
     Raises:
-        ValueError: the episode shares a data, video or metadata file with another
-            episode (not a shard written by the recorder).
+        FileExistsError: ``output`` exists.
     """
 
-    def __init__(self, meta: Any, rows: dict, index: int):
-        import pandas as pd
-        from lerobot.datasets.utils import DEFAULT_EPISODES_PATH, unflatten_dict
+    def __init__(self, output: Path, per_file: int = EPISODES_PER_FILE):
+        self.output = Path(output)
+        if self.output.exists():
+            raise FileExistsError(f"{self.output} exists; the merged dataset needs a new folder")
+        self.work = self.output.parent / f".{self.output.name}.merging"
+        self.per_file = max(1, per_file)
+        self.merged: list[ShardEpisode] = []
+        self._pending: dict[int, ShardEpisode] = {}
+        self._skipped: set[int] = set()
+        self._known: set[int] = set()
+        self._next, self._draining, self._stopped = 0, False, False
+        self._error: BaseException | None = None
+        self._dst: _Destination | None = None
+        self._shards: dict[Path, ShardMeta] = {}
+        self._cond = threading.Condition()
+        self._thread = threading.Thread(target=self._loop, name="embodichain-merge", daemon=True)
+        self._thread.start()
 
-        if index not in rows:
-            raise ValueError(f"{meta.root}: no metadata row of episode {index}")
-        row = meta.episodes[rows[index]]
-        self.root, self.tasks, self.index = meta.root, meta.tasks, index
-        self.episodes = {key: [value] for key, value in row.items()}
-        self.total_episodes, self.from_index = 1, int(row["dataset_from_index"])
-        self.total_frames = int(row["dataset_to_index"]) - self.from_index
-        path = meta.root / DEFAULT_EPISODES_PATH.format(
-            chunk_index=row["meta/episodes/chunk_index"], file_index=row["meta/episodes/file_index"]
-        )
-        frame = pd.read_parquet(path)
-        if len(frame) != 1:
-            raise ValueError(
-                f"{path} holds {len(frame)} episodes; a one-episode view needs the recorder's "
-                "one-file-per-episode layout"
-            )
-        stats = {k[len("stats/") :]: _array(v) for k, v in frame.iloc[0].items() if k.startswith("stats/")}
-        self.stats = unflatten_dict(stats)
+    def add(self, ep: ShardEpisode) -> bool:
+        """Take a saved episode (``False``: a copy of that run episode came before; it is ignored)."""
+        with self._cond:
+            if ep.episode in self._known:
+                return False
+            self._known.add(ep.episode)
+            self._pending[ep.episode] = ep
+            self._cond.notify()
+        return True
 
+    def skip(self, episode: int) -> None:
+        """Episode ``episode`` has no copy to merge (it failed every attempt)."""
+        with self._cond:
+            if episode not in self._known:
+                self._skipped.add(episode)
+                self._cond.notify()
 
-def _new_destination(metas: Sequence[Any], root: Path, repo_id: str) -> Any:
-    """An empty destination dataset with the union of the shards' tasks (as lerobot does)."""
-    import pandas as pd
-    from lerobot.datasets.aggregate import validate_all_metadata
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+    @property
+    def held(self) -> set[int]:
+        """The run episodes taken so far (merged or waiting for the ones before them)."""
+        with self._cond:
+            return set(self._known)
 
-    fps, robot_type, features = validate_all_metadata(list(metas))
-    videos = [k for k in features if features[k]["dtype"] == "video"]
-    dst = LeRobotDatasetMetadata.create(
-        repo_id=repo_id,
-        fps=fps,
-        robot_type=robot_type,
-        features=features,
-        root=root,
-        use_videos=bool(videos),
-        data_files_size_in_mb=DATA_MB,
-        video_files_size_in_mb=VIDEO_MB,
-    )
-    tasks = pd.concat([m.tasks for m in metas]).index.unique()
-    dst.tasks = pd.DataFrame({"task_index": range(len(tasks))}, index=tasks)
-    dst.episodes = {}
-    return dst, videos
+    def _take(self) -> ShardEpisode | None:
+        """The next episode to append, or ``None`` once there is nothing left (finish or abort)."""
+        with self._cond:
+            while True:
+                if self._stopped or self._error is not None:
+                    return None
+                while self._next in self._skipped:
+                    self._next += 1
+                if self._next in self._pending:
+                    self._next += 1
+                    return self._pending.pop(self._next - 1)
+                if self._draining:
+                    if not self._pending:
+                        return None
+                    self._next = min(self._pending)
+                    continue
+                self._cond.wait()
 
+    def _loop(self) -> None:
+        from lerobot.utils.utils import SuppressProgressBars
 
-def _next_files(data_idx: dict, meta_idx: dict, videos_idx: dict) -> None:
-    """Start new destination data, metadata and video files (in place)."""
-    from lerobot.datasets.utils import DEFAULT_CHUNK_SIZE, update_chunk_file_indices
+        try:
+            with plain_nd_arrays(), SuppressProgressBars():
+                while (ep := self._take()) is not None:
+                    self._append(ep)
+                if self._dst is not None and not self._stopped:
+                    self._dst.finalize()
+        except BaseException as err:  # noqa: BLE001  (handed to finish(), which raises it)
+            self._error = err
 
-    for idx in (data_idx, meta_idx, *videos_idx.values()):
-        idx["chunk"], idx["file"] = update_chunk_file_indices(idx["chunk"], idx["file"], DEFAULT_CHUNK_SIZE)
+    def _append(self, ep: ShardEpisode) -> None:
+        meta = self._shards.get(ep.root)
+        if meta is None:
+            meta = self._shards[ep.root] = ShardMeta(ep.root)
+            if self._dst is not None:
+                check_same_format(self._dst.first, meta)
+        if self._dst is None:
+            remove_tree(self.work)
+            self.work.parent.mkdir(parents=True, exist_ok=True)
+            self._dst = _Destination(meta, self.work, self.per_file)
+        self._dst.append(meta, ep)
+        self.merged.append(ep)
 
+    def finish(self) -> int:
+        """Append what is left, write the final metadata and move the dataset to ``output``.
 
-def _merge_views(
-    episodes: Sequence[ShardEpisode], root: Path, metas: dict[Path, tuple[Any, dict[int, int]]], per_file: int
-) -> None:
-    """Copy ``episodes`` (in order) into a new dataset at ``root`` with lerobot's aggregation steps."""
-    from lerobot.datasets import aggregate as agg
-    from lerobot.datasets.utils import DEFAULT_CHUNK_SIZE
+        Returns:
+            The number of merged episodes (0: nothing was saved, nothing is written).
 
-    dst, videos = _new_destination([meta for meta, _ in metas.values()], root, f"local/{root.name}")
-    meta_idx, data_idx = {"chunk": 0, "file": 0}, {"chunk": 0, "file": 0}
-    videos_idx = {k: {"chunk": 0, "file": 0, "latest_duration": 0, "episode_duration": 0} for k in videos}
-    views, frames = [], 0
-    for position, ep in enumerate(episodes):
-        if position and position % per_file == 0:
-            _next_files(data_idx, meta_idx, videos_idx)
-        meta, rows = metas[ep.root]
-        view = EpisodeView(meta, rows, ep.index)
-        # lerobot adds the destination totals to the source's own indices: subtract the view's
-        dst.info["total_episodes"], dst.info["total_frames"] = position - ep.index, frames - view.from_index
-        videos_idx = agg.aggregate_videos(view, dst, videos_idx, VIDEO_MB, DEFAULT_CHUNK_SIZE)
-        data_idx = agg.aggregate_data(view, dst, data_idx, DATA_MB, DEFAULT_CHUNK_SIZE)
-        meta_idx = agg.aggregate_metadata(view, dst, meta_idx, data_idx, videos_idx)
-        data_idx.pop("src_to_dst", None)
-        frames += view.total_frames
-        views.append(view)
-    dst.info["total_episodes"], dst.info["total_frames"] = len(episodes), frames
-    agg.finalize_aggregation(dst, views)
+        Raises:
+            Exception: the merge's error (the partial dataset is removed).
+        """
+        with self._cond:
+            self._draining = True
+            self._cond.notify()
+        self._thread.join()
+        try:
+            if self._error is not None:
+                raise self._error
+            if not self.merged:
+                return 0
+            write_sidecars(self.work, self.merged)
+            merge_env_meta(sorted({ep.root for ep in self.merged}), self.work)  # what a replay rebuilds the env from
+            os.replace(self.work, self.output)
+        except BaseException:
+            remove_tree(self.work)
+            raise
+        return len(self.merged)
+
+    def abort(self) -> None:
+        """Stop appending and remove the partial dataset."""
+        with self._cond:
+            self._stopped = True
+            self._cond.notify()
+        self._thread.join()
+        remove_tree(self.work)
 
 
 def merge_episodes(episodes: Sequence[ShardEpisode], output: Path, per_file: int = EPISODES_PER_FILE) -> Path:
     """Merge ``episodes`` (in the given order) into a new dataset at ``output``.
 
-    The dataset is built in ``.<name>.merging`` beside ``output`` and renamed into place
-    when complete, with the recorder's sidecars (:func:`~embodichain_ray.shards.write_sidecars`).
-
     Args:
-        episodes: the shard episodes, in the merged order (an episode may appear twice).
+        episodes: the shard episodes, in the merged order (their run episode indices ascend).
         output: the new dataset folder.
         per_file: episodes per destination data/video/metadata file.
 
@@ -191,29 +257,14 @@ def merge_episodes(episodes: Sequence[ShardEpisode], output: Path, per_file: int
         FileExistsError: ``output`` exists.
         ValueError: no episode, or the shards disagree (fps, features, robot type, subtasks).
     """
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-    from lerobot.utils.utils import SuppressProgressBars
-
-    output = Path(output)
-    if output.exists():
-        raise FileExistsError(f"{output} exists; the merged dataset needs a new folder")
     if not episodes:
         raise ValueError("no episode to merge")
-    work = output.parent / f".{output.name}.merging"
-    remove_tree(work)
-    work.parent.mkdir(parents=True, exist_ok=True)
-    metas: dict[Path, tuple[Any, dict[int, int]]] = {}
-    for root in sorted({ep.root for ep in episodes}):
-        meta = LeRobotDatasetMetadata(f"local/{root.name}", root=root)
-        metas[root] = (meta, {int(i): r for r, i in enumerate(meta.episodes["episode_index"])})
+    merge = StreamingMerge(output, per_file)
     try:
-        # lerobot's validation draws a tqdm bar on stderr; its errors come as exceptions
-        with plain_nd_arrays(), SuppressProgressBars(), contextlib.redirect_stderr(io.StringIO()):
-            _merge_views(episodes, work, metas, max(1, per_file))
-        write_sidecars(work, episodes)
-        merge_env_meta(sorted({ep.root for ep in episodes}), work)  # what a replay rebuilds the env from
+        for ep in episodes:
+            merge.add(ep)
     except BaseException:
-        remove_tree(work)
+        merge.abort()
         raise
-    os.replace(work, output)
-    return output
+    merge.finish()
+    return Path(output)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import inspect
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from embodichain_core.cli.run_loops import RunPlan
@@ -39,8 +40,9 @@ class GeneratePlan:
     keep_failed: bool
 
 
-def load_plan(spec: GenerateSpec, worker: int = -1) -> GeneratePlan:
-    """Load the run's config; for ``worker >= 0`` point its recorder at that worker's folder.
+def load_plan(spec: GenerateSpec, save_path: Path | None = None) -> GeneratePlan:
+    """Load the run's config with its recorder's ``save_path`` at ``save_path`` (a worker's
+    folder) or, for the driver's checks, at ``spec.shards``.
 
     Raises:
         ConfigError: the config is invalid (the same errors as ``run-env``), the task has
@@ -54,10 +56,7 @@ def load_plan(spec: GenerateSpec, worker: int = -1) -> GeneratePlan:
     _check_demo(run.task_id)
     name, fcfg = _recorder(run.cfg)
     fcfg.params = dict(fcfg.params or {})
-    if worker >= 0:
-        fcfg.params["save_path"] = str(spec.worker_dir(worker))
-    else:
-        fcfg.params["save_path"] = str(spec.shards)
+    fcfg.params["save_path"] = str(save_path if save_path is not None else spec.shards)
     attempts = int(run.extras.get("demo_max_attempts") or 1)
     return GeneratePlan(run, name, max(attempts, 1), bool(getattr(fcfg, "save_failed_episodes", False)))
 

@@ -2,10 +2,14 @@
 
 Whatever ends the run (done, Ctrl-C, ``SIGTERM``, an error) the workers are asked to
 stop, wait for their writers and close their shards within ``spec.close_timeout``
-seconds, Ray is shut down (or disconnected from a cluster), every episode the shards
-hold is merged in episode order, and the summary is printed. Every count in the summary
-(merged episodes, the worker table) is read from the shards, so it is what the merged
-dataset holds; an episode a worker had reported but no shard holds is listed as lost.
+seconds, Ray is shut down (or disconnected from a cluster), and the summary is printed.
+The merge runs while the workers generate (:class:`~embodichain_ray.merge.StreamingMerge`):
+each batch's episodes are merged once every episode before them is, so the end of a run
+waits only for the last batches' episodes and the final metadata. Every count in the summary
+(merged episodes, the worker table) is what the merged dataset holds; an episode a worker had
+reported but no shard holds is listed as lost. A worker that cannot start (its node lacks the
+task's plugin or cannot reach the storage URI) stops the run before any episode runs, with
+one message, exit 2 and no summary.
 """
 
 from __future__ import annotations
@@ -24,11 +28,19 @@ from embodichain_ray.driver import (
     start_workers,
 )
 from embodichain_ray.faults import GenerateError
+from embodichain_ray.intake import Intake, PreflightError, StopFlag, await_ready
 from embodichain_ray.local_ray import init_ray
-from embodichain_ray.reaper import Reaper
+from embodichain_ray.merge import StreamingMerge
 from embodichain_ray.plan import GeneratePlan
 from embodichain_ray.progress import progress
+from embodichain_ray.reaper import Reaper
+from embodichain_ray.shards import remove_tree, scan_shards, shard_folders
 from embodichain_ray.spec import WORKER_DIR, GenerateSpec, seed_table
+from embodichain_ray.storage import SHARED
+from embodichain_ray.summary import print_summary
+
+#: The exit code of a run stopped before any episode ran (a worker that cannot start).
+EXIT_PREFLIGHT = 2
 
 
 def generate(
@@ -48,7 +60,8 @@ def generate(
         143 (``SIGTERM``).
     """
     state = execute(spec, plan, prog, on_start, started)
-    print_summary(spec, plan, state)
+    if state.code != EXIT_PREFLIGHT:
+        print_summary(spec, plan, state)
     return state.code
 
 
@@ -67,12 +80,22 @@ def execute(
 
     go_offline()
     state = RunState(start_s=started if started is not None else time.perf_counter())
+    new_shards = not spec.shards.exists()
     spec.shards.mkdir(parents=True, exist_ok=True)
     spec.stop_file.unlink(missing_ok=True)
+    merge = StreamingMerge(spec.output)
+    intake = Intake(spec, seed_table(spec.seed, spec.episodes, plan.max_attempts), merge)
+    scan = scan_shards(spec.shards, intake.table)
+    intake.resume(scan)
     if not spec.merge_only:
-        state.code = _run_workers(spec, plan, prog, state, on_start)
+        state.code = _run_workers(spec, prog, plan.run.task_id, state, intake, frozenset(scan.episodes), on_start)
+    if state.code == EXIT_PREFLIGHT:
+        merge.abort()  # nothing half-merged is left
+        if new_shards and not shard_folders(spec.shards):
+            remove_tree(spec.shards)
+        return state
     try:
-        state.merged, state.merge_s = _merge(spec, plan, state)
+        state.merged, state.merge_s = _finish_merge(spec, merge, state)
     except Exception as err:  # noqa: BLE001  (reported; the shards are kept with every saved episode)
         traceback.print_exception(err, file=sys.stderr)
         state.error, state.code = f"merge failed: {type(err).__name__}: {err}", 1
@@ -82,25 +105,33 @@ def execute(
 
 
 def _run_workers(
-    spec: GenerateSpec, plan: GeneratePlan, prog: str, state: RunState, on_start: Callable[[list], None] | None
+    spec: GenerateSpec,
+    prog: str,
+    task_id: str,
+    state: RunState,
+    intake: Intake,
+    done: frozenset,
+    on_start: Callable[[list], None] | None,
 ) -> int:
     """Start Ray and the workers, run every episode, end the workers and Ray; the exit code so far."""
+    import ray
 
     from embodichain_core.cli.run_env import _interrupt_code
 
     actors: list = []
     code, scheduler, reaper = 0, None, None
-    done = frozenset(_durable(spec, plan))
     state.resumed = len(done)
     if done:
         print(f"{prog}: {len(done)} episode(s) of this run are already in {spec.shards}; running the rest")
     try:
         reaper = init_ray(spec)
-        actors = start_workers(spec)
+        flag = ray.remote(num_cpus=0)(StopFlag).remote() if spec.transport != SHARED else None
+        actors = start_workers(spec, flag)
         if on_start is not None:
             on_start(actors)
-        with progress(spec, plan.run.task_id, initial=len(done)) as bar:
-            scheduler = Scheduler(spec, actors, state, bar, done)
+        await_ready(actors, spec)
+        with progress(spec, task_id, initial=len(done)) as bar:
+            scheduler = Scheduler(spec, actors, state, bar, done, take=intake.take, stop_flag=flag)
             scheduler.run()
     except KeyboardInterrupt as err:
         code, state.error = _interrupt_code(err)
@@ -110,6 +141,9 @@ def _run_workers(
                 f"{spec.close_timeout:.0f} s), then the saved episodes are merged",
                 file=sys.stderr,
             )
+    except PreflightError as err:  # no episode ran: one line, no summary
+        print(f"{prog}: {err}", file=sys.stderr)
+        state.error, code = str(err), EXIT_PREFLIGHT
     except GenerateError as err:  # understood: one line, no traceback
         print(f"{prog}: {err}", file=sys.stderr)
         state.error, code = str(err), 1
@@ -153,32 +187,21 @@ def _end_workers(spec: GenerateSpec, actors: list, scheduler: Scheduler | None, 
         spec.stop_file.unlink(missing_ok=True)
 
 
-def _durable(spec: GenerateSpec, plan: GeneratePlan) -> set:
-    """The run's episodes that the shards already hold (a resumed run does not run them again)."""
-    from embodichain_ray.shards import scan_shards
-
-    return set(scan_shards(spec.shards, seed_table(spec.seed, spec.episodes, plan.max_attempts)).episodes)
-
-
-def _merge(spec: GenerateSpec, plan: GeneratePlan, state: RunState) -> tuple[int, float]:
-    """Merge what the shards hold (Ctrl-C during the merge is held back until it is done)."""
+def _finish_merge(spec: GenerateSpec, merge: StreamingMerge, state: RunState) -> tuple[int, float]:
+    """Merge what is left and move the dataset into place (Ctrl-C meanwhile is held back until
+    it is done); the merged count and the seconds it took."""
     from embodichain_lerobot.writer import deferred_sigint
 
-    from embodichain_ray.merge import merge_episodes
-    from embodichain_ray.shards import remove_tree, scan_shards
-
     started = time.perf_counter()
-    scan = scan_shards(spec.shards, seed_table(spec.seed, spec.episodes, plan.max_attempts))
-    ordered = [scan.episodes[k] for k in sorted(scan.episodes)]
-    _true_counts(state, ordered)
-    if not ordered:
+    with deferred_sigint():
+        merged = merge.finish()
+    _true_counts(state, merge.merged)
+    if not merged:
         state.error = state.error or "no episode was saved"
         return 0, 0.0
-    with deferred_sigint():
-        merge_episodes(ordered, spec.output)
-    if not spec.keep_shards and len(ordered) == spec.episodes:
+    if not spec.keep_shards and merged == spec.episodes:
         remove_tree(spec.shards)
-    return len(ordered), time.perf_counter() - started
+    return merged, time.perf_counter() - started
 
 
 def _true_counts(state: RunState, ordered: list) -> None:
@@ -189,59 +212,3 @@ def _true_counts(state: RunState, ordered: list) -> None:
     state.saved = held
     for w, stats in enumerate(state.workers):
         stats.episodes = sum(ep.root.parent.name == WORKER_DIR.format(w) for ep in ordered)
-
-
-def print_summary(spec: GenerateSpec, plan: GeneratePlan, state: RunState) -> None:
-    """``run-env``-style summary plus one line per worker."""
-    merged, merge_s = state.merged, state.merge_s
-    speed = state.env_steps / state.run_s if state.run_s > 0 else 0.0
-    wall = time.perf_counter() - state.start_s
-    lines = [
-        f"generate summary: {plan.run.task_id}",
-        (
-            f"  episodes     {merged}/{spec.episodes} merged ({spec.workers} worker(s) x {spec.num_envs} env(s), "
-            f"seed {spec.seed})"
-        ),
-        (
-            f"  env steps    {state.env_steps} ({speed:.1f} env-steps/s overall, {state.busy_steps_per_s:.1f} "
-            "while the workers ran)"
-        ),
-        (
-            f"  wall time    {wall:.2f} s (startup and workers {state.run_s:.2f} s, closing {state.close_s:.2f} s, "
-            f"merge {merge_s:.2f} s)"
-        ),
-    ]
-    if state.resumed:
-        lines.append(f"  resumed      {state.resumed} episode(s) were already in the shards")
-    if state.failed:
-        shown = ", ".join(f"{k}" for k in sorted(state.failed)[:10])
-        lines.append(
-            f"  failed       {len(state.failed)} episode(s) failed all {plan.max_attempts} attempt(s): {shown}"
-        )
-    lines.append("  worker  episodes  failures  env-steps/s  restarts")
-    for w, ws in enumerate(state.workers):
-        note = "  (died while closing its shard)" if ws.died_closing else ""
-        lines.append(f"  {w:>6}  {ws.episodes:>8}  {ws.failures:>8}  {ws.steps_per_s:>11.1f}  {ws.restarts:>8}{note}")
-    lines += _missing_lines(spec, state)
-    lines.append(f"  data         {spec.output if merged else 'nothing merged'}")
-    if spec.keep_shards or merged < spec.episodes:
-        lines.append(f"  shards       {spec.shards}")
-    if state.error:
-        lines.append(f"  stopped      early: {state.error}")
-    print("\n".join(lines))
-
-
-def _missing_lines(spec: GenerateSpec, state: RunState) -> list[str]:
-    """Summary lines naming the episodes that are not in the merged dataset, and how to run them."""
-    lines = []
-    if state.lost:
-        shown = ", ".join(str(k) for k in state.lost[:20])
-        lines.append(f"  lost         {len(state.lost)} episode(s) reported saved but in no shard: {shown}")
-    missing = [k for k in range(spec.episodes) if k not in state.saved and k not in state.failed]
-    if missing and not spec.merge_only:
-        shown = ", ".join(str(k) for k in missing[:20]) + (", ..." if len(missing) > 20 else "")
-        lines.append(
-            f"  not saved    {len(missing)} episode(s): {shown}; to run just these, delete the output "
-            f"and run the same command again with --shards {spec.shards}"
-        )
-    return lines

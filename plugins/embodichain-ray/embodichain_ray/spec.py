@@ -76,6 +76,11 @@ class GenerateSpec:
             round, wait for their writers and close their shards before they are killed.
         dashboard: start the embedded Ray's dashboard (off unless asked).
         progress_every: without the bar, seconds between plain progress lines (0: none).
+        transport: how shards reach the driver: ``shared`` (``shards`` is a folder every
+            worker writes), ``ray`` (the object store) or a storage URI (see
+            :mod:`embodichain_ray.transport`).
+        scratch: with ``ray`` or a URI, the folder on each worker's node it records into
+            (``None``: the node's ``EMBODICHAIN_GENERATE_SCRATCH``, else its temp folder).
     """
 
     task: str | None
@@ -94,6 +99,8 @@ class GenerateSpec:
     close_timeout: float = 60.0
     dashboard: bool = False
     progress_every: float = 0.0
+    transport: str = "shared"
+    scratch: str | None = None
 
     def worker_dir(self, worker: int) -> Path:
         """Where worker ``worker`` records (its recorder's ``save_path``)."""

@@ -16,7 +16,9 @@ seed that is never merged.
 An episode is reported as saved only once it is durable: :meth:`EpisodeWorker.run` returns
 after the recorder has published every committed episode (an ``AsyncLeRobotRecorder``'s
 writer process is waited for, :meth:`EpisodeWorker.wait_durable`), so an episode reported
-as saved survives the worker and its writer process being killed. When the driver's stop
+as saved survives the worker and its writer process being killed. Then the batch's
+:class:`~embodichain_ray.transport.Delivery` (the shard's new episodes and, without a shared
+folder, their files: :mod:`embodichain_ray.transport`) goes back with it. When the driver's stop
 file exists (Ctrl-C, ``SIGTERM``) the current round is abandoned after its current step
 (its episodes are not committed) and ``run`` returns what earlier rounds saved.
 """
@@ -29,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from embodichain_ray.spec import GenerateSpec, episode_seed, padding_seed
+from embodichain_ray.transport import Delivery, ShardSender
 
 
 @dataclass
@@ -50,6 +53,7 @@ class BatchResult:
         failed_attempts: demo attempts that failed (retried or not).
         seconds: wall time of the batch.
         pid: the worker's process id.
+        delivery: the episodes the shard gained (``None``: none yet).
     """
 
     outcomes: list = field(default_factory=list)
@@ -57,6 +61,7 @@ class BatchResult:
     failed_attempts: int = 0
     seconds: float = 0.0
     pid: int = 0
+    delivery: Delivery | None = None
 
 
 def _flags(value: Any, n: int) -> Any:
@@ -72,29 +77,63 @@ class EpisodeWorker:
         spec: the run.
         worker: this worker's index (names its shard folder).
 
+    A first start that fails (a plugin missing on this node, storage it cannot reach) is
+    kept for :meth:`ready`, so the driver can stop the run before any episode runs; a
+    restart that fails raises (Ray then counts it as a death).
+
     Raises:
-        ConfigError: the config is invalid (checked by the driver before, so unexpected here).
+        Exception: a restart failed to build the env.
     """
 
-    def __init__(self, spec: GenerateSpec, worker: int):
+    def __init__(self, spec: GenerateSpec, worker: int, stop_flag: Any = None):
+        os.environ.setdefault("SVT_LOG", "1")
+        self.spec, self.worker, self.stop_flag = spec, worker, stop_flag
+        self._closed, self._stopped, self._checked = False, False, 0.0
+        self.error: str | None = None
+        try:
+            self._build()
+        except Exception as err:  # noqa: BLE001  (reported by ready() on the first start)
+            if _restarted():
+                raise
+            self.error, self._closed = f"{type(err).__name__}: {err}", True
+
+    def _build(self) -> None:
         from embodichain_core.cli.run_env import make_env
         from embodichain_ray.plan import load_plan
+        from embodichain_ray.storage import SHARED, RAY, probe_storage
 
-        os.environ.setdefault("SVT_LOG", "1")
-        self.spec, self.worker = spec, worker
-        self.plan = load_plan(spec, worker)
+        if self.spec.transport not in (SHARED, RAY):
+            probe_storage(self.spec.transport)
+        self.sender = ShardSender(self.spec, self.worker)
+        self.plan = load_plan(self.spec, self.sender.save_path)
         self.env = make_env(self.plan.run)
         self.base = self.env.unwrapped
         self.num_envs = int(self.base.num_envs)
-        self._closed = False
-        self._stopped = False
+
+    def ready(self) -> dict:
+        """Where this worker runs and whether its env was built (``error``: why not)."""
+        import socket
+
+        return {"pid": os.getpid(), "host": socket.gethostname(), "node": _node_ip(), "error": self.error}
 
     def pid(self) -> int:
         """This worker's process id (the tests kill it)."""
         return os.getpid()
 
+    def node_id(self) -> str:
+        """The Ray node this worker runs on (the tests remove it)."""
+        import ray
+
+        return str(ray.get_runtime_context().get_node_id())
+
     def run(self, episodes: list[int]) -> BatchResult:
-        """Record ``episodes`` (each at most ``demo_max_attempts`` attempts)."""
+        """Record ``episodes`` (each at most ``demo_max_attempts`` attempts).
+
+        Raises:
+            RuntimeError: the env could not be built (see :meth:`ready`).
+        """
+        if self.error is not None:
+            raise RuntimeError(self.error)
         started = time.perf_counter()
         result = BatchResult(pid=os.getpid())
         pending = [(k, 0) for k in episodes]  # (episode, attempt), in order
@@ -115,12 +154,34 @@ class EpisodeWorker:
                     result.outcomes.append(EpisodeOutcome(k, a + 1, False))
             pending = retry + pending
         self.wait_durable()
+        result.delivery = self.sender.collect(self._shard_root())
         result.seconds = time.perf_counter() - started
         return result
 
+    def _shard_root(self) -> Any:
+        manager = getattr(self.base, "dataset_manager", None)
+        for entry in getattr(manager, "entries", {}).values():
+            path = getattr(entry.func, "dataset_path", None)
+            if path is not None:
+                return path
+        return None
+
     def stopping(self) -> bool:
-        """Whether the driver asked the workers to stop (its stop file exists)."""
-        self._stopped = self._stopped or self.spec.stop_file.exists()
+        """Whether the driver asked the workers to stop: its stop file exists (a shared folder)
+        or its stop flag is set (read at most twice a second; a flag that is gone, with its
+        driver, means stop)."""
+        if self._stopped:
+            return True
+        if self.stop_flag is None:
+            self._stopped = self.spec.stop_file.exists()
+        elif time.monotonic() - self._checked > 0.5:
+            import ray
+
+            self._checked = time.monotonic()
+            try:
+                self._stopped = bool(ray.get(self.stop_flag.is_set.remote(), timeout=10))
+            except Exception:  # noqa: BLE001  (the flag died with the driver)
+                self._stopped = True
         return self._stopped
 
     def wait_durable(self) -> None:
@@ -192,4 +253,24 @@ class EpisodeWorker:
         manager = getattr(self.base, "dataset_manager", None)
         self.env.close()
         paths = [p for p in (manager.finalize() if manager is not None else []) if p]
+        self.sender.discard()
         return str(paths[0]) if paths else None
+
+
+def _restarted() -> bool:
+    """Whether this actor is a restart (Ray re-ran its constructor after a death)."""
+    try:
+        import ray
+
+        return bool(ray.is_initialized() and ray.get_runtime_context().was_current_actor_reconstructed)
+    except Exception:  # noqa: BLE001  (not in a Ray actor)
+        return False
+
+
+def _node_ip() -> str:
+    try:
+        import ray
+
+        return str(ray.util.get_node_ip_address()) if ray.is_initialized() else ""
+    except Exception:  # noqa: BLE001  (not in a Ray actor)
+        return ""
