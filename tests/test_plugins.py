@@ -409,3 +409,21 @@ def test_register_env_runs_the_tasks_hook(plugin_manager: Any) -> None:  # noqa:
 
     with pytest.raises(TypeError, match="defined inside a function"):
         register_env("EcShimLocal-v0")(Local)
+
+
+def test_register_env_leaves_a_gym_id_from_outside_the_plugins(plugin_manager: Any) -> None:  # noqa: F811
+    import gymnasium
+
+    from embodichain_core.envs import register_env
+
+    gymnasium.register("EcShimForeign-v0", entry_point="other_pkg:OtherEnv")
+    try:
+        with pytest.warns(NameClashWarning, match="'EcShimForeign-v0' is already registered outside"):
+            register_env("EcShimForeign-v0", override=True)(ShimFirst)
+        assert gymnasium.registry["EcShimForeign-v0"].entry_point == "other_pkg:OtherEnv"  # not ours to replace
+        tasks = plugin_manager.registry("tasks")
+        qualified = tasks.qualified_name(tasks.entry("EcShimForeign-v0"))  # under its provider's namespace
+        assert qualified.endswith("test_plugins/EcShimForeign-v0")
+        assert gymnasium.registry[qualified].entry_point is ShimFirst
+    finally:
+        gymnasium.registry.pop("EcShimForeign-v0", None)
