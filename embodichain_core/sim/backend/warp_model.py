@@ -50,6 +50,10 @@ class WarpModelFields:
         self._expanded: set[str] = set()
         self._views: dict[str, torch.Tensor] = {}
         self._host: dict[str, np.ndarray] = {}  # visual fields MuJoCo Warp does not hold
+        self.mirrored: set[str] = set()
+        """Host fields whose writer also folds their effect into a field MuJoCo Warp batches
+        (the Light entity writes its intensity into ``light_diffuse`` too): MuJoCo Warp's
+        renderer shows them all the same."""
         self._const_groups = 0
 
     # -- arrays ----------------------------------------------------------------------------------
@@ -110,6 +114,11 @@ class WarpModelFields:
         """The fields holding per-env values on the host only (visual fields MuJoCo Warp
         does not hold: the CPU renderer reads them, MuJoCo Warp's renderer does not), sorted."""
         return sorted(self._host)
+
+    @property
+    def unrendered_fields(self) -> list[str]:
+        """The :attr:`host_fields` MuJoCo Warp's renderer would not show (not :attr:`mirrored`)."""
+        return sorted(set(self._host) - self.mirrored)
 
     def is_per_env(self, name: str) -> bool:
         """Whether ``name`` holds per-env values (expanded, or a host-side visual field)."""

@@ -44,6 +44,8 @@ from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
 _AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
 #: :meth:`WarpSim.advance` checks MuJoCo Warp's contact-overflow flags (a host read) every this many calls.
 CONTACT_CHECK_PERIOD = 64
+#: Outputs :meth:`WarpSim.forward` computes for the envs it was asked for only.
+_ACTUATION = ("qfrc_actuator", "actuator_force")
 #: State (and acceleration-level outputs) a subset step puts back for the envs outside the subset.
 _KEPT = "qpos qvel act qacc_warmstart time history plastic qacc qfrc_actuator actuator_force cfrc_ext".split()
 
@@ -213,11 +215,27 @@ class WarpSim(WarpFailures, FieldViews):
         return failed
 
     def forward(self, env_ids: Any = None) -> None:
-        """Recompute derived views (of every world: MuJoCo Warp has no subset)."""
+        """Recompute derived views: positions and velocities of every world (MuJoCo Warp has
+        no subset), and the actuator forces of ``env_ids`` (default: the envs written since
+        the last step; the others keep those of their last step, as on ``mujoco_batch``)."""
         self.flush_const()
-        self.graphs.run("refresh", self._refresh)
+        rows = np.flatnonzero(self._dirty) if env_ids is None else np_ids(env_ids, self.num_envs)
+        if env_ids is None and not len(rows):
+            rows = np.arange(self.num_envs)
+        saved = {n: self._kept[n].clone() for n in _ACTUATION if n in self._kept}
+        self.graphs.run("forward", self._refresh_with_actuation)
+        if len(rows) < self.num_envs:
+            others = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
+            others[torch.as_tensor(rows, dtype=torch.long, device=self.device)] = False
+            for name, values in saved.items():  # no boolean indexing: no wait for the device
+                view = self._kept[name]
+                view.copy_(torch.where(others[:, None], values, view))
         self._dirty[:] = False
         self._maybe_dirty = False
+
+    def _refresh_with_actuation(self) -> None:
+        self._refresh()
+        self.mjw.fwd_actuation(self.wp_model, self.wp_data)
 
     def reset(self, env_ids: Any = None, state: Optional[np.ndarray] = None) -> None:
         """Model defaults for ``env_ids`` (``reset_data`` with a world mask; no forward);

@@ -115,6 +115,9 @@ class Light(Entity):
         diffuse = np.minimum(np.maximum(self._color.numpy()[rows] * scale, 0.0), 1.0)
         self.sim.set_model_field("light_diffuse", rows, self.light_id, diffuse)
         self.sim.set_model_field("light_intensity", rows, self.light_id, intensity)
+        mirrored = getattr(getattr(self.sim, "fields", None), "mirrored", None)
+        if mirrored is not None:  # backend warp: MuJoCo Warp's renderer sees the intensity in the diffuse
+            mirrored.add("light_intensity")
 
     def reset(self, env_ids: Any = None) -> None:
         """Restore the configured position, direction, colour and intensity (only if changed)."""

@@ -131,7 +131,7 @@ class WarpCameraRenderer:
     # -- inputs ---------------------------------------------------------------------------------
     def check_supported(self) -> None:
         """Raise :class:`ConfigError` for per-env visual fields the ray tracer would not show."""
-        host = self.sim.fields.host_fields
+        host = self.sim.fields.unrendered_fields
         if host:
             raise ConfigError(
                 self.where,

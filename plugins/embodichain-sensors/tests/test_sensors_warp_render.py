@@ -166,6 +166,18 @@ def test_a_per_env_field_only_opengl_reads_is_refused() -> None:
         cam.update()
 
 
+def test_a_light_entitys_intensity_renders_through_its_diffuse_colour() -> None:
+    """The Light entity writes its intensity into ``light_diffuse`` too, so the ray tracer
+    accepts a per-env intensity set through it (``randomize_light``) and shows it."""
+
+    def dim_env_1(scene: Any, cam: Any) -> None:
+        scene["lamp"].set_intensity([30.0, 5.0])
+
+    data, _ = _render(_cam(enable_mask=False), "warp", prepare=dim_env_1)
+    rgb = data["color"][..., :3].float()
+    assert rgb[1].mean() < 0.9 * rgb[0].mean()  # env 1's lamp is dimmer
+
+
 def test_push_cube_renders_alike_with_both_renderers() -> None:
     """PushCube-v1 on backend warp, 2 envs after a few steps: one camera per renderer, same pose."""
     import gymnasium as gym
