@@ -86,14 +86,14 @@ def is_visual_randomization(checked: ValidatedFunctor) -> bool:
     """A ``randomize_*`` functor of category ``randomization.visual``, as its registry
     entry says (a registered name) or as the functor declares it (``embodichain_category``,
     for a callable or an import path)."""
-    from embodichain_core.plugins import VISUAL_RANDOMIZATION
+    from embodichain_core.plugins.hookspecs import visual_randomization
 
     if checked.entry is not None:
         name, category = checked.entry.name, checked.entry.meta.get("category", "")
     else:
         name = getattr(checked.func, "__name__", "")
         category = getattr(checked.func, "embodichain_category", "")
-    return name.startswith("randomize_") and category == VISUAL_RANDOMIZATION
+    return visual_randomization(name, category)
 
 
 def resolve_active_joints(cfg: Any, robot: Any) -> list[int]:

@@ -16,6 +16,7 @@ from embodichain_core.plugins.hookspecs import SensorRegister as SensorRegister
 from embodichain_core.plugins.hookspecs import TaskRegister as TaskRegister
 from embodichain_core.plugins.hookspecs import ViewerRegister as ViewerRegister
 from embodichain_core.plugins.hookspecs import hookimpl as hookimpl
+from embodichain_core.plugins.hookspecs import visual_randomization
 from embodichain_core.plugins.manager import CORE_PLUGIN_NAME as CORE_PLUGIN_NAME
 from embodichain_core.plugins.manager import NameClash as NameClash
 from embodichain_core.plugins.manager import NameClashWarning as NameClashWarning
@@ -84,7 +85,7 @@ def is_visual_randomization(name: str) -> bool:
         entry = functor_registry().find(name)
     except AmbiguousNameError:
         return False
-    return entry is not None and entry.name.startswith("randomize_") and entry.meta["category"] == VISUAL_RANDOMIZATION
+    return entry is not None and visual_randomization(entry.name, entry.meta["category"])
 
 
 def name_clashes(provider: str | None = None) -> list[NameClash]:

@@ -24,6 +24,12 @@ VIEWER_NAMES = ("native", "browser")
 VISUAL_RANDOMIZATION = "randomization.visual"
 
 
+def visual_randomization(name: str, category: str) -> bool:
+    """What ``filter_visual_rand`` removes: a functor named ``randomize_*`` of category
+    :data:`VISUAL_RANDOMIZATION`."""
+    return name.startswith("randomize_") and category == VISUAL_RANDOMIZATION
+
+
 def class_name_key(name: str) -> str:
     """Case-insensitive key that also accepts a trailing ``Cfg`` (``DexforceW1Cfg``)."""
     key = name.lower()
