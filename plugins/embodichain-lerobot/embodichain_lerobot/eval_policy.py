@@ -37,6 +37,9 @@ class EpisodeResult:
     truncated: bool
     video: Optional[str] = None
     episode_seed: Optional[int] = None  # the env's seed of the episode (compare with a dataset's)
+    #: the task's metrics (``info["metrics"]``, e.g. PickFork-v1's ``fork_height``) at the last step:
+    #: how far a failed episode got
+    metrics: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -99,14 +102,16 @@ class _Rollout:
                 if self.index[i] < self.episodes:
                     self.frames[i].append(np.concatenate([f[i] for f in frames.values()], axis=1))
 
-    def finish(self, i: int, success: bool, terminated: bool, truncated: bool, fps: int) -> Optional[EpisodeResult]:
+    def finish(
+        self, i: int, success: bool, terminated: bool, truncated: bool, fps: int, metrics: dict[str, float]
+    ) -> Optional[EpisodeResult]:
         """Close env ``i``'s episode; its result when it counts. Env ``i`` starts the next one."""
         result = None
         if self.index[i] < self.episodes:
             result = EpisodeResult(
                 self.index[i], i, success, float(self.returns[i]), int(self.lengths[i]), terminated, truncated
             )
-            result.episode_seed = self.seeds[i]
+            result.episode_seed, result.metrics = self.seeds[i], metrics
             if self.video_dir is not None:
                 result.video = str(self._write_video(self.index[i], self.frames[i], fps))
         self.index[i], self.started = self.started, self.started + 1
@@ -126,6 +131,17 @@ def _env_action(env: Any, action: torch.Tensor) -> Any:
     if hasattr(space, "spaces") and "qpos" in space.spaces:
         return {"qpos": action}
     return action
+
+
+def _episode_metrics(metrics: Any, n: int) -> list[dict[str, float]]:
+    """Each env's scalar task metrics (one value per env; others are left out), rounded."""
+    rows: list[dict[str, float]] = [{} for _ in range(n)]
+    for name, value in (metrics or {}).items():
+        values = torch.as_tensor(value).detach().reshape(-1).cpu()
+        if values.numel() == n and values.dtype.is_floating_point:
+            for i in range(n):
+                rows[i][str(name)] = round(float(values[i]), 5)
+    return rows
 
 
 def _check_action_dim(env: Any, loaded: LoadedPolicy) -> None:
@@ -217,8 +233,9 @@ def _step(
         final = info.get("final_info", info)
         success = torch.as_tensor(final.get("success", torch.zeros(n, dtype=torch.bool))).reshape(n).cpu().numpy()
         state.add_frames(mapper.frames(info["final_obs"]) if state.video_dir is not None else {}, done)
+        metrics = _episode_metrics(final.get("metrics"), n)
         for i in done:
-            episode = state.finish(int(i), bool(success[i]), bool(term[i]), bool(trunc[i]), fps)
+            episode = state.finish(int(i), bool(success[i]), bool(term[i]), bool(trunc[i]), fps, metrics[i])
             if episode is not None:
                 result.episodes.append(episode)
                 if progress is not None:

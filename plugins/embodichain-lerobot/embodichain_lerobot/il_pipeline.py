@@ -20,7 +20,8 @@ Training, validation and test episodes never share a seed (checked from the data
 ``DIR/results.json`` (commands, wall time of each stage, every validation rate and the test
 rate with their 95% Wilson intervals, the test episodes one by one) and
 ``DIR/success_curve.png``. A step whose output exists is not run again, so an interrupted
-pipeline resumes.
+pipeline resumes; a training whose last checkpoint is short of ``--steps`` (interrupted, or
+run again with more steps) is resumed from that checkpoint by lerobot-train.
 """
 
 from __future__ import annotations
@@ -174,12 +175,13 @@ class _Stages:
         if any(step >= a.steps for step, _ in _checkpoints(self.train)):
             print(f"{self.train} has its last checkpoint: not trained again", flush=True)
             return
-        if self.train.exists():  # lerobot-train refuses an existing output_dir; resuming is its own flag
-            raise SystemExit(
-                f"{self.train} holds an unfinished training: resume it with lerobot-train "
-                f"--config_path={self.train}/checkpoints/last/pretrained_model/train_config.json --resume=true, "
-                "or delete it"
-            )
+        last = self.train / "checkpoints" / "last" / "pretrained_model" / "train_config.json"
+        if last.is_file():  # a shorter or interrupted run: lerobot-train resumes it up to --steps
+            cmd = [_bin("lerobot-train"), f"--config_path={last}", "--resume=true", f"--steps={a.steps}"]
+            _run([*cmd, f"--save_freq={a.save_freq}"], self.log)
+            return
+        if self.train.exists():  # lerobot-train refuses an existing output_dir
+            raise SystemExit(f"{self.train} holds a training without a checkpoint to resume from: delete it")
         cmd = [_bin("lerobot-train"), f"--dataset.repo_id=local/{self.demos.name}", f"--dataset.root={self.demos}"]
         cmd += [*train_flags(a.policy), f"--policy.device={a.device}", f"--output_dir={self.train}"]
         cmd += [f"--steps={a.steps}", f"--save_freq={a.save_freq}", f"--batch_size={a.batch_size}"]

@@ -432,3 +432,15 @@ def test_per_env_state_restarts_one_envs_observation_history() -> None:
     assert runner.select_action(obs(2)).shape == (3, 3)
     assert [history(i) for i in range(3)] == [[1.0, 2.0], [2.0, 2.0], [1.0, 2.0]]
     assert runner.groups() == [[0, 2], [1]]
+
+
+def test_each_episode_keeps_the_task_metrics_of_its_last_step() -> None:
+    from embodichain_lerobot.eval_policy import _episode_metrics
+
+    metrics = {
+        "fork_height": torch.tensor([0.1234567, -0.002]),
+        "per_joint": torch.zeros(2, 3),  # not one value per env: left out
+        "lifted": torch.tensor([True, False]),  # not a number to report
+    }
+    assert _episode_metrics(metrics, 2) == [{"fork_height": 0.12346}, {"fork_height": -0.002}]
+    assert _episode_metrics(None, 2) == [{}, {}]
