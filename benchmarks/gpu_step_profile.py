@@ -236,7 +236,7 @@ STEP_PHASES = (
     ("check_action", "", "_check_action"),
     ("action_terms", "action_manager", "process_action"),
     ("apply_command", "", "_apply_command"),
-    ("physics", "sim", "step"),
+    ("physics", "sim", "advance"),  # the env's physics call (sim.advance: every env, diverged mask back)
     ("interval_events", "event_manager", "apply"),
     ("observations", "", "get_obs"),
     ("info", "", "get_info"),
@@ -246,7 +246,7 @@ STEP_PHASES = (
 )
 #: Calls inside the phases timed on their own (besides every functor).
 STEP_DETAILS = (
-    ("physics.failure_check", "sim", "_failed"),
+    ("physics.failure_check", "sim", "_failed_mask"),  # backend warp: the divergence check on the device
     ("observations.robot_state", "_robot_io", "observe"),
     ("auto_reset.scene_reset", "scene", "reset"),
 )

@@ -16,7 +16,7 @@ Script use: ``--task`` (``PushCube-v1`` by default) on ``--backend``/``--device`
 kernels):
 
 - ``plain``: env steps/s of the uninstrumented loop;
-- ``phases``: each phase of ``EmbodiedEnv.step``, a few calls inside them and every
+- ``phases``: each phase of ``EmbodiedEnv.step`` (physics: ``sim.advance``), a few calls inside them and every
   event/observation/reward functor, each call bracketed by two device syncs
   (:class:`gpu_step_profile.PhaseTimer`);
 - ``syncs``: the calls per step that make the host wait for the device, and the lines that
