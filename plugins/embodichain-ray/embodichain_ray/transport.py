@@ -18,6 +18,7 @@ it; the driver then runs its batch again (:class:`TransferLost`).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import tempfile
@@ -115,8 +116,11 @@ class ShardSender:
             return None
         delivery = Delivery(self.shard_name(root))
         self._shard = delivery.shard
-        log = root / SIDECAR
-        text = log.read_bytes()[self._log_at :] if log.is_file() else b""
+        text = b""
+        if (root / SIDECAR).is_file():
+            with open(root / SIDECAR, "rb") as log:  # only what was appended since the last batch
+                log.seek(self._log_at)
+                text = log.read()
         text = text[: text.rfind(b"\n") + 1]  # whole lines only
         total = int(json.loads((root / _INFO).read_text(encoding="utf-8"))["total_episodes"])
         for line in text.decode("utf-8").splitlines():
@@ -180,7 +184,7 @@ def receive(delivery: Delivery, shards: Path, transport: str) -> Path:
     from ray.exceptions import ObjectLostError
 
     root = shards / delivery.shard
-    fs = open_storage(transport)[0] if delivery.files and transport not in (SHARED, RAY) else None
+    fs = _driver_storage(transport) if delivery.files and transport not in (SHARED, RAY) else None
     for item in delivery.files:
         dest = root / item.path
         dest.parent.mkdir(parents=True, exist_ok=True)
@@ -197,6 +201,12 @@ def receive(delivery: Delivery, shards: Path, transport: str) -> Path:
             raise TransferLost(f"{delivery.shard}/{item.path}: {type(err).__name__}") from None
         os.replace(tmp, dest)
     return root
+
+
+@functools.lru_cache(maxsize=4)
+def _driver_storage(uri: str) -> Any:
+    """The driver's filesystem of ``uri``, opened once per run."""
+    return open_storage(uri)[0]
 
 
 def _write(item: FileItem, tmp: Path, fs: Any) -> None:
