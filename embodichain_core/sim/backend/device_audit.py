@@ -170,7 +170,7 @@ class HostWaitAudit(TorchFunctionMode):
 
     def _classify(self, func: Any, args: tuple, kwargs: dict) -> tuple[str | None, bool]:
         """``(wait kind or None, whether the result is a device tensor)``."""
-        tensors = [a for a in _flat(args) if isinstance(a, torch.Tensor)] + list(_flat(kwargs.values()))
+        tensors = [a for a in (*_flat(args), *_flat(kwargs.values())) if isinstance(a, torch.Tensor)]
         on_device = any(self.is_device(t) for t in tensors)
         if func in _MOVES:
             target = self._target(args[1:] if func is torch.Tensor.to else (), kwargs)
