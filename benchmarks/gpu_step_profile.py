@@ -235,7 +235,7 @@ def cprofile_top(run: Callable[[int], Any], steps: int, top: int = 30) -> dict[s
 STEP_PHASES = (
     ("check_action", "", "_check_action"),
     ("action_terms", "action_manager", "process_action"),
-    ("apply_command", "", "_apply_command"),
+    ("apply_command", "", "apply_action"),
     ("physics", "sim", "advance"),  # the env's physics call (sim.advance: every env, diverged mask back)
     ("interval_events", "event_manager", "apply"),
     ("observations", "", "get_obs"),

@@ -21,9 +21,12 @@ from gymnasium.utils.env_checker import check_env
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.envs import BaseEnv, EmbodiedEnv, EnvCfg, register_env
 from embodichain_core.gym_vector import UnbatchedEnv
-from embodichain_core.sim.cfg import JointDrivePropertiesCfg, RobotCfg
+from embodichain_core.sim.cfg import JointDrivePropertiesCfg, RigidObjectCfg, RobotCfg
 from embodichain_core.sim.scene import Scene
+from embodichain_core.sim.shapes import CubeCfg
 from embodichain_core.testing.env_checks import check_batched_env
+
+from core_testlib import ARM_ACTIVE
 
 CART = (
     '<mujoco><worldbody><body name="cart" pos="0 0 0.1"><joint name="x" type="slide" axis="1 0 0" range="-1 1"/>'
@@ -198,7 +201,7 @@ def test_bad_actions_and_configs_are_clear_errors(env: CartReach) -> None:
         make(max_episode_step=3)
 
 
-def test_missing_overrides_and_misplaced_hooks() -> None:
+def test_missing_overrides() -> None:
     class NoScene(BaseEnv):
         pass
 
@@ -219,11 +222,69 @@ def test_missing_overrides_and_misplaced_hooks() -> None:
         DiscreteCart(EnvCfg(verbose=False))
     assert DiscreteCart.closed == 1  # a failed build closes what it opened
 
-    with pytest.raises(TypeError, match="defines apply_action, which only BaseEnv's step calls"):
 
-        class Confused(EmbodiedEnv):
-            def apply_action(self, action: torch.Tensor) -> None:
-                pass
+class LoggedArm(EmbodiedEnv):
+    """Extends each of BaseEnv's overrides (``super()`` first) and logs the call; steps its
+    physics one step at a time, holding the arm's joint efforts at zero between steps."""
+
+    def _log(self, *entry: Any) -> None:
+        self.__dict__.setdefault("log", []).append(entry)
+
+    def check_cfg(self) -> None:
+        super().check_cfg()
+        self._log("check_cfg")
+
+    def design_scene(self, scene: Scene) -> None:
+        super().design_scene(scene)
+        scene.add_rigid_object(RigidObjectCfg(uid="marker", shape=CubeCfg(size=[0.02] * 3), init_pos=(1.0, 1.0, 0.02)))
+        self._log("design_scene")
+
+    def on_scene_built(self) -> None:
+        super().on_scene_built()
+        self._log("on_scene_built", self.event_manager is not None)
+
+    def define_action_space(self) -> gym.spaces.Box:
+        space = super().define_action_space()
+        self._log("define_action_space", space.shape)
+        return space
+
+    def apply_action(self, command: Any) -> None:
+        super().apply_action(command)
+        self._log("apply_action", command.clone())
+
+    def step_physics(self) -> torch.Tensor:
+        diverged = torch.zeros(self.num_envs, dtype=torch.bool)
+        for _ in range(self.sim_steps_per_control):
+            self.robot.set_qf(torch.zeros(self.num_envs, self.robot.dof))
+            diverged |= self.sim.advance(1).cpu()
+            self._log("physics_step")
+        return diverged
+
+    def reset_envs(self, env_ids: torch.Tensor) -> None:
+        super().reset_envs(env_ids)
+        self._log("reset_envs", env_ids.tolist())
+
+
+def test_embodied_env_honours_the_base_env_overrides_of_a_subclass(make_env, make_cfg) -> None:
+    env = make_env(make_cfg(max_episode_steps=2, sim_steps_per_control=3), env_cls=LoggedArm)
+    assert isinstance(env, BaseEnv)
+    assert [e[0] for e in env.log] == ["check_cfg", "design_scene", "on_scene_built", "define_action_space"]
+    assert env.log[2][1]  # the managers exist once the scene is built
+    assert env.log[3][1] == (ARM_ACTIVE,)
+    assert "marker" in env.scene.rigid_objects  # an entity added by code next to the config's
+    env.log.clear()
+    env.reset(options={"reset_ids": [1]})
+    assert env.log == [("reset_envs", [1])]
+    env.log.clear()
+    target = torch.full((2, ARM_ACTIVE), 0.1)
+    env.step(target)
+    assert [e[0] for e in env.log] == ["apply_action", "physics_step", "physics_step", "physics_step"]
+    assert torch.equal(env.log[0][1], target)
+    assert env.elapsed_steps.tolist() == [1, 1]
+    env.log.clear()
+    _, _, _, truncated, _ = env.step(target)  # the time limit: the autoreset calls reset_envs
+    assert truncated.all()
+    assert env.log[-1] == ("reset_envs", [0, 1])
 
 
 def test_summary_lists_the_scene(capsys: pytest.CaptureFixture[str]) -> None:

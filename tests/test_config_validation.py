@@ -108,7 +108,7 @@ def _set(cfg: Any, path: list, value: Any) -> Any:
 def test_physical_values_fail_before_the_scene_is_built(monkeypatch, path: list, value: Any, where: str) -> None:
     import embodichain_core.envs.embodied_env as embodied
 
-    monkeypatch.setattr(embodied, "build_scene", lambda *a: pytest.fail("the scene was built"))
+    monkeypatch.setattr(embodied, "add_config_entities", lambda *a: pytest.fail("the scene was built"))
     err = raise_path(EmbodiedEnv, _set(base_cfg(), path, value))
     assert err.path == where, err
 
@@ -389,7 +389,7 @@ def test_memory_limit_fails_fast_with_the_fields_to_change(monkeypatch) -> None:
 def test_memory_check_runs_before_anything_is_allocated(monkeypatch) -> None:
     import embodichain_core.envs.embodied_env as embodied
 
-    monkeypatch.setattr(embodied, "build_scene", lambda *a: pytest.fail("the scene was built"))
+    monkeypatch.setattr(embodied, "add_config_entities", lambda *a: pytest.fail("the scene was built"))
     monkeypatch.setenv(MEMORY_LIMIT_ENV, "0.001")
     assert raise_path(EmbodiedEnv, base_cfg(num_envs=64)).path == "num_envs"
     monkeypatch.delenv(MEMORY_LIMIT_ENV)

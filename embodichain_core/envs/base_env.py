@@ -11,10 +11,13 @@ A subclass writes its step in a few overrides, which :meth:`BaseEnv.step` calls 
 5. the dones: ``terminated = success | fail``, ``truncated = check_truncated | time limit |
    diverged``; then the done envs reset in the same call (gymnasium ``SAME_STEP``).
 
-It builds its scene in :meth:`~BaseEnv.design_scene` and its action space in
-:meth:`~BaseEnv.define_action_space`; :meth:`~BaseEnv.reset_envs` resets a subset of envs.
-``BaseEnv`` also holds what :class:`~embodichain_core.envs.embodied_env.EmbodiedEnv` shares:
-the run setup (config, timing, device, seed, counters), seeding, the same-step autoreset.
+Construction: the config (:meth:`~BaseEnv.check_cfg`), the scene
+(:meth:`~BaseEnv.design_scene`, then compiled), :meth:`~BaseEnv.on_scene_built`, the action
+space (:meth:`~BaseEnv.define_action_space`), the first observation and the spaces.
+:meth:`~BaseEnv.reset_envs` resets a subset of envs. :class:`~embodichain_core.envs.embodied_env.EmbodiedEnv`
+is a ``BaseEnv`` built the same way: it implements these overrides from its config and
+writes its own ``step`` and ``reset`` from the same phases (it calls ``apply_action``,
+``step_physics`` and ``reset_envs`` there).
 """
 
 from __future__ import annotations
@@ -47,8 +50,9 @@ class BaseEnv(TaskApi, gym.Env):
 
     Every observation, reward and flag has a leading ``num_envs`` dimension. Overrides:
     ``design_scene``, ``define_action_space``, ``apply_action``, ``get_obs`` (required);
-    ``step_physics``, ``compute_task_state``, ``get_reward``, ``check_truncated``,
-    ``reset_envs`` (optional). See docs/embodied_env.md, "BaseEnv".
+    ``check_cfg``, ``on_scene_built``, ``step_physics``, ``compute_task_state``,
+    ``get_reward``, ``check_truncated``, ``reset_envs`` (optional). See
+    docs/embodied_env.md, "BaseEnv".
 
     Random generators, all seeded from ``cfg.seed`` (docs/embodied_env.md, "Seeding and
     determinism"):
@@ -83,9 +87,7 @@ class BaseEnv(TaskApi, gym.Env):
         if render_mode is not None and render_mode not in type(self).metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not one of {type(self).metadata['render_modes']}")
         self._init_run(cfg, num_envs, render_mode, kwargs)
-        self.cfg.validate()
-        check_run_settings(self.cfg)
-        check_sim(self.cfg.sim_cfg, "sim_cfg")
+        self.check_cfg()
         self.scene = Scene(self.cfg.sim_cfg, self.num_envs, str(self.device))
         self.sensors = self.scene.sensors  # filled as design_scene adds them
         try:
@@ -100,14 +102,20 @@ class BaseEnv(TaskApi, gym.Env):
         """The task's scene, its action space, the first observation and the spaces."""
         self.design_scene(self.scene)
         self.scene.build()
+        self.on_scene_built()
         space = self.define_action_space()
         if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
             raise TypeError(
                 f"{type(self).__name__}.define_action_space must return a 1-D gym.spaces.Box, got {space!r}"
             )
         self.single_action_space = space
-        self._init_spaces(self.get_obs())
-        self._check_action = ActionChecker(self.num_envs, [space.shape[0]], self.device, self.action_space)
+        self._init_obs = self.get_obs()  # the spaces' sample (and a viewer's first frame)
+        self._init_spaces(self._init_obs)
+        self._check_action = self._action_checker()
+
+    def _action_checker(self) -> ActionChecker:
+        """The boundary check of ``step``: one flat action of the action space's width."""
+        return ActionChecker(self.num_envs, [self.single_action_space.shape[0]], self.device, self.action_space)
 
     # -- what EmbodiedEnv shares ----------------------------------------------------------------
     def _init_run(self, cfg: Any, num_envs: Optional[int], render_mode: Optional[str], overrides: dict) -> None:
@@ -198,14 +206,24 @@ class BaseEnv(TaskApi, gym.Env):
         """Reset ``options["reset_ids"]`` (all envs by default); ``options["episode_seeds"]``
         (one per reset env) replays episodes."""
         options = dict(options or {})
-        if seed is not None:
-            self._seed_rng(seed)
-        ids = options.pop("reset_ids", None)
-        ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
-        self.rng.begin_episodes(ids, episode_seeds_option(options, len(ids)))
+        ids = self._reset_ids(seed, options)  # the seed, then the envs to reset
+        self._begin_episodes(ids, options)
         self.reset_envs(ids)
         self._elapsed_steps[ids.cpu()] = 0
         return self.get_obs(), self.get_info()
+
+    def _reset_ids(self, seed: Optional[int], options: dict) -> torch.Tensor:
+        """The first reset phases: reseed with ``seed`` (``None`` keeps the streams); the envs
+        to reset, ``options["reset_ids"]`` (popped; all envs by default), as a long tensor."""
+        if seed is not None:
+            self._seed_rng(seed)
+        ids = options.pop("reset_ids", None)
+        return torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
+
+    def _begin_episodes(self, ids: torch.Tensor, options: dict) -> None:
+        """The episode streams of the new episodes of ``ids``: from ``options["episode_seeds"]``
+        (one per id) when given, else ``env.rng``'s rule."""
+        self.rng.begin_episodes(ids, episode_seeds_option(options, len(ids)))
 
     def _dones(self, obs: Any, info: dict, diverged: Any) -> tuple[torch.Tensor, torch.Tensor, Optional[torch.Tensor]]:
         """``terminated = success | fail`` (none with ``ignore_terminations``); ``truncated =
@@ -230,10 +248,23 @@ class BaseEnv(TaskApi, gym.Env):
         return terminated, truncated, dones if bool(flags[0].any()) else None
 
     # -- the overrides of a BaseEnv task ---------------------------------------------------------
+    def check_cfg(self) -> None:
+        """Check the config before anything is built: required fields, the run settings and
+        ``sim_cfg``. A task with settings of its own extends it (``super().check_cfg()``
+        first) and raises :class:`~embodichain_core.config.errors.ConfigError` naming the key."""
+        self.cfg.validate()
+        check_run_settings(self.cfg)
+        check_sim(self.cfg.sim_cfg, "sim_cfg")
+
     def design_scene(self, scene: Scene) -> None:
         """Add the task's entities to ``scene`` (``scene.add_robot``, ``add_rigid_object``,
         ``add_light``, ...); the env builds it afterwards. Required."""
         raise NotImplementedError(f"{type(self).__name__} must override design_scene(scene) to add its entities")
+
+    def on_scene_built(self) -> None:
+        """Called once the scene is compiled (``self.sim`` exists), before the action space and
+        the first observation: resolve what needs the built model (joint addresses, entity
+        handles, per-env tensors sized by it). Optional; nothing by default."""
 
     def define_action_space(self) -> gym.spaces.Box:
         """The action space of one env: a 1-D ``gym.spaces.Box``. Required."""
@@ -255,5 +286,6 @@ class BaseEnv(TaskApi, gym.Env):
 
     def reset_envs(self, env_ids: torch.Tensor) -> None:
         """Reset the envs ``env_ids`` (a long tensor): by default every entity goes back to
-        its initial state. Draw per-episode randomness from ``self.rng`` (one row per id)."""
-        self.scene.reset(env_ids)
+        its initial state, except those excluded with ``add_detached_uids_for_reset``. Draw
+        per-episode randomness from ``self.rng`` (one row per id)."""
+        self.scene.reset(env_ids, keep_uids=self._detached_uids_for_reset)

@@ -1,13 +1,15 @@
 """``EmbodiedEnv``: the batched, configuration-driven env (leading ``num_envs`` dim everywhere).
 
-Construction (:mod:`embodichain_core.envs.env_build`): config -> timing and seed (shared
-with :class:`~embodichain_core.envs.base_env.BaseEnv`) -> scene -> managers -> first
-observation and spaces -> action check -> summary.
+It is a :class:`~embodichain_core.envs.base_env.BaseEnv` whose overrides come from the
+config (helpers in :mod:`embodichain_core.envs.env_build`): ``check_cfg`` (the whole config,
+the manager sections), ``design_scene`` (the config's entities), ``on_scene_built`` (robot,
+active joints, managers), ``define_action_space``, ``apply_action`` (the command into the
+joint drives), ``get_obs`` and ``reset_envs`` (scene reset, reset events, manager resets).
 :meth:`EmbodiedEnv.step` and :meth:`EmbodiedEnv.reset` each read top to bottom, one
-named phase after the other; docs/embodied_env.md lists the same phases with the
-same numbers. ``step`` auto-resets finished envs in the same call (gymnasium
-``AutoresetMode.SAME_STEP``): the terminal observation is in ``info["final_obs"]``
-with the mask ``info["_final_obs"]``.
+named phase after the other, calling those overrides and ``step_physics``;
+docs/embodied_env.md lists the same phases with the same numbers. ``step`` auto-resets
+finished envs in the same call (gymnasium ``AutoresetMode.SAME_STEP``): the terminal
+observation is in ``info["final_obs"]`` with the mask ``info["_final_obs"]``.
 """
 
 from __future__ import annotations
@@ -19,25 +21,27 @@ import torch
 from gymnasium.vector import AutoresetMode
 
 from embodichain_core.envs import env_build
+from embodichain_core.envs.action_check import ActionChecker
 from embodichain_core.envs.base_env import BaseEnv
 from embodichain_core.envs.cfg import EmbodiedEnvCfg
-from embodichain_core.envs.episode_rng import episode_seeds_option
 from embodichain_core.envs.robot_io import RobotIO
 from embodichain_core.envs.rollout_buffer import RolloutBuffer
-from embodichain_core.envs.scene_setup import build_scene
-from embodichain_core.envs.summary import print_summary
+from embodichain_core.envs.scene_setup import add_config_entities
 from embodichain_core.envs.task_api import TaskApi
 from embodichain_core.managers.env_keys import check_after_first_reset
+from embodichain_core.sim.scene import Scene
 from embodichain_core.viewing import attach_viewer
 
 
 class EmbodiedEnv(BaseEnv):
     """The configuration-driven env (see docs/embodied_env.md).
 
-    It builds its scene from the config and runs its own ``step`` and ``reset``: the
-    :class:`BaseEnv` overrides of a hand-written step (``design_scene``,
-    ``define_action_space``, ``apply_action``, ``step_physics``, ``reset_envs``) are
-    not called here, and a subclass defining one is an error.
+    It builds through :class:`BaseEnv`'s ``__init__`` with the overrides of the module
+    docstring, and runs its own ``step`` and ``reset`` from BaseEnv's phases. A subclass
+    overrides the task points (``compute_task_state``, ``get_reward``, ...) and may extend
+    BaseEnv's others, calling ``super()``: ``step_physics`` to act between physics steps,
+    ``apply_action`` (it receives the command after the action terms), ``design_scene``,
+    ``reset_envs``.
 
     Example:
         >>> env = gym.make("MyTask-v0", cfg=MyTaskCfg(num_envs=4))
@@ -49,9 +53,7 @@ class EmbodiedEnv(BaseEnv):
     cfg_cls: type = EmbodiedEnvCfg
     # set during construction (env_build)
     single_action_space: gym.spaces.Box  # joint-position limits, or the action manager's ``pre`` terms
-    scene: Any
     robot: Any
-    sensors: dict[str, Any]
     active_joint_ids: list[int]
     event_manager: Any
     observation_manager: Any
@@ -59,17 +61,7 @@ class EmbodiedEnv(BaseEnv):
     action_manager: Any
     dataset_manager: Any
     _robot_io: RobotIO
-    _check_action: Any  # env_build.action_checker
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        hooks = [name for name in _BASE_ENV_HOOKS if name in cls.__dict__]
-        if hooks:
-            raise TypeError(
-                f"{cls.__name__} defines {', '.join(hooks)}, which only BaseEnv's step calls: EmbodiedEnv "
-                "builds its scene from the config and runs its own step (override compute_task_state, "
-                "get_reward, check_truncated, get_info or get_obs instead; or subclass BaseEnv)"
-            )
+    _check_action: ActionChecker  # env_build.action_checker
 
     def __init__(
         self,
@@ -84,28 +76,50 @@ class EmbodiedEnv(BaseEnv):
         self._pending_env_keys: list = []  # env attributes to find after the first reset (env_keys)
         self.rollout_buffer: Optional[RolloutBuffer] = None
         self._viewer: Optional[Any] = None  # headless: false opens one once built (embodichain_core.viewing)
-        # config, timing, device, seed, counters (BaseEnv)
-        self._init_run(cfg, num_envs, render_mode, kwargs)
         self._default_reward = type(self).get_reward is TaskApi.get_reward  # zeros: phase 8 skips it
+        # config, scene, managers, spaces, the action check, the summary (BaseEnv, with the overrides below)
+        super().__init__(cfg, num_envs, render_mode, **kwargs)
+        try:
+            if self.cfg.init_rollout_buffer or env_build.recorders_need_buffer(self.dataset_manager):
+                self.cfg.init_rollout_buffer = True
+                self.rollout_buffer = RolloutBuffer(
+                    self._init_obs, self.single_action_space.shape, self.num_envs, self.max_episode_steps
+                )
+            self._viewer = attach_viewer(self)
+        except BaseException:
+            self.close()  # nothing half-built stays open (sensors, recorders)
+            raise
+
+    # -- BaseEnv's construction overrides, from the config -------------------------------------------
+    def check_cfg(self) -> None:
+        """The whole config (:meth:`EmbodiedEnvCfg.validate`, the memory estimate included) and
+        the manager sections, each functor resolved once for the build; then ``extensions``."""
+        self._functors = env_build.check_cfg(self)
+
+    def design_scene(self, scene: Scene) -> None:
+        """The config's entities, then the scene hooks of the event functors (``modify_scene``)."""
+        add_config_entities(self.cfg, scene, self._functors["events"])
+
+    def on_scene_built(self) -> None:
+        """The robot, the active joints, then the managers (and the ``startup`` events)."""
+        self._joint_space = env_build.resolve_robot(self)
         self._episode_success = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
-        # scene, managers, spaces, the action check
-        env_build.build_managers(self, env_build.setup_scene(self, build_scene))
+        env_build.build_managers(self, self._functors)
+        self._functors = {}  # the managers hold what they use
         # which manager phases have work (managers are fixed once built): one flag test per step
-        self._pre_terms = bool(self.action_manager is not None and len(self.action_manager))
-        self._post_terms = bool(self.action_manager is not None and self.action_manager.terms("post"))
-        self._obs_terms = bool(self.observation_manager is not None and len(self.observation_manager))
-        self._reward_terms = bool(self.reward_manager is not None and len(self.reward_manager))
-        self._init_obs = obs = self.get_obs()
-        self._init_spaces(obs)
-        self._check_action = env_build.action_checker(self)
-        if self.cfg.init_rollout_buffer or env_build.recorders_need_buffer(self.dataset_manager):
-            self.cfg.init_rollout_buffer = True
-            self.rollout_buffer = RolloutBuffer(
-                obs, self.single_action_space.shape, self.num_envs, self.max_episode_steps
-            )
-        if self.cfg.verbose:
-            print_summary(self)
-        self._viewer = attach_viewer(self)
+        self._pre_terms = bool(len(self.action_manager))
+        self._post_terms = bool(self.action_manager.terms("post"))
+        self._obs_terms = bool(len(self.observation_manager))
+        self._reward_terms = bool(len(self.reward_manager))
+
+    def define_action_space(self) -> gym.spaces.Box:
+        """The ``pre`` action terms' bounds, else the active joints' position limits."""
+        space = self.action_manager.single_action_space()
+        return self._joint_space if space is None else space
+
+    def _action_checker(self) -> ActionChecker:
+        """The boundary check of ``step``: the action terms' widths, or joint commands."""
+        return env_build.action_checker(self)
 
     # -- the loop ----------------------------------------------------------------------------------
     def step(self, action: Any) -> tuple[dict, torch.Tensor, torch.Tensor, torch.Tensor, dict]:  # type: ignore[override]
@@ -120,9 +134,9 @@ class EmbodiedEnv(BaseEnv):
         if self._pre_terms:
             command = self.action_manager.process_action(action, "pre")
         # 2. apply the command: joint targets / efforts into the simulation
-        self._apply_command(command)
-        # 3. physics: sim_steps_per_control physics steps of every env
-        diverged = self.sim.advance(self.sim_steps_per_control)
+        self.apply_action(command)
+        # 3. physics: sim_steps_per_control physics steps of every env (sim.advance)
+        diverged = self.step_physics()
         # 4. interval events
         self.event_manager.apply("interval")
         # 5. counters: this step counts from here on
@@ -155,35 +169,17 @@ class EmbodiedEnv(BaseEnv):
         """Reset ``options["reset_ids"]`` (all envs by default); ``options["episode_seeds"]``
         replays episodes, ``save_data=False`` discards the finished episodes."""
         options = dict(options or {})
-        # 1. seed
-        if seed is not None:
-            self._seed_rng(seed)
-        # 2. the envs to reset
-        ids = options.pop("reset_ids", None)
-        ids = torch.arange(self.num_envs) if ids is None else torch.as_tensor(ids).reshape(-1).long()
+        # 1. seed (with ``seed``)
+        # 2. the envs to reset (BaseEnv's first phases)
+        ids = self._reset_ids(seed, options)
         # 3. dataset: commit (or discard) the episodes that just ended, with their seeds
         self._commit_or_discard(ids, bool(options.get("save_data", True)))
         # 4. episode streams of the new episodes
-        self.rng.begin_episodes(ids, episode_seeds_option(options, len(ids)))
+        self._begin_episodes(ids, options)
         # 5. scene reset: whole state rows (clears a diverged env), then every entity
-        if self.rollout_buffer is not None:
-            self.rollout_buffer.clear(ids)
-        self.scene.reset(ids, keep_uids=self._detached_uids_for_reset)
         # 6. reset events
-        self.event_manager.apply("reset", ids)
-        # 7. manager resets (interval counters, class functors)
-        for manager in (
-            self.event_manager,
-            self.observation_manager,
-            self.reward_manager,
-            self.action_manager,
-            self.dataset_manager,
-        ):
-            if manager is not None:
-                manager.reset(ids)
-        if self._pending_env_keys:  # read by a functor, stored by no event: task code must have set them
-            check_after_first_reset(self, self._pending_env_keys)
-            self._pending_env_keys = []
+        # 7. manager resets (interval counters, class functors): 5-7 are reset_envs
+        self.reset_envs(ids)
         # 8. counters
         rows = ids.cpu()
         self._elapsed_steps[rows] = 0
@@ -198,17 +194,36 @@ class EmbodiedEnv(BaseEnv):
         return obs, info
 
     # -- phases with more than a line ---------------------------------------------------------------
-    def _apply_command(self, command: Any) -> None:
-        """Phase 2: a tensor is position targets; a dict routes ``qpos``/``qvel``/``qf``."""
+    def apply_action(self, command: Any) -> None:
+        """Phase 2: the command (the action after the ``pre`` action terms) into the joint
+        drives. A tensor is position targets; a dict routes ``qpos``/``qvel``/``qf``."""
+        robot_io = self._robot_io  # addresses and drive targets resolved at build
         if isinstance(command, dict):
             for key in ("qpos", "qvel", "qf"):
                 if key in command:
-                    self._apply_joint_command(key, command[key])
+                    robot_io.write(key, command[key])
             return
-        self._robot_io.write("qpos", command)  # the action itself (no action terms)
+        robot_io.write("qpos", command)  # the action itself (no action terms)
 
-    def _apply_joint_command(self, key: str, value: Any) -> None:
-        self._robot_io.write(key, value)  # addresses and drive targets resolved at build
+    def reset_envs(self, env_ids: torch.Tensor) -> None:
+        """Reset phases 5-7: the rollout-buffer rows, the scene (BaseEnv's: every entity but
+        the detached ones), the reset events, each manager's reset, for ``env_ids``."""
+        if self.rollout_buffer is not None:
+            self.rollout_buffer.clear(env_ids)
+        super().reset_envs(env_ids)
+        self.event_manager.apply("reset", env_ids)
+        for manager in (
+            self.event_manager,
+            self.observation_manager,
+            self.reward_manager,
+            self.action_manager,
+            self.dataset_manager,
+        ):
+            if manager is not None:
+                manager.reset(env_ids)
+        if self._pending_env_keys:  # read by a functor, stored by no event: task code must have set them
+            check_after_first_reset(self, self._pending_env_keys)
+            self._pending_env_keys = []
 
     def get_obs(self, **kwargs: Any) -> dict:
         """Phase 6: ``robot`` (active joints' qpos, qvel, qf), ``sensor`` (per uid), then
@@ -280,6 +295,3 @@ class EmbodiedEnv(BaseEnv):
             self._viewer.close()
         if errors:
             raise errors[0]
-
-
-_BASE_ENV_HOOKS = ("design_scene", "define_action_space", "apply_action", "step_physics", "reset_envs")

@@ -1,16 +1,19 @@
 """Construction of an :class:`~embodichain_core.envs.embodied_env.EmbodiedEnv`, by role.
 
-The env's ``__init__`` runs these in order: :func:`resolve_cfg` (config and keyword
-overrides) -> :func:`setup_scene` (extensions, scene, robot, active joints, default
-action space) -> :func:`build_managers` (event manager + startup events, observation,
-reward, action, dataset managers, the env attributes functors pass between them) -> the first observation and the spaces ->
-:func:`action_checker` (the boundary check of ``step``). The loop itself (``step``,
-``reset``) lives in the env class, top to bottom.
+The env is built by :class:`~embodichain_core.envs.base_env.BaseEnv`'s ``__init__``, whose
+overrides ``EmbodiedEnv`` implements with these: :func:`resolve_cfg` (config and keyword
+overrides) -> :func:`check_cfg` (validation, the manager sections resolved once,
+extensions) -> the config's entities (``scene_setup.add_config_entities``) and the compile
+-> :func:`resolve_robot` (robot, active joints, their drive targets, the joint-limit action
+space) -> :func:`build_managers` (event manager + startup events, observation, reward,
+action, dataset managers, the env attributes functors pass between them) -> the action
+space, the first observation and the spaces -> :func:`action_checker` (the boundary check
+of ``step``). The loop itself (``step``, ``reset``) lives in the env class, top to bottom.
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 import gymnasium as gym
 import numpy as np
@@ -79,24 +82,31 @@ def bind_extensions(env: Any) -> None:
         setattr(env, key, value)
 
 
-def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
-    """Validate, bind extensions, build the scene; resolve the robot, the active joints,
-    their drive targets and the default action space.
-
-    Args:
-        env: the env under construction.
-        build_scene: :func:`~embodichain_core.envs.scene_setup.build_scene`, as the env
-            module names it (the seam tests replace to prove nothing was built).
+def check_cfg(env: Any) -> dict:
+    """Validate the config (memory estimate included), check the manager sections (each
+    functor resolved once, for the build), warn about ignored settings, bind extensions.
 
     Returns:
-        The checked manager sections after the filters, each functor resolved once
-        (for the managers).
+        The checked manager sections after the filters (``filter_visual_rand``,
+        ``filter_dataset_saving``), for :func:`build_managers`.
+
+    Raises:
+        ConfigError: the first bad value, at its config path, before anything is built.
     """
     env.cfg.validate(functors=False)
     functors = filter_functors(env.cfg, check_sections(env.cfg, warn=True))
     warn_ignored(env.cfg)
     bind_extensions(env)
-    env.scene = build_scene(env, functors["events"])
+    return functors
+
+
+def resolve_robot(env: Any) -> gym.spaces.Box:
+    """The robot (the scene's first), the sensors, the active joints and their addresses and
+    drive targets (``env._robot_io``), once the scene is built.
+
+    Returns:
+        The default action space: a ``Box`` of the active joints' position limits.
+    """
     env.robot = next(iter(env.scene.robots.values()))
     env.sensors = env.scene.sensors
     env.active_joint_ids = resolve_active_joints(env.cfg, env.robot)
@@ -104,22 +114,17 @@ def setup_scene(env: Any, build_scene: Callable[[Any, Any], Any]) -> Any:
     # addresses, drive targets and fast paths of the active joints, resolved once
     env._robot_io = RobotIO(env.sim, env.robot, env.active_joint_ids, env.num_envs)
     limits = env.robot.get_qpos_limits()[0, aid].cpu().numpy()  # the sim device may be a GPU
-    env.single_action_space = gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
-    return functors
+    return gym.spaces.Box(low=limits[:, 0], high=limits[:, 1], dtype=np.float32)
 
 
 def build_managers(env: Any, functors: dict) -> None:
     """Event manager (then the ``startup`` events), observation, reward, action and
-    dataset managers from the checked sections ``functors`` (:func:`setup_scene`);
-    ``pre`` action terms replace the action space."""
+    dataset managers from the checked sections ``functors`` (:func:`check_cfg`)."""
     env.event_manager = EventManager(functors["events"], env)
     env.event_manager.apply("startup", None)
     env.observation_manager = ObservationManager(functors["observations"], env)
     env.reward_manager = RewardManager(functors["rewards"], env)
     env.action_manager = ActionManager(functors["actions"], env)
-    space = env.action_manager.single_action_space()
-    if space is not None:
-        env.single_action_space = space
     if functors["dataset"] is not None:
         manager = DatasetManager(functors["dataset"], env)
         env.dataset_manager = manager if len(manager) else None

@@ -1,4 +1,4 @@
-"""Scene construction of an ``EmbodiedEnv`` from its config, and config filters."""
+"""The scene of an ``EmbodiedEnv`` from its config (its ``design_scene``), and config filters."""
 
 from __future__ import annotations
 
@@ -10,12 +10,11 @@ from embodichain_core.managers.manager_base import ValidatedFunctor
 from embodichain_core.sim.scene import Scene
 
 
-def build_scene(env: Any, events: dict[str, ValidatedFunctor]) -> Scene:
-    """Add every configured entity, let the event functors edit the spec, compile, reset.
+def add_config_entities(cfg: Any, scene: Scene, events: dict[str, ValidatedFunctor]) -> None:
+    """Add every entity of ``cfg`` (an ``EmbodiedEnvCfg``) to ``scene``, then let the event
+    functors edit the spec (``modify_scene``); the env compiles the scene afterwards.
 
     ``events`` is the checked events section (``check_sections``, after :func:`filter_functors`)."""
-    cfg = env.cfg
-    scene = Scene(cfg.sim_cfg, env.num_envs, str(env.device))
     robot = cfg.robot
     if robot.uid is None:
         robot.uid = "robot"
@@ -35,9 +34,7 @@ def build_scene(env: Any, events: dict[str, ValidatedFunctor]) -> Scene:
         scene.add_rigid_object_group(group, f"rigid_object_group[{i}]")
     for i, sensor_cfg in enumerate(cfg.sensor):
         scene.add_sensor(_make_sensor(sensor_cfg, scene, f"sensor[{i}]"), f"sensor[{i}]")
-    _run_scene_hooks(env, scene, events)
-    scene.build()
-    return scene
+    _run_scene_hooks(scene, events)
 
 
 def _indirect_light(scene: Scene, indirect: Any) -> None:
@@ -62,7 +59,7 @@ def _make_sensor(sensor_cfg: Any, scene: Scene, path: str) -> Any:
     return sensor_cls(sensor_cfg, scene)
 
 
-def _run_scene_hooks(env: Any, scene: Scene, events: dict[str, ValidatedFunctor]) -> None:
+def _run_scene_hooks(scene: Scene, events: dict[str, ValidatedFunctor]) -> None:
     """Class functors with ``modify_scene(cfg, scene)`` edit the spec before compile."""
     for checked in events.values():
         hook = getattr(checked.func, "modify_scene", None)
