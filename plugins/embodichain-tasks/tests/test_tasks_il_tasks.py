@@ -14,7 +14,7 @@ import embodichain_core  # noqa: F401  (loads the plugins)
 from embodichain_core.config.loader import load_gym_config
 from embodichain_core.envs import EmbodiedEnvCfg
 from embodichain_tasks.il.open_drawer import OpenDrawerCfg, OpenDrawerEnv
-from embodichain_tasks.il.pick_fork import PickForkCfg, PickForkEnv
+from embodichain_tasks.il.pick_fork import PickForkCfg, PickForkEnv, fork_com
 from embodichain_tasks.plugin import CONFIG_DIR
 
 #: task id -> (env class, cfg class, JSON config)
@@ -110,6 +110,21 @@ def test_pick_fork_success_needs_a_lifted_and_held_fork() -> None:
     assert (metrics["fork_height"] > 0.1).all()
     assert metrics["fork_tcp_distance"][1] < 1e-3 < 0.04 < metrics["fork_tcp_distance"][0]
     assert success.tolist() == [False, True]
+    env.close()
+
+
+def test_the_fork_com_observation_follows_the_drawn_mesh() -> None:
+    env = gym.make("PickFork-v1", num_envs=2, verbose=False).unwrapped
+    centres = set()
+    for seed in range(4):
+        env.reset(seed=seed)
+        com = fork_com(env)
+        assert com.shape == (2, 3)
+        assert com.dtype == torch.float32
+        origin = env.scene["fork"].get_local_pose()[:, :3]
+        assert ((com - origin).norm(dim=-1) < 0.03).all()  # on the fork, near its origin
+        centres.update(tuple(round(float(x), 4) for x in env.scene["fork"].get_com()[i]) for i in range(2))
+    assert len(centres) > 1  # the meshes' centres of mass differ: the fork's origin pose does not say it
     env.close()
 
 

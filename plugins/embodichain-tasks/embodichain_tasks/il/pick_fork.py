@@ -78,6 +78,16 @@ def fork_events() -> dict:
     }
 
 
+def fork_com(env: Any, obs: Any = None) -> torch.Tensor:
+    """Observation functor: (N, 3) the fork's centre of mass in the env frame.
+
+    The fork's origin pose (``get_rigid_object_pose``) does not say which of the six meshes
+    the reset drew; their centres of mass lie up to 1 cm apart along the fork, and the
+    scripted demonstration grasps above the centre of mass.
+    """
+    return env.fork_com().float()
+
+
 @configclass
 class PickForkCfg(EmbodiedEnvCfg):
     """The ``PickFork-v1`` scene; ``configs/pick_fork.json`` is the same config as a file."""
