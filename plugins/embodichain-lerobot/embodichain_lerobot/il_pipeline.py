@@ -39,7 +39,7 @@ from typing import Any, Optional, Sequence
 from embodichain_lerobot.il_recipes import POLICIES, pipeline_config, train_flags
 from embodichain_lerobot.il_stats import choose_checkpoint, format_rate, rate_summary
 
-__all__ = ["main", "build_parser", "MAIN_JOB", "CAMERA_CONFIG"]
+__all__ = ["main", "build_parser", "MAIN_JOB", "STATE_CONFIG", "CAMERA_CONFIG"]
 
 
 def _tasks_config(name: str) -> Optional[Path]:
@@ -50,8 +50,11 @@ def _tasks_config(name: str) -> Optional[Path]:
     return Path(next(iter(spec.submodule_search_locations))) / "configs" / name
 
 
-#: The state recipe's default ``--config``: PickFork-v1's data-generation job.
+#: PickFork-v1's data-generation job (what ``make run`` records).
 MAIN_JOB = _tasks_config("main_job.json")
+#: The state recipe's default ``--config``: that job with the fork's centre of mass in
+#: ``environment_state`` beside its pose (the six fork meshes differ in where it lies).
+STATE_CONFIG = _tasks_config("pick_fork_state.json")
 #: The camera recipe's default ``--config``: the same job with a 96x96 policy camera.
 CAMERA_CONFIG = _tasks_config("pick_fork_camera.json")
 
@@ -98,7 +101,7 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         if getattr(args, name) is not None and getattr(args, name) < 1:
             parser.error(f"--{name} must be at least 1, got {getattr(args, name)}")
     if args.config is None:
-        args.config = CAMERA_CONFIG if args.policy == "camera" else MAIN_JOB
+        args.config = CAMERA_CONFIG if args.policy == "camera" else STATE_CONFIG
     if args.config is None:
         parser.error("--config is required: embodichain-tasks (the default PickFork-v1 configs) is not installed")
     args.config = _resolve_config(parser, args.config)

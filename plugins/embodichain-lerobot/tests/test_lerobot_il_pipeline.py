@@ -94,6 +94,17 @@ def test_the_pipeline_stops_before_any_step_on_a_config_without_a_camera(tmp_pat
     assert not (tmp_path / "run").exists()  # nothing half-built
 
 
+def test_the_pick_fork_state_default_reads_the_fork_pose_and_its_centre_of_mass(tmp_path: Path) -> None:
+    from embodichain_lerobot.il_pipeline import STATE_CONFIG, _check_args, build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["--out", str(tmp_path)])
+    _check_args(parser, args)
+    assert args.config == STATE_CONFIG
+    params = pipeline_config(STATE_CONFIG, "state")["env"]["dataset"]["lerobot"]["params"]
+    assert params["environment_state"] == ["fork_pose", "fork_com"]
+
+
 def test_the_open_drawer_state_recipe_reads_the_handle_and_the_opening_and_renders_nothing() -> None:
     config = MAIN_JOB.parent / "open_drawer_record.json"
     data = pipeline_config(config, "state")
