@@ -34,6 +34,9 @@ from embodichain_ray.transport import TransferLost
 from embodichain_ray.worker import BatchResult
 
 log = logging.getLogger("embodichain_ray")
+#: Once every episode is done, how long the run still waits for restarting workers (a worker
+#: whose node is gone may find no CPU to restart on; the run then ends without it).
+RESTART_GRACE_S = 30.0
 
 
 @dataclass
@@ -148,8 +151,10 @@ class Scheduler:
 
         for w in range(len(self.actors)):
             self._submit(w)
-        while self.inflight and (self.queue or any(batch is not None for _, batch in self.inflight.values())):
+        last = time.monotonic()
+        while self.inflight and (self.queue or not self._only_probes() or time.monotonic() - last < RESTART_GRACE_S):
             ready, _ = ray.wait(list(self.inflight), num_returns=1, timeout=1.0)
+            last = last if self._only_probes() else time.monotonic()
             for ref in ready:
                 worker, batch = self.inflight.pop(ref)
                 if self._collect(ref, worker, batch):
@@ -159,6 +164,10 @@ class Scheduler:
         self.inflight = {ref: v for ref, v in self.inflight.items() if v[1] is not None}  # no probe to wait for
         if self.queue:  # the loop only ends with episodes left when no worker is left
             raise GenerateError(f"every worker is gone ({self.state.error}); {len(self.queue)} episode(s) were not run")
+
+    def _only_probes(self) -> bool:
+        """Whether every call in flight is a restart probe (no batch is running)."""
+        return all(batch is None for _, batch in self.inflight.values())
 
     def stop(self, timeout: float) -> None:
         """Ask every worker to stop (the stop file) and take the batches they return within
