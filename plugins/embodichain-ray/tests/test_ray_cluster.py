@@ -43,6 +43,9 @@ def cluster(monkeypatch: Any) -> Iterator[Callable[[list[dict]], tuple[Any, list
     monkeypatch.setenv("RAY_USAGE_STATS_ENABLED", "0")
     # on a loaded machine a node's agents take well over Ray's 30 s to start: wait for them
     monkeypatch.setenv("RAY_raylet_start_wait_time_s", "180")
+    # a busy node answers its health checks late: give each check a minute before it counts as
+    # missed (a removed node refuses the connection at once, so it is still found dead in seconds)
+    monkeypatch.setenv("RAY_health_check_timeout_ms", "60000")
     get_node = services.get_node
 
     def patient_get_node(*args: Any, **kwargs: Any) -> Any:
