@@ -15,7 +15,6 @@ import mujoco
 import numpy as np
 import pytest
 import torch
-import trimesh
 
 from core_testlib import base_cfg
 
@@ -24,9 +23,8 @@ from embodichain_core.config.validate import check_sim
 from embodichain_core.demo import DemoSceneEnv, demo_cfg
 from embodichain_core.sim.backend import SimBackend, conformance
 from embodichain_core.sim.backend.warp_sim import WarpSim
-from embodichain_core.sim.cfg import RigidObjectCfg, SimulationManagerCfg
+from embodichain_core.sim.cfg import SimulationManagerCfg
 from embodichain_core.sim.scene import Scene
-from embodichain_core.sim.shapes import MeshCfg
 
 NUM_ENVS = 8
 STEPS = 50
