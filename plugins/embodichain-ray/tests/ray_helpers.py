@@ -79,3 +79,11 @@ def _running(pid: int) -> bool:
     except (OSError, IndexError):
         return False
     return state != "Z"
+
+
+def generate_spec(tmp_path: Path, config: str, **kw: Any) -> Any:
+    """A ``GenerateSpec`` of ``config`` writing under ``tmp_path`` (``out``, ``shards``); ``kw`` overrides."""
+    from embodichain_ray.spec import GenerateSpec
+
+    base = {"task": None, "gym_config": config, "episodes": 6, "workers": 1, "num_envs": 1, "seed": 7}
+    return GenerateSpec(**{**base, "output": tmp_path / "out", "shards": tmp_path / "shards", **kw})

@@ -18,21 +18,11 @@ from embodichain_ray.spec import GenerateSpec, episode_seed, seed_table
 from embodichain_ray.storage import open_storage
 from embodichain_ray.transport import receive
 from embodichain_ray.worker import EpisodeWorker
-from ray_helpers import episode_arrays, load, sidecar
+from ray_helpers import episode_arrays, generate_spec, load, sidecar
 
 
 def _spec(tmp_path: Path, config: str, **kw: Any) -> GenerateSpec:
-    base = {
-        "task": None,
-        "gym_config": config,
-        "episodes": 7,
-        "workers": 2,
-        "num_envs": 1,
-        "seed": 3,
-        "output": tmp_path / "out",
-        "shards": tmp_path / "shards",
-    }
-    return GenerateSpec(**{**base, **kw})
+    return generate_spec(tmp_path, config, **{"episodes": 7, "workers": 2, "seed": 3, **kw})
 
 
 def _digests(root: Path) -> dict[str, str]:

@@ -9,25 +9,13 @@ import numpy as np
 import pytest
 from embodichain_ray.merge import merge_episodes
 from embodichain_ray.shards import scan_shards
-from embodichain_ray.spec import GenerateSpec, episode_seed, seed_table
+from embodichain_ray.spec import episode_seed, seed_table
 from embodichain_ray.worker import EpisodeWorker
-from ray_helpers import episode_arrays, load, sidecar
+from ray_helpers import episode_arrays, generate_spec, load, sidecar
 
 from embodichain_core.envs.episode_rng import derive_seed
 
 
-def _spec(tmp_path: Path, config: str, **kw: Any) -> GenerateSpec:
-    base = {
-        "task": None,
-        "gym_config": config,
-        "episodes": 6,
-        "workers": 1,
-        "num_envs": 1,
-        "seed": 7,
-        "output": tmp_path / "out",
-        "shards": tmp_path / "shards",
-    }
-    return GenerateSpec(**{**base, **kw})
 
 
 def test_episode_seeds_are_a_function_of_seed_episode_and_attempt() -> None:
@@ -41,7 +29,7 @@ def test_episode_seeds_are_a_function_of_seed_episode_and_attempt() -> None:
 
 def test_failed_demos_are_retried_with_the_next_attempts_seed(tmp_path: Path, tiny_config: Any) -> None:
     config = tiny_config(demo_max_attempts=3)  # 10-step episodes: the demo never succeeds
-    worker = EpisodeWorker(_spec(tmp_path, config), 0)
+    worker = EpisodeWorker(generate_spec(tmp_path, config), 0)
     worker.plan.keep_failed = False  # as if the recorder kept successes only
     seen: list = []
     reset = worker.env.reset
@@ -63,7 +51,7 @@ def test_failed_demos_are_retried_with_the_next_attempts_seed(tmp_path: Path, ti
 
 
 def test_shard_episodes_merge_in_episode_order_with_their_metadata(tmp_path: Path, tiny_config: Any) -> None:
-    spec = _spec(tmp_path, tiny_config())
+    spec = generate_spec(tmp_path, tiny_config())
     worker = EpisodeWorker(spec, 0)
     try:
         worker.run([3, 1])
@@ -94,7 +82,7 @@ def test_shard_episodes_merge_in_episode_order_with_their_metadata(tmp_path: Pat
 
 
 def test_the_merge_starts_new_files_every_per_file_episodes(tmp_path: Path, tiny_config: Any) -> None:
-    spec = _spec(tmp_path, tiny_config())
+    spec = generate_spec(tmp_path, tiny_config())
     worker = EpisodeWorker(spec, 0)
     try:
         worker.run([2, 0, 1])
@@ -123,7 +111,7 @@ def test_merge_only_merges_what_the_shards_hold_without_starting_ray(
     from embodichain_ray import cli
 
     config = tiny_config()
-    spec = _spec(tmp_path, config)
+    spec = generate_spec(tmp_path, config)
     worker = EpisodeWorker(spec, 0)
     try:
         worker.run([1, 0, 2])

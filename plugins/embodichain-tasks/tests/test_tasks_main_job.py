@@ -1,5 +1,6 @@
 """The main job's config (`make run`): PickFork-v1 with a LeRobot recorder."""
 
+import json
 from pathlib import Path
 
 import embodichain_tasks
@@ -20,3 +21,27 @@ def test_main_job_records_pick_fork_demos_with_the_stereo_camera_as_video():
     assert recorder.params["vcodec"] == "h264"
     assert recorder.params["environment_state"] == ["fork_pose"]  # what state-based policies read
     assert [s.sensor_type for s in cfg.sensor] == ["StereoCamera"]
+
+
+def _load(name: str) -> dict:
+    return json.loads((MAIN_JOB.parent / name).read_text(encoding="utf-8"))
+
+
+def test_pick_fork_state_config_is_the_main_job_plus_the_fork_centre_of_mass():
+    """pick_fork_state.json is a copy of main_job.json with one observation more: undoing
+    that change must give main_job.json back, so the two cannot drift apart unseen."""
+    state = _load("pick_fork_state.json")
+    assert state["env"]["observations"].pop("fork_com")["func"] == "embodichain_tasks.il.pick_fork:fork_com"
+    recorder = state["env"]["dataset"]["lerobot"]["params"]
+    assert recorder["environment_state"] == ["fork_pose", "fork_com"]
+    recorder["environment_state"] = ["fork_pose"]
+    assert state == _load("main_job.json")
+
+
+def test_pick_fork_camera_config_is_the_main_job_plus_a_policy_camera():
+    camera = _load("pick_fork_camera.json")
+    policy_cam = [s for s in camera["sensor"] if s["uid"] == "policy_cam"]
+    assert len(policy_cam) == 1
+    assert policy_cam[0]["width"] == policy_cam[0]["height"] == 96
+    camera["sensor"] = [s for s in camera["sensor"] if s["uid"] != "policy_cam"]
+    assert camera == _load("main_job.json")
