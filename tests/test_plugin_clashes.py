@@ -243,7 +243,7 @@ def test_configs_resolve_qualified_names(
             resolve_func("ecclash-beta/shared_evnt", "event", "env.events.e")
         with pytest.raises(ConfigError, match="Did you mean 'ecclash-beta'"):
             resolve_func("ecclash-betta/shared_event", "event", "env.events.e")
-        # the old spelling of a qualified name says what to write instead
+        # a qualified name written with ":" (an import path's separator) gets the "/" spelling
         with pytest.raises(ConfigError, match="'ecclash-beta' is a plugin: .* written 'ecclash-beta/shared_event'"):
             resolve_func("ecclash-beta:shared_event", "event", "env.events.e")
         with pytest.raises(ConfigError, match=r"robot\.class_type.*unknown robot 'ecclash-beta:ClashArm'"):
@@ -278,12 +278,7 @@ def _outcome() -> dict[str, Any]:
     return out
 
 
-@pytest.mark.parametrize("priority", [None, "ecclash-beta"])
-def test_outcome_is_the_same_in_both_orders(
-    monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path], priority: str | None
-) -> None:
-    if priority:  # the variable of earlier versions changes nothing: a config means one thing
-        monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", priority)
+def test_outcome_is_the_same_in_both_orders(monkeypatch: pytest.MonkeyPatch, dist_roots: dict[str, Path]) -> None:
     outcomes = []
     for order in ORDERS:
         with monkeypatch.context() as mp:

@@ -160,7 +160,6 @@ def test_raising_hook_rolls_back_and_others_load(monkeypatch: pytest.MonkeyPatch
 
 @pytest.mark.parametrize("reverse", [False, True])
 def test_clash_across_plugins_keeps_both(monkeypatch: pytest.MonkeyPatch, reverse: bool) -> None:
-    monkeypatch.delenv("EMBODICHAIN_PLUGIN_PRIORITY", raising=False)
     eps = [FakeEntryPoint("plugin-a", FunctorPlugin), FakeEntryPoint("plugin-b", OtherFunctorPlugin)]
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a clash is no load failure

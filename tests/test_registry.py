@@ -52,8 +52,7 @@ def test_add_get_and_queries() -> None:
     assert list(reg) == ["randomize_light"]
 
 
-def test_same_name_two_providers_both_kept_bare_name_ambiguous(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("EMBODICHAIN_PLUGIN_PRIORITY", "plugin-b")  # no longer read: a config means one thing
+def test_same_name_two_providers_both_kept_bare_name_ambiguous() -> None:
     reg = Registry("functors")
     reg.add("randomize_light", "json:dumps", provider="plugin-b")
     reg.add("randomize_light", "json:loads", provider="plugin-a")
@@ -129,8 +128,7 @@ def test_unknown_name_suggests_closest() -> None:
     with pytest.raises(UnknownNameError) as info:
         reg.get("randomise_light")
     err = info.value
-    assert isinstance(err, KeyError)
-    assert isinstance(err, ValueError)
+    assert isinstance(err, KeyError)  # what the config code catches for an unknown name
     assert str(err).startswith("unknown functor 'randomise_light'. Did you mean 'randomize_light'")
     assert err.matches[0] == "randomize_light"
 

@@ -1,6 +1,7 @@
-"""The embodichain plugin host (docs/plugins.md): :data:`hookimpl` for plugin authors, and
-registry accessors (loading the plugins on first use) taking a bare or qualified name.
-The names imported here with ``as`` are its public API."""
+"""The embodichain plugin host (docs/plugins.md): :data:`hookimpl` and the typed register
+objects for plugin authors, and the registry accessors (loading the plugins on first use),
+which take a bare or a qualified (``<plugin>/<name>``) name. The names imported here with
+``as`` are its public API."""
 
 from __future__ import annotations
 
@@ -8,8 +9,6 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from embodichain_core.plugins import manager as manager
-from embodichain_core.plugins.hookspecs import VISUAL_RANDOMIZATION as VISUAL_RANDOMIZATION
 from embodichain_core.plugins.hookspecs import FunctorRegister as FunctorRegister
 from embodichain_core.plugins.hookspecs import RobotRegister as RobotRegister
 from embodichain_core.plugins.hookspecs import SensorRegister as SensorRegister
@@ -32,11 +31,8 @@ from embodichain_core.plugins.manager import unregister_plugin as unregister_plu
 from embodichain_core.plugins.registry import AmbiguousNameError as AmbiguousNameError
 from embodichain_core.plugins.registry import RegistryEntry
 
-# Each accessor returns the registry of one kind (loading the plugins first). RegistryEntry meta:
-# functors ``kind``/``category``/``description``; sensors ``sensor_class``; tasks
-# ``max_episode_steps``/``kwargs``/``config``/``description``; commands ``help``; viewers
-# ``description``. Robot,
-# solver and sensor lookups ignore case and a trailing ``Cfg``.
+# The registry of each kind; RegistryEntry.meta holds a functor's kind/category/description, a
+# sensor's sensor_class, a task's max_episode_steps/kwargs/config/description, a command's help.
 functor_registry = partial(get_registry, "functors")
 robot_registry = partial(get_registry, "robots")
 solver_registry = partial(get_registry, "solvers")
@@ -58,7 +54,7 @@ def get_robot_cfg_class(name: str) -> Any:
 
 
 def get_solver_class(name: str) -> Any:
-    """The solver class registered as ``name`` (a ``solver_cfg.<part>.class_type``)."""
+    """The solver class for a ``solver_cfg.<part>.class_type``."""
     return solver_registry().get(name)
 
 
@@ -79,8 +75,8 @@ def get_asset_root(name: str | RegistryEntry) -> Path:
 
 
 def is_visual_randomization(name: str) -> bool:
-    """True for a registered ``randomize_*`` functor of category ``"randomization.visual"`` (an
-    ambiguous name is not; it fails when resolved)."""
+    """True for a registered functor that ``filter_visual_rand`` removes (an ambiguous name is
+    not one: it fails when resolved)."""
     try:
         entry = functor_registry().find(name)
     except AmbiguousNameError:

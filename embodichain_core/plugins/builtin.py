@@ -1,10 +1,6 @@
-"""The core's own registrations: a plugin module like any other.
-
-Registered by :func:`~embodichain_core.plugins.manager.load_plugins` under the
-name ``"embodichain-core"``: the ``embodichain`` subcommands and the demo task.
-Every target is a lazy ``"module:attr"`` string, so ``embodichain --help``
-imports none of the command modules and no env class.
-"""
+"""The core's own registrations (provider ``"embodichain-core"``), a plugin module like any
+other: the ``embodichain`` subcommands and the demo task, as lazy ``"module:attr"`` strings so
+that ``embodichain --help`` imports no command module and no env class."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""The hooks (documented in docs/plugins.md) and the ``register`` objects they receive; each
-register class names its registry kind, and :data:`KINDS` lists them in hook-call order."""
+"""The hooks (documented in docs/plugins.md) and the typed ``register`` objects they receive.
+Each register class names its registry kind; :data:`KINDS` lists them in hook-call order."""
 
 from __future__ import annotations
 
@@ -17,8 +17,7 @@ hookspec = pluggy.HookspecMarker(PROJECT_NAME)
 hookimpl = pluggy.HookimplMarker(PROJECT_NAME)
 
 FUNCTOR_KINDS = ("event", "observation", "reward", "action", "dataset")
-#: The viewers ``sim_cfg.viewer`` can open (MuJoCo's native window, a page in the browser);
-#: plugins register an opener for each through ``embodichain_register_viewers``.
+#: The viewers ``sim_cfg.viewer`` can open (MuJoCo's native window, a page in the browser).
 VIEWER_NAMES = ("native", "browser")
 #: Functor category removed by ``filter_visual_rand`` (with names ``randomize_*``).
 VISUAL_RANDOMIZATION = "randomization.visual"
@@ -36,14 +35,21 @@ def class_name_key(name: str) -> str:
     return key[:-3] if key.endswith("cfg") and len(key) > 3 else key
 
 
+#: kind -> register class, in the order the hooks are called (the order the classes are defined).
+KINDS: dict[str, type[BaseRegister]] = {}
+
+
 class BaseRegister:
-    """Registers into ``registry`` on behalf of the plugin ``provider``. Subclasses name their
-    registry ``kind`` (hook ``embodichain_register_<kind>``) and its message ``noun``; with
+    """Registers into ``registry`` for the plugin ``provider``. A subclass names its registry
+    ``kind`` (hook ``embodichain_register_<kind>``) and the ``noun`` of its messages; with
     ``class_names``, lookups ignore case and a trailing ``Cfg`` (:func:`class_name_key`)."""
 
     kind: ClassVar[str]
     noun: ClassVar[str]
     class_names: ClassVar[bool] = False
+
+    def __init_subclass__(cls) -> None:
+        KINDS[cls.kind] = cls
 
     def __init__(self, registry: Registry, provider: str):
         self.registry, self.provider = registry, provider
@@ -52,6 +58,10 @@ class BaseRegister:
         self, name: str, target: Any, meta: dict[str, Any] | None = None, *, lazy: bool | None = None
     ) -> RegistryEntry:
         return self.registry.add(name, target, self.provider, meta, lazy=lazy)
+
+    def _check(self, ok: bool, name: str, problem: str, error: type[Exception] = ValueError) -> None:
+        if not ok:
+            raise error(f"{self.noun} {name!r} from {self.provider!r}: {problem}")
 
 
 class CommandRegister(BaseRegister):
@@ -64,16 +74,14 @@ class CommandRegister(BaseRegister):
 
 
 class AssetRegister(BaseRegister):
-    """``register(name, root)``: a data root directory or a zero-argument callable (called
-    once, on first use)."""
+    """``register(name, root)``: a data directory, or a zero-argument callable returning one
+    (called once, on first use)."""
 
     kind, noun = "assets", "asset root"
 
     def __call__(self, name: str, root: Any) -> RegistryEntry:
-        if not (isinstance(root, (str, os.PathLike)) or callable(root)):
-            raise TypeError(
-                f"asset root {name!r} from {self.provider!r} must be a path or a callable, got {type(root).__name__}"
-            )
+        ok = isinstance(root, (str, os.PathLike)) or callable(root)
+        self._check(ok, name, f"must be a path or a callable, got {type(root).__name__}", TypeError)
         return self._add(name, functools.cache(root) if callable(root) else root, lazy=False)
 
 
@@ -114,10 +122,7 @@ class FunctorRegister(BaseRegister):
     def __call__(
         self, name: str, target: Any, *, kind: str, category: str = "", description: str = ""
     ) -> RegistryEntry:
-        if kind not in FUNCTOR_KINDS:
-            raise ValueError(
-                f"functor {name!r} from {self.provider!r}: unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}"
-            )
+        self._check(kind in FUNCTOR_KINDS, name, f"unknown kind {kind!r}.{did_you_mean(kind, FUNCTOR_KINDS)}")
         return self._add(name, target, {"kind": kind, "category": category, "description": description})
 
 
@@ -136,52 +141,27 @@ class TaskRegister(BaseRegister):
         config: Any = None,
         description: str = "",
     ) -> RegistryEntry:
-        if not (is_lazy_target(entry_point) or isinstance(entry_point, type)):
-            raise ValueError(
-                f"task {task_id!r} from {self.provider!r}: entry_point must be a 'module:Class' string or the env "
-                f"class, got {entry_point!r}"
-            )
+        ok = is_lazy_target(entry_point) or isinstance(entry_point, type)
+        self._check(ok, task_id, f"entry_point must be a 'module:Class' string or the env class, got {entry_point!r}")
         limit = None if max_episode_steps is None else int(max_episode_steps)
         meta = {"max_episode_steps": limit, "kwargs": dict(kwargs or {}), "config": config, "description": description}
         return self._add(task_id, entry_point, meta)
 
 
 class ViewerRegister(BaseRegister):
-    """``register(name, opener, description="")``: ``name`` is the viewer ``sim_cfg.viewer``
-    selects (one of :data:`VIEWER_NAMES`); ``opener(env, name, port=...)`` opens it on a built
-    env and returns its session (``before_step()``, ``after_step(obs, reward, info)``, ``close()``).
-    Give ``opener`` as a ``"module:function"`` string so that a headless run imports nothing of it."""
+    """``register(name, opener, description="")``: ``name`` is one of :data:`VIEWER_NAMES`;
+    ``opener(env, name, port=...)`` opens it on a built env and returns its session
+    (``before_step()``, ``after_step(obs, reward, info)``, ``close()``). A ``"module:function"``
+    opener keeps a headless run from importing it."""
 
     kind, noun = "viewers", "viewer"
 
     def __call__(self, name: str, opener: Any, description: str = "") -> RegistryEntry:
-        if name not in VIEWER_NAMES:
-            raise ValueError(
-                f"viewer {name!r} from {self.provider!r}: a viewer is registered as one of "
-                f"{', '.join(VIEWER_NAMES)}.{did_you_mean(str(name), VIEWER_NAMES)}"
-            )
-        if not (is_lazy_target(opener) or callable(opener)):
-            raise TypeError(
-                f"viewer {name!r} from {self.provider!r}: the opener must be a 'module:function' string or a "
-                f"callable, got {type(opener).__name__}"
-            )
+        hint = did_you_mean(str(name), VIEWER_NAMES)
+        self._check(name in VIEWER_NAMES, name, f"a viewer is registered as one of {', '.join(VIEWER_NAMES)}.{hint}")
+        ok, got = is_lazy_target(opener) or callable(opener), type(opener).__name__
+        self._check(ok, name, f"the opener must be a 'module:function' string or a callable, got {got}", TypeError)
         return self._add(name, opener, {"description": description})
-
-
-#: kind -> register class, in the order the hooks are called.
-KINDS: dict[str, type[BaseRegister]] = {
-    r.kind: r
-    for r in (
-        CommandRegister,
-        AssetRegister,
-        RobotRegister,
-        SolverRegister,
-        SensorRegister,
-        FunctorRegister,
-        TaskRegister,
-        ViewerRegister,
-    )
-}
 
 
 def hook_name(kind: str) -> str:

@@ -1,8 +1,7 @@
 """The plugin host: loads the core's and the installed plugins (entry point group
-``"embodichain"``, sorted by plugin name), fills the registries, writes the tasks into
-gymnasium. Each plugin's hooks write into staging registries merged on success: a plugin
-that fails contributes nothing and is reported in one line (:class:`PluginLoadWarning`).
-"""
+``"embodichain"``, sorted by plugin name), fills the registries and writes the tasks into
+gymnasium. A plugin that fails contributes nothing (what its hooks registered is removed) and is
+reported in one line (:class:`PluginLoadWarning`)."""
 
 from __future__ import annotations
 
@@ -75,7 +74,7 @@ class NameClash:
 
 
 class EmbodichainPluginManager(pluggy.PluginManager):
-    """pluggy manager owning the registries (hooks are marked with ``@hookimpl``)."""
+    """pluggy manager owning the registries and the gymnasium specs it wrote."""
 
     def __init__(self) -> None:
         super().__init__(PROJECT_NAME)
@@ -83,9 +82,7 @@ class EmbodichainPluginManager(pluggy.PluginManager):
         self.registries: dict[str, Registry] = new_registries()
         self.infos: dict[str, PluginInfo] = {}
         self.loaded = False
-        self.lock = threading.RLock()
-        self.tracing = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
-        self.gym_specs: dict[str, Any] = {}  # gym id -> the spec this manager wrote
+        self.gym_specs: dict[str, Any] = {}
 
     def registry(self, kind: str) -> Registry:
         """The registry of ``kind`` (``"functors"``, ``"robots"``, ...)."""
@@ -95,22 +92,22 @@ class EmbodichainPluginManager(pluggy.PluginManager):
 
     def name_clashes(self, provider: str | None = None) -> list[NameClash]:
         """Bare names several plugins register, by kind then name (only ``provider``'s when given)."""
-        found = []
-        for kind, registry in self.registries.items():
-            for name, providers in registry.clashes().items():
-                qualified = [registry.qualified_name(registry.entry(f"{p}/{name}")) for p in providers]
-                found.append(NameClash(kind, name, tuple(providers), tuple(qualified)))
-        return [c for c in found if provider is None or provider in c.providers]
+        return [
+            NameClash(kind, name, tuple(found), tuple(r.qualified_name(r.entry(f"{p}/{name}")) for p in found))
+            for kind, r in self.registries.items()
+            for name, found in r.clashes().items()
+            if provider is None or provider in found
+        ]
 
 
 _PM: EmbodichainPluginManager | None = None
-_GLOBAL_LOCK = threading.Lock()
+_LOCK = threading.RLock()  # guards the current manager and its loading
 
 
 def get_plugin_manager() -> EmbodichainPluginManager:
     """The current plugin manager (created on first call; plugins not loaded yet)."""
     global _PM
-    with _GLOBAL_LOCK:
+    with _LOCK:
         if _PM is None:
             _PM = EmbodichainPluginManager()
         return _PM
@@ -119,7 +116,7 @@ def get_plugin_manager() -> EmbodichainPluginManager:
 def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozenset()) -> EmbodichainPluginManager:
     """Load the built-ins and (with ``entry_points``) the installed plugins but ``exclude``, once."""
     pm = get_plugin_manager()
-    with pm.lock:
+    with _LOCK:
         if pm.loaded:
             return pm
         pm.loaded = True
@@ -135,21 +132,25 @@ def load_plugins(*, entry_points: bool = True, exclude: frozenset[str] = frozens
                 info.registered = _activate(pm, info.name)
             except Exception:
                 _fail(pm, info)
-        pm.check_pending()
         sync_gym(pm)
     return pm
 
 
 def named_entry_points() -> list[tuple[str, Any]]:
-    """``(plugin name, entry point)`` of every ``"embodichain"`` entry point in load order: the
-    distribution's (PEP 503-normalized) name, ``<dist>.<entry point>`` for a distribution with several."""
+    """``(plugin name, entry point)`` of the ``"embodichain"`` entry points in load order. A plugin
+    is named after its distribution (PEP 503-normalized), ``<dist>.<entry point>`` when the
+    distribution has several."""
+
+    def norm(name: str) -> str:
+        return re.sub(r"[-_.]+", "-", name).lower()
+
     eps = list(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP))
-    dists = [re.sub(r"[-_.]+", "-", getattr(getattr(ep, "dist", None), "name", "") or "").lower() for ep in eps]
-    named = []
-    for ep, dist in zip(eps, dists):
-        own = re.sub(r"[-_.]+", "-", ep.name).lower()
-        named.append((ep.name if not dist else dist if dists.count(dist) == 1 or own == dist else f"{dist}.{own}", ep))
-    return sorted(named, key=lambda p: (p[0], p[1].name, str(getattr(p[1], "value", ""))))
+    dists = [norm(getattr(getattr(ep, "dist", None), "name", "") or "") for ep in eps]
+    named = [
+        (dist if dists.count(dist) == 1 or norm(ep.name) == dist else f"{dist}.{norm(ep.name)}") if dist else ep.name
+        for ep, dist in zip(eps, dists)
+    ]
+    return sorted(zip(named, eps), key=lambda p: (p[0], p[1].name, str(getattr(p[1], "value", ""))))
 
 
 def _register_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str]) -> None:
@@ -173,10 +174,9 @@ def _register_entry_points(pm: EmbodichainPluginManager, exclude: frozenset[str]
 
 
 def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
-    """Mark ``info`` failed and warn in one line."""
+    """Mark ``info`` failed (in an ``except`` block) and warn in one line."""
     info.status, info.error, info.registered = "failed", traceback.format_exc(), {}
-    if pm.get_plugin(info.name) is not None:
-        pm.unregister(name=info.name)
+    _drop(pm, info.name)
     exc = sys.exc_info()[1]
     first = (str(exc).strip().splitlines() or [""])[0]
     warnings.warn(
@@ -188,8 +188,8 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
 
 
 def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
-    """Run plugin ``name``'s hooks into staging registries, merged when all succeed; returns the
-    names per kind. ``PluginValidationError`` for an unknown hook."""
+    """Run plugin ``name``'s hooks (``PluginValidationError`` for an unknown hook); returns the
+    names it registered per kind. A failure removes what the plugin registered and raises."""
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
         if not caller.has_spec():
@@ -197,24 +197,34 @@ def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
             raise pluggy.PluginValidationError(
                 plugin, f"plugin {name!r} implements unknown hook {caller.name!r}.{hint}"
             )
-    staged = new_registries()
-    for kind, register in KINDS.items():
-        for impl in getattr(pm.hook, hook_name(kind)).get_hookimpls():
-            if impl.plugin is plugin:
-                if pm.tracing:
-                    sys.stderr.write(f"embodichain plugins: {name}: {hook_name(kind)}\n")
-                impl.function(*[register(staged[kind], name) for _ in impl.argnames])
-    for kind, registry in staged.items():
-        for entry in registry.ordered_entries():
-            pm.registries[kind].merge(entry)
-    return {kind: [e.name for e in r.ordered_entries()] for kind, r in staged.items() if len(r)}
+    trace = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
+    try:
+        for kind, register in KINDS.items():
+            for impl in getattr(pm.hook, hook_name(kind)).get_hookimpls():
+                if impl.plugin is plugin:
+                    if trace:
+                        sys.stderr.write(f"embodichain plugins: {name}: {hook_name(kind)}\n")
+                    impl.function(*[register(pm.registries[kind], name) for _ in impl.argnames])
+    except BaseException:
+        _drop(pm, name)
+        raise
+    found = {kind: [e.name for e in r.ordered_entries() if e.provider == name] for kind, r in pm.registries.items()}
+    return {kind: names for kind, names in found.items() if names}
+
+
+def _drop(pm: EmbodichainPluginManager, name: str) -> None:
+    """Remove plugin ``name`` from ``pm`` and its entries from the registries."""
+    for registry in pm.registries.values():
+        registry.drop(name)
+    if pm.get_plugin(name) is not None:
+        pm.unregister(name=name)
 
 
 def register_plugin(obj: Any, name: str | None = None) -> str:
     """Register a plugin (module, class or instance) at runtime and run its hooks; returns its
     name. A failure raises and leaves nothing registered."""
     pm = load_plugins()
-    with pm.lock:
+    with _LOCK:
         if name is None:
             cls = obj if inspect.isclass(obj) else type(obj)
             name = obj.__name__ if isinstance(obj, types.ModuleType) else f"{cls.__module__}.{cls.__qualname__}"
@@ -223,7 +233,7 @@ def register_plugin(obj: Any, name: str | None = None) -> str:
         try:
             registered = _activate(pm, name)
         except BaseException:
-            pm.unregister(name=name)
+            _drop(pm, name)
             raise
         module = getattr(obj, "__module__", None) or getattr(obj, "__name__", "")
         pm.infos[name] = PluginInfo(name, module=str(module), registered=registered)
@@ -234,11 +244,8 @@ def register_plugin(obj: Any, name: str | None = None) -> str:
 def unregister_plugin(name: str) -> None:
     """Remove plugin ``name`` and everything it registered."""
     pm = load_plugins()
-    with pm.lock:
-        for registry in pm.registries.values():
-            registry.drop(name)
-        if pm.get_plugin(name) is not None:
-            pm.unregister(name=name)
+    with _LOCK:
+        _drop(pm, name)
         pm.infos.pop(name, None)
         sync_gym(pm)
 
@@ -250,12 +257,12 @@ def isolated_plugins(
     """A fresh manager with the built-ins (and the installed plugins but ``exclude``); on exit the
     previous manager is current again, with its gymnasium ids."""
     global _PM
-    with _GLOBAL_LOCK:
+    with _LOCK:
         saved, _PM = _PM, EmbodichainPluginManager()
     try:
         yield load_plugins(entry_points=load_entry_points, exclude=frozenset(exclude))
     finally:
-        with _GLOBAL_LOCK:
+        with _LOCK:
             pm, _PM = _PM, saved
         for manager, release in ((pm, True), (saved, False)):
             if manager is not None:
@@ -263,8 +270,8 @@ def isolated_plugins(
 
 
 def _make_task(registry: Registry, task_id: str, *args: Any, **kwargs: Any) -> Any:
-    """gymnasium entry point of a bare id several plugins provide: the env of the task the id
-    names when made (so making it while ambiguous raises the :class:`AmbiguousNameError`)."""
+    """The gymnasium entry point of a bare id several plugins register: making it raises the
+    :class:`AmbiguousNameError` naming the qualified ids."""
     return registry.get(task_id)(*args, **kwargs)
 
 
@@ -292,14 +299,12 @@ def sync_gym(pm: EmbodichainPluginManager, *, release: bool = False) -> None:
     """Make gymnasium's registry show ``pm``'s tasks (none with ``release``) by qualified and bare
     id, removing the ids ``pm`` wrote that it no longer has; an id gymnasium has from elsewhere is
     left as it is (a :class:`NameClashWarning` unless it names the same class)."""
+    import gymnasium
+
     tasks, wanted = pm.registries["tasks"], {}
     for entry in [] if release else tasks.ordered_entries():
         wanted[tasks.qualified_name(entry)] = [entry]
         wanted.setdefault(entry.name, []).append(entry)
-    if not wanted and not pm.gym_specs:
-        return  # a manager without tasks does not import gymnasium
-    import gymnasium
-
     for gym_id in [g for g in pm.gym_specs if g not in wanted]:
         if gymnasium.registry.get(gym_id) is pm.gym_specs.pop(gym_id):
             del gymnasium.registry[gym_id]
@@ -328,7 +333,7 @@ def list_plugins() -> list[PluginInfo]:
 
 def failed_plugins() -> list[tuple[str, str]]:
     """``(name, traceback)`` of the plugins that failed to load."""
-    return [(i.name, i.error) for i in load_plugins().infos.values() if i.status == "failed"]
+    return [(i.name, i.error) for i in list_plugins() if i.status == "failed"]
 
 
 def get_registry(kind: str) -> Registry:

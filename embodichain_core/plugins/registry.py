@@ -1,7 +1,6 @@
-"""Registries of what plugins provide, and the lookup errors. Two plugins may register one
-name: each entry stays reachable as ``<plugin>/<name>`` and the bare name is ambiguous.
-``:`` only separates a lazy ``"module:attr"`` target, imported on first use.
-"""
+"""Registries of what plugins register, and the lookup errors. Every entry is reachable as
+``<plugin>/<name>``; a bare name several plugins register is ambiguous. ``:`` only separates a
+lazy ``"module:attr"`` target, imported on first use."""
 
 from __future__ import annotations
 
@@ -20,20 +19,20 @@ class DuplicateRegistrationError(ValueError):
     """One provider registered a name twice with different targets."""
 
 
-class AmbiguousNameError(LookupError, ValueError):
-    """A bare name several plugins provide: ``providers`` and the qualified ``choices``."""
+class AmbiguousNameError(LookupError):
+    """A bare name several plugins register; ``providers`` lists them."""
 
-    def __init__(self, message: str, name: str, providers: Sequence[str], choices: Sequence[str]):
+    def __init__(self, message: str, providers: Sequence[str] = ()):
         super().__init__(message)
-        self.name, self.providers, self.choices = name, list(providers), list(choices)
+        self.providers = list(providers)
 
 
-class UnknownNameError(KeyError, ValueError):
-    """An unknown name was looked up; ``matches`` holds the closest known names."""
+class UnknownNameError(KeyError):
+    """An unknown name; ``matches`` holds the closest registered names."""
 
-    def __init__(self, message: str, name: str = "", matches: Sequence[str] = ()):
+    def __init__(self, message: str, matches: Sequence[str] = ()):
         super().__init__(message)
-        self.name, self.matches = name, list(matches)
+        self.matches = list(matches)
 
     def __str__(self) -> str:  # the message, not KeyError's quoted repr of it
         return str(self.args[0])
@@ -89,15 +88,14 @@ def first_doc_line(obj: Any) -> str:
 
 
 class RegistryEntry:
-    """One registration of a plugin: ``name`` -> ``target`` (an object or a lazy ``"module:attr"``) from plugin ``provider``;
+    """``name`` -> ``target`` (an object, or a lazy ``"module:attr"``) from plugin ``provider``;
     ``meta`` holds the kind's extra values (a functor's ``kind``, a task's ``kwargs``, ...)."""
 
     def __init__(self, name: str, target: Any, provider: str, meta: dict | None, lazy: bool | None, noun: str):
         self.name, self.target, self.provider, self.noun = name, target, provider, noun
         self.meta: dict[str, Any] = dict(meta or {})
         self.lazy = is_lazy_target(target) if lazy is None else lazy
-        self.resolved = not self.lazy  # whether the target has been imported
-        self._value = target
+        self.resolved, self._value = not self.lazy, target  # resolved: the target has been imported
 
     def resolve(self) -> Any:
         """The target object, imported on first call (:class:`TargetImportError` naming the entry)."""
@@ -157,15 +155,11 @@ class Registry:
         entry = RegistryEntry(name, target, provider, meta, lazy, self.noun)
         if entry.lazy:
             check_target_string(target, what)
-        return self.merge(entry)
-
-    def merge(self, entry: RegistryEntry) -> RegistryEntry:
-        """Store a checked entry (see :meth:`add`); returns the stored one."""
-        old = self._entries.setdefault((entry.provider, self._key(entry.name)), entry)
+        old = self._entries.setdefault((provider, self._key(name)), entry)
         if (old.target_repr, repr(old.meta)) != (entry.target_repr, repr(entry.meta)):
             raise DuplicateRegistrationError(
-                f"{self.noun} {entry.name!r} is registered twice by {entry.provider!r} "
-                f"(with {old.target_repr!r} and {entry.target_repr!r}); one provider cannot register a name twice"
+                f"{self.noun} {name!r} is registered twice by {provider!r} (with {old.target_repr!r} and "
+                f"{entry.target_repr!r}); one provider cannot register a name twice"
             )
         return old
 
@@ -175,20 +169,18 @@ class Registry:
 
     def find(self, name: str) -> RegistryEntry | None:
         """The entry for ``name`` (bare or qualified), or ``None``; :class:`AmbiguousNameError`
-        for a bare name several plugins provide."""
-        if not isinstance(name, str):
-            return None
-        provider, bare = self._split(name)
+        for a bare name several plugins register."""
+        provider, bare = self._split(name) if isinstance(name, str) else (None, "")
         if provider is not None:
             return self._entries.get((provider, self._key(bare)))
-        candidates = sorted(self._candidates(name), key=lambda e: e.provider)
+        candidates = sorted(self._candidates(bare), key=lambda e: e.provider)
         if len(candidates) > 1:
-            providers, choices = [e.provider for e in candidates], [self.qualified_name(e) for e in candidates]
-            message = (
+            providers = [e.provider for e in candidates]
+            raise AmbiguousNameError(
                 f"{self.noun} {name!r} is ambiguous: it is provided by {join_names(providers)}. "
-                f"Use a qualified name: {join_names(choices, 'or')}."
+                f"Use a qualified name: {join_names([self.qualified_name(e) for e in candidates], 'or')}.",
+                providers,
             )
-            raise AmbiguousNameError(message, name, providers, choices)
         return candidates[0] if candidates else None
 
     def _candidates(self, name: str) -> list[RegistryEntry]:
@@ -196,8 +188,7 @@ class Registry:
         return [e for (_, k), e in self._entries.items() if k == key]
 
     def _split(self, name: str) -> tuple[str | None, str]:
-        """``(provider, bare)`` when ``name`` is ``"<plugin>/<bare>"`` for a provider of this
-        registry, else ``(None, name)``."""
+        """``(provider, bare)`` for ``"<plugin>/<bare>"`` naming a provider here, else ``(None, name)``."""
         prefix, found, bare = name.partition(SEPARATOR)
         providers = {namespace(p): p for p in self.providers()} | {p: p for p in self.providers()}
         return (providers[prefix], bare) if found and bare and prefix in providers else (None, name)
@@ -212,8 +203,10 @@ class Registry:
     def unknown(self, name: str) -> UnknownNameError:
         """The error for an unknown ``name``, with the closest registered names (or plugins)."""
         if not self._entries:
-            message = f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin providing them"
-            return UnknownNameError(f"{message} (see `embodichain list plugins`)", name)
+            return UnknownNameError(
+                f"unknown {self.noun} {name!r}: no {self.kind} are registered; install a plugin providing "
+                "them (see `embodichain list plugins`)"
+            )
         provider, bare = self._split(name)
         prefix, sep, _ = name.partition(SEPARATOR)
         if provider is not None:  # a known plugin, an unknown name: suggest among its names
@@ -222,12 +215,12 @@ class Registry:
         elif sep:  # an unknown plugin: suggest among the plugins
             typed, pool = prefix, self.providers()
             message = f"unknown {self.noun} {name!r}: no plugin named {prefix!r} provides {self.kind}"
-        else:  # a qualified name written with ':' (an import path's separator) gets the '/' form
+        else:  # ':' is an import path's separator: a name written with it gets the qualified forms
             message, typed = f"unknown {self.noun} {name!r}", name
             pool = self.qualified_names() if ":" in name else self.names()
         listing = f"embodichain list {self.kind}" + (f" --provider {provider}" if provider else "")
         hint = did_you_mean(typed, pool) or f" See `{listing}`."
-        return UnknownNameError(f"{message}.{hint}", name, closest(typed, pool))
+        return UnknownNameError(f"{message}.{hint}", closest(typed, pool))
 
     def get(self, name: str) -> Any:
         """The (imported) target registered as ``name``."""
@@ -266,15 +259,15 @@ class Registry:
         return sorted(e.provider for e in self._candidates(name))
 
     def clashes(self) -> dict[str, list[str]]:
-        """Bare names provided by several plugins -> their providers (sorted), by name."""
+        """Bare names several plugins register -> their providers (sorted), by name."""
         providers = {name: self.providers_of(name) for name in self.names()}
         return {name: found for name, found in providers.items() if len(found) > 1}
 
     def __contains__(self, name: object) -> bool:
-        if not isinstance(name, str):
-            return False
-        provider, bare = self._split(name)
-        return (provider, self._key(bare)) in self._entries if provider else bool(self._candidates(name))
+        try:
+            return isinstance(name, str) and self.find(name) is not None
+        except AmbiguousNameError:
+            return True
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names())
