@@ -8,11 +8,12 @@ import pytest
 import torch
 
 from embodichain_core.envs.robot_io import RobotIO, _selector
+from embodichain_core.testing.device_paths import without_host_arrays
 
 
 def _pair(env, joints):
     fast = RobotIO(env.sim, env.robot, joints, env.num_envs)  # the route the backend offers: host arrays
-    slow = RobotIO(env.sim, env.robot, joints, env.num_envs, host=False)
+    slow = RobotIO(without_host_arrays(env.sim), env.robot, joints, env.num_envs)  # the torch route
     return fast, slow
 
 

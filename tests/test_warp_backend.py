@@ -22,6 +22,7 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_core.config.validate import check_sim
 from embodichain_core.demo import DemoSceneEnv, demo_cfg
 from embodichain_core.sim.backend import SimBackend, conformance
+from embodichain_core.sim.backend.warp_device import cpu_device_route
 from embodichain_core.sim.backend.warp_sim import WarpSim
 from embodichain_core.sim.cfg import SimulationManagerCfg
 from embodichain_core.sim.scene import Scene
@@ -226,27 +227,84 @@ def test_demo_scene_steps_as_on_mujoco_batch(demo_pair: tuple) -> None:
     assert torch.allclose(warp.sim.xpos.double(), cpu.sim.xpos, atol=1e-5)  # derived views current after step
 
 
-def test_device_array_path_gives_the_same_steps(demo_pair: tuple, monkeypatch: Any) -> None:
-    """With ``sim.arrays`` as device proxies (what CUDA gets), entities take their device
-    code paths; the steps agree all the same (checked on Warp's CPU device)."""
-    from embodichain_core.sim.backend.warp_views import DeviceArrays
+@pytest.fixture(scope="module")
+def device_demo() -> Iterator[DemoSceneEnv]:
+    """The demo scene on Warp's CPU device built on the route a GPU takes (no host arrays)."""
+    with cpu_device_route():
+        env = _demo("warp")
+    yield env
+    env.close()
 
-    cpu = demo_pair[0]
-    monkeypatch.setattr(WarpSim, "host_arrays_on_cpu", False)
-    env = _demo("warp")
-    try:
-        assert isinstance(env.sim.arrays, DeviceArrays)
-        assert not env.sim.capabilities.host_arrays
-        cpu.reset(seed=0)
-        env.reset(seed=0)
-        rng = torch.Generator().manual_seed(2)
-        for _ in range(20):
-            action = torch.rand(cpu.action_space.shape, generator=rng) * 0.4 - 0.2
-            cpu.step(action)
-            env.step(action)
-        assert torch.allclose(env.sim.qpos.double(), cpu.sim.qpos, atol=1e-5)
-    finally:
-        env.close()
+
+def test_device_route_gives_the_same_steps(demo_pair: tuple, device_demo: DemoSceneEnv) -> None:
+    """Without host arrays (what CUDA gets), entities and the robot commands take their device
+    code paths; the steps agree all the same (checked on Warp's CPU device)."""
+    cpu, env = demo_pair[0], device_demo
+    assert not env.sim.capabilities.host_arrays
+    assert not hasattr(env.sim, "arrays")  # no numpy stand-in for device memory
+    assert not env._robot_io.host
+    cpu.reset(seed=0)
+    env.reset(seed=0)
+    rng = torch.Generator().manual_seed(2)
+    for _ in range(20):
+        action = torch.rand(cpu.action_space.shape, generator=rng) * 0.4 - 0.2
+        cpu.step(action)
+        env.step(action)
+    assert torch.allclose(env.sim.qpos.double(), cpu.sim.qpos, atol=1e-5)
+
+
+def _entity_io(env: DemoSceneEnv) -> dict[str, torch.Tensor]:
+    """Writes joint positions, velocities and root poses through the entities of ``env``,
+    then reads them back (and what follows from them) through the same entities."""
+    gen = torch.Generator().manual_seed(5)
+    robot, cube, table = env.robot, env.scene["cube_red"], env.scene["table"]
+    env.reset(seed=0)
+    qpos = torch.as_tensor(CLEAR_QPOS, dtype=torch.float64) + 0.3 * torch.rand(NUM_ENVS, robot.dof, generator=gen)
+    robot.set_qpos(qpos, target=False)
+    robot.set_qpos(qpos[[1, 3], :2] + 0.1, joint_ids=[0, 1], env_ids=[1, 3])  # drive targets only
+    robot.set_qvel(torch.rand(2, robot.dof, generator=gen, dtype=torch.float64), env_ids=[0, 2], target=False)
+    pose = np.tile([0.5, 0.1, 0.6, 0.8, 0.0, 0.6, 0.0], (NUM_ENVS, 1)) + np.arange(NUM_ENVS)[:, None] * 0.01
+    cube.set_local_pose(pose)
+    cube.set_velocity(torch.tensor([[0.1, 0.0, 0.0, 0.0, 0.0, 2.0]]).expand(NUM_ENVS, 6))
+    table.set_local_pose(torch.tensor([[0.6, 0.05, 0.2, 1.0, 0.0, 0.0, 0.0]]).expand(2, 7), env_ids=[4, 5])
+    link = robot.link_names[-1]
+    return {
+        "qpos": robot.get_qpos(),
+        "targets": robot.get_qpos(target=True),
+        "qpos_array": torch.as_tensor(robot.qpos_array([2, 6], [0, 3])),
+        "qvel": robot.get_qvel(),
+        "root": robot.get_local_pose(),
+        "link": robot.get_link_pose(link),
+        "link_of_some": robot.get_link_pose(link, env_ids=[1, 3]),
+        "cube": cube.get_local_pose(),
+        "cube_velocity": cube.get_velocity(),
+        "table": table.get_local_pose(),
+    }
+
+
+def test_entities_read_and_write_alike_on_both_routes(demo_pair: tuple, device_demo: DemoSceneEnv) -> None:
+    """Every entity holds the route chosen at build: on the device route the sim has no host
+    arrays, so an entity that still chose numpy per call fails here; joint positions and root
+    poses written and read back through either route are the same values."""
+    from embodichain_core.sim.backend.state_route import DeviceRoute, HostRoute
+    from embodichain_core.sim.entities.base import Entity
+
+    host, device = demo_pair[1], device_demo
+    for env, route in ((host, HostRoute), (device, DeviceRoute)):
+        entities = [e for e in env.scene.entities.values() if isinstance(e, Entity)]
+        assert len(entities) >= 5
+        assert all(type(e.state_route) is route for e in entities), env.sim.capabilities
+    want, got = _entity_io(host), _entity_io(device)
+    for key, value in want.items():
+        assert (got[key].dtype, got[key].device) == (value.dtype, value.device), key
+        assert torch.equal(got[key], value), key
+    qpos = torch.as_tensor(CLEAR_QPOS, dtype=torch.float64) + 0.3 * torch.rand(
+        NUM_ENVS, host.robot.dof, generator=torch.Generator().manual_seed(5)
+    )
+    driven = ~torch.isin(torch.arange(host.robot.dof), torch.as_tensor(host.robot.mimic_ids, dtype=torch.long))
+    assert torch.allclose(want["qpos"][:, driven].double(), qpos[:, driven], atol=1e-6)  # the writes happened
+    assert torch.allclose(want["cube"][:, 0].double(), torch.as_tensor(np.arange(NUM_ENVS) * 0.01 + 0.5), atol=1e-6)
+    assert torch.allclose(want["table"][[4, 5], 1], torch.tensor([0.05, 0.05]))
 
 
 def test_subset_reset_resets_only_those_envs(demo_pair: tuple) -> None:

@@ -4,20 +4,23 @@
 ``qfrc_applied``) and the default ``robot`` observation of phase 6. Everything that
 does not depend on the state (addresses, which action columns drive which
 actuators, whether the addresses are one run with one stride, so that a slice is a
-view) is worked out here once, and so is the route the data takes: on a backend
-whose state lives in host memory (``sim.capabilities.host_arrays``) commands are
-written into, and observations read from, numpy views of that memory (cheaper per
-call than the same torch indexing on the small batches of the CPU backend); any
-other backend gets the same values through its torch views. Callers see torch
-tensors either way; nothing else in the env chooses between numpy and torch.
+view) is worked out here once, and so is the route the data takes, the one the
+entities take (:func:`~embodichain_core.sim.backend.state_route.state_route`): on a
+backend whose state lives in host memory (``sim.capabilities.host_arrays``) commands
+are written into, and observations read from, numpy views of that memory (cheaper per
+call than the same torch indexing on the small batches of the CPU backend); any other
+backend gets the same values through its torch views. Callers see torch tensors either
+way.
 """
 
 from __future__ import annotations
 
-from typing import Any, Optional, Union
+from typing import Any, Union
 
 import numpy as np
 import torch
+
+from embodichain_core.sim.backend.state_route import state_route
 
 _Sel = Union[slice, np.ndarray]
 _FLOATS = (torch.float32, torch.float64)
@@ -44,22 +47,21 @@ class RobotIO:
         robot: the env's robot entity.
         active_joint_ids: the robot's joint ids the env acts on.
         num_envs: the batch size.
-        host: move data through the backend's numpy views (default: where the backend
-            has them, ``sim.capabilities.host_arrays``); ``False`` uses its torch views.
 
     Attributes:
-        host: the route chosen at build (see ``host``).
+        host: whether data moves through the backend's numpy views (chosen at build:
+            where the backend has them, ``sim.capabilities.host_arrays``), else its torch views.
         drive_targets: per command kind (``qpos``, ``qvel``): the action columns that drive
             an actuator, and those actuators' ids.
     """
 
-    def __init__(self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int, host: Optional[bool] = None):
+    def __init__(self, sim: Any, robot: Any, active_joint_ids: list[int], num_envs: int):
         aid = torch.as_tensor(active_joint_ids, dtype=torch.long)
         self.sim, self.num_envs = sim, int(num_envs)
         self.active_joint_ids = list(active_joint_ids)
         self.n_active, self.dof = len(aid), int(robot.dof)
         self.qpos_adr, self.dof_adr = robot.qpos_adr[aid], robot.dof_adr[aid]
-        self.host = bool(sim.capabilities.host_arrays) if host is None else bool(host)
+        self.host = state_route(sim, sim.device).host
         self.drive_targets = {
             key: ((acts >= 0), acts[acts >= 0])
             for key, acts in (("qpos", robot.pos_act[aid]), ("qvel", robot.vel_act[aid]))

@@ -10,6 +10,9 @@ Public helpers (imported lazily, so ``import embodichain_core.testing`` is cheap
 * :func:`check_name_clashes`: register a plugin next to the *installed* plugins and
   report (raise :class:`NameClashError`) every name it shares with them, e.g.
   ``check_name_clashes(my_plugin, name="embodichain-myplugin")``.
+* :func:`without_host_arrays`, :func:`cpu_device_route`: run a consumer, or a whole env
+  on backend ``warp``, on the torch (GPU) state route on the CPU
+  (:mod:`embodichain_core.testing.device_paths`).
 * ``make_env`` / ``check_batched_env``: env checks from
   :mod:`embodichain_core.testing.env_checks`, when that module is available.
 
@@ -29,6 +32,8 @@ _PLUGIN_HELPERS = {
     "check_name_clashes": "embodichain_core.testing.clashes",
     "NameClashError": "embodichain_core.testing.clashes",
     "patch_entry_points": "embodichain_core.testing.entry_points",
+    "without_host_arrays": "embodichain_core.testing.device_paths",
+    "cpu_device_route": "embodichain_core.testing.device_paths",
 }
 _ENV_HELPERS = ("make_env", "check_batched_env")
 

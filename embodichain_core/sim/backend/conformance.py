@@ -15,7 +15,7 @@ with their derived constants, and divergence reported by both kinds of step.
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Mapping
 
 import mujoco
 import numpy as np
@@ -51,6 +51,11 @@ def _np(t: torch.Tensor) -> np.ndarray:
     return t.detach().cpu().double().numpy().copy()
 
 
+def _arrays(sim: SimBackend) -> Mapping[str, np.ndarray]:
+    """``sim.arrays`` (an attribute only backends with ``capabilities.host_arrays`` have)."""
+    return getattr(sim, "arrays")  # noqa: B009
+
+
 def check_views(factory: Factory) -> None:
     """Views: shapes, dtype, device, and the same tensors through step, reset, forward, writes."""
     sim, model, box = _make(factory)
@@ -61,7 +66,9 @@ def check_views(factory: Factory) -> None:
     assert views["qpos"].device == sim.device
     attribute = getattr(sim, "qpos")  # noqa: B009 (sim.qpos: named views are not protocol members)
     assert attribute is views["qpos"], "sim.qpos and sim.view('qpos') differ"
-    arrays = dict(sim.arrays) if sim.capabilities.host_arrays else {}
+    assert sim.tensors["qpos"] is views["qpos"], "sim.tensors and sim.view('qpos') differ"
+    arrays = dict(_arrays(sim)) if sim.capabilities.host_arrays else {}
+    assert sim.capabilities.host_arrays or not hasattr(sim, "arrays"), "host arrays without host_arrays"
     sim.step(2)
     sim.step(1, env_ids=[1])
     sim.reset([0])
@@ -71,7 +78,7 @@ def check_views(factory: Factory) -> None:
     for name, view in views.items():
         assert sim.view(name) is view, f"the view of {name!r} was replaced"
     for name, array in arrays.items():
-        assert sim.arrays[name] is array, f"the numpy view of {name!r} was replaced"
+        assert _arrays(sim)[name] is array, f"the numpy view of {name!r} was replaced"
     assert set(DERIVED_FIELDS) >= {"xpos", "xquat", "qfrc_actuator", "sensordata"}
 
 

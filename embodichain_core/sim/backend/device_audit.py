@@ -12,9 +12,11 @@ live in the same memory: Warp's arrays as torch tensors (``wp.to_torch``: the si
 views) are device tensors, and so is the result of any op on a device tensor, of a factory
 given a ``torch.device`` (``torch.zeros(n, device=env.device)``) and of ``.to(env.device)``;
 every other tensor is a host tensor, and the string ``"cpu"`` (``.to("cpu")``) names the
-host. So the audit spans the env's build. Build the env so that it takes its device code
-paths (backend ``warp`` with ``WarpSim.host_arrays_on_cpu = False``;
-:meth:`HostWaitAudit.check_env` refuses a backend whose state is host memory).
+host. So the audit spans the env's build, and an env built inside it takes its device code
+paths: the audit enters :func:`~embodichain_core.sim.backend.warp_device.cpu_device_route`,
+so backend ``warp`` on Warp's CPU device has no host arrays there and the entities and the
+robot commands use the torch views, as on a GPU (:meth:`HostWaitAudit.check_env` refuses an
+env whose backend offers host arrays).
 
 Example:
     >>> with HostWaitAudit("cpu") as audit:  # doctest: +SKIP
@@ -29,6 +31,7 @@ Example:
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import re
 import traceback
@@ -39,6 +42,8 @@ from typing import Any, Callable, Iterator
 import numpy as np
 import torch
 from torch.overrides import TorchFunctionMode
+
+from embodichain_core.sim.backend.warp_device import cpu_device_route
 
 #: Reads of device memory by the host.
 _READS = {
@@ -84,8 +89,9 @@ class HostWaitAudit(TorchFunctionMode):
     """Count host waits (device-to-host reads, blocking host-to-device copies) by call site.
 
     Enter it before the env is built, so that the tensors the env makes on its device at
-    build and reset are known as device tensors, and call :meth:`clear` before the block
-    to measure.
+    build and reset are known as device tensors (and that backend ``warp`` on Warp's CPU
+    device is built without host arrays, taking a GPU's code paths), and call :meth:`clear`
+    before the block to measure.
 
     Args:
         device: the device the audit stands for (the env's ``sim_device``; ``"cpu"`` for
@@ -108,8 +114,8 @@ class HostWaitAudit(TorchFunctionMode):
         sim = getattr(env, "unwrapped", env).sim
         if sim.capabilities.host_arrays:
             raise ValueError(
-                "HostWaitAudit: the backend exposes host views (capabilities.host_arrays); build "
-                "backend 'warp' with WarpSim.host_arrays_on_cpu = False so the env takes its device paths"
+                "HostWaitAudit: the backend exposes host views (capabilities.host_arrays); build the env "
+                "(backend 'warp') inside the audit's with-block so that it takes its device paths"
             )
 
     def clear(self) -> None:
@@ -243,6 +249,9 @@ class HostWaitAudit(TorchFunctionMode):
         was = math_utils.NUMPY_VIEWS
         math_utils.NUMPY_VIEWS = False  # the torch code a GPU runs, not the CPU's numpy fast path
         self._undo.append(lambda: setattr(math_utils, "NUMPY_VIEWS", was))
+        route = contextlib.ExitStack()
+        route.enter_context(cpu_device_route())  # envs built inside take a GPU's code paths
+        self._undo.append(route.close)
         self._patch_warp()
         super().__enter__()
         return self

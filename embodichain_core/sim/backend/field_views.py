@@ -5,12 +5,15 @@ is the same for each, and each backend supplies what it reads: the persistent vi
 ``self._views`` (name -> tensor, set in its constructor), ``self._maybe_dirty`` (set
 while envs await their lazy forward) and the forward itself (:meth:`_forward_dirty`,
 abstract). Reading a derived field runs that forward first; reading a state field does not.
+:attr:`FieldViews.tensors` maps the state fields' names to their views (every backend); a
+backend without host views of its state has no ``arrays`` and says so.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Any
+from types import MappingProxyType
+from typing import Any, Mapping
 
 import torch
 
@@ -43,12 +46,29 @@ class FieldViews(ABC):
     def _forward_dirty(self) -> None:
         """Run the lazy forward of the dirty envs and clear ``_maybe_dirty``."""
 
+    @property
+    def tensors(self) -> Mapping[str, torch.Tensor]:
+        """The torch views of the state fields (``STATE_FIELDS``), by name: the same tensors
+        as ``sim.<field>`` (a read-only mapping; the tensors are writable)."""
+        cached = self.__dict__.get("_tensors")
+        if cached is None:
+            cached = self.__dict__["_tensors"] = MappingProxyType(
+                {n: self._views[n] for n in STATE_FIELDS if n in self._views}
+            )
+        return cached
+
     def __getattr__(self, name: str) -> torch.Tensor:
         views = self.__dict__.get("_views")
         if views is not None and name in views:
             if self._maybe_dirty and name not in STATE_FIELDS:
                 self._forward_dirty()
             return views[name]
+        if name == "arrays":
+            raise AttributeError(
+                f"{type(self).__name__} on {self.device} has no host arrays (capabilities.host_arrays "
+                "is False: the state is device memory); use sim.tensors[name] or sim.<field>, "
+                "or the entities' accessors"
+            )
         raise AttributeError(f"{type(self).__name__} has no field {name!r}")
 
     def view(self, name: str) -> torch.Tensor:

@@ -11,9 +11,11 @@ Conventions:
 * **Views are persistent.** ``sim.qpos`` (any name of :data:`STATE_FIELDS` or
   :data:`DERIVED_FIELDS`, also ``sim.view(name)``) is the same tensor for the backend's
   lifetime, on ``sim.device`` in ``sim.dtype``, leading dim ``num_envs``. Write state in
-  place (``sim.qpos[ids, cols] = v``), never rebind it. ``sim.arrays`` holds numpy views
-  of the same memory where ``capabilities.host_arrays`` (the cheap way to write a few
-  values of a few envs).
+  place (``sim.qpos[ids, cols] = v``, values in ``sim.dtype``), never rebind it.
+  ``sim.tensors`` maps the state fields' names to their views. ``sim.arrays`` holds numpy
+  views of the same memory where ``capabilities.host_arrays`` (the cheap way to write a
+  few values of a few envs); a backend without them has no ``arrays``. Entities pick one
+  of the two once (:mod:`~embodichain_core.sim.backend.state_route`).
 * **Forward is lazy.** After writing state directly, call :meth:`mark_dirty`; derived
   views are recomputed for those envs before they are next read or stepped.
 * **Model fields.** :meth:`model_field` reads ``(num_envs, ...)`` values (shared fields
@@ -66,7 +68,8 @@ class SimCapabilities:
     Attributes:
         subset_step: :meth:`SimBackend.step` of a subset runs only those envs (without
             it a backend steps every env with the others' state saved and restored).
-        host_arrays: ``sim.arrays`` are zero-copy numpy views of the state.
+        host_arrays: ``sim.arrays`` are zero-copy numpy views of the state (without it the
+            backend has no ``arrays``: its state is device memory).
         float64: state and views are float64 (else float32).
         deterministic: the same inputs give bit-identical results at any thread count.
     """
@@ -87,8 +90,9 @@ class SimBackend(Protocol):
         substeps: MuJoCo steps per physics step (``physics_dt / timestep``).
         device, dtype: of every tensor view.
         capabilities: see :class:`SimCapabilities`.
-        arrays: numpy views of :data:`STATE_FIELDS` (``capabilities.host_arrays``; read-only
-            mapping, the arrays themselves are writable).
+        arrays: (only where ``capabilities.host_arrays``) numpy views of :data:`STATE_FIELDS`
+            by name, persistent like the tensor views (read-only mapping, the arrays
+            themselves are writable).
         restores_state_rows: (optional, ``False`` when absent) whether :meth:`reset` takes a
             saved state row (``state=``; see :mod:`embodichain_core.sim.scene_defaults`).
     """
@@ -101,8 +105,8 @@ class SimBackend(Protocol):
     capabilities: SimCapabilities
 
     @property
-    def arrays(self) -> Mapping[str, np.ndarray]:
-        """Numpy views of :data:`STATE_FIELDS`, by name (persistent, like the tensor views)."""
+    def tensors(self) -> Mapping[str, torch.Tensor]:
+        """The torch views of :data:`STATE_FIELDS`, by name (the same tensors as ``sim.<field>``)."""
         ...
 
     # -- stepping and state -------------------------------------------------------------------

@@ -13,14 +13,22 @@ device. A graph keeps the array pointers of its capture, so the backend calls
 :meth:`StepGraphs.clear` whenever it replaces a model array (expanding a field per env) and
 the next call captures again; a capture that fails falls back to direct launches (with a
 warning). **The CUDA path is untested** (no GPU was lent to this task).
+
+:func:`host_arrays_for` decides once, at build, whether the backend offers numpy views of
+its state (``capabilities.host_arrays``): on Warp's CPU device by default, never on a GPU.
+Inside :func:`cpu_device_route` a sim on Warp's CPU device is built without them, so the
+env takes the code paths a GPU runs (what
+:class:`~embodichain_core.sim.backend.device_audit.HostWaitAudit` measures).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
+from contextvars import ContextVar
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Iterator, Optional
 
 import torch
 
@@ -28,6 +36,42 @@ from embodichain_core.config.errors import ConfigError
 
 #: Environment variable naming the Warp kernel cache folder.
 CACHE_ENV = "EMBODICHAIN_WARP_CACHE"
+_CPU_DEVICE_ROUTE: ContextVar[bool] = ContextVar("embodichain_cpu_device_route", default=False)
+
+
+@contextlib.contextmanager
+def cpu_device_route() -> Iterator[None]:
+    """Within the block, a ``WarpSim`` built on Warp's CPU device (with ``host_arrays`` left
+    at its default) has no numpy views of its state: ``capabilities.host_arrays`` is False,
+    ``sim.arrays`` is absent, and entities and the env's robot commands take the torch
+    views, as on a GPU. The env runs the GPU's code paths on the CPU, so that a test (the
+    device audit, a comparison with the host route) can exercise them without a GPU.
+    """
+    was = _CPU_DEVICE_ROUTE.get()
+    _CPU_DEVICE_ROUTE.set(True)
+    try:
+        yield
+    finally:
+        _CPU_DEVICE_ROUTE.set(was)
+
+
+def host_arrays_for(wp_device: str, requested: Optional[bool] = None) -> bool:
+    """Whether a sim on ``wp_device`` offers numpy views of its state.
+
+    Args:
+        wp_device: Warp's device name (``"cpu"``, ``"cuda:0"``).
+        requested: ``None``: on the CPU unless inside :func:`cpu_device_route`; ``False``:
+            never; ``True``: on the CPU only.
+
+    Raises:
+        ValueError: ``requested`` is True on a GPU (no numpy view of device memory exists).
+    """
+    on_cpu = wp_device == "cpu"
+    if requested is None:
+        return on_cpu and not _CPU_DEVICE_ROUTE.get()
+    if requested and not on_cpu:
+        raise ValueError(f"WarpSim(host_arrays=True): device {wp_device!r} has no host views of its memory")
+    return bool(requested)
 
 
 def default_cache_dir() -> Optional[Path]:

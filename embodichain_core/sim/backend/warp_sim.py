@@ -5,8 +5,9 @@ so entities, managers, functors and tasks run on it unchanged. What differs from
 :class:`~embodichain_core.sim.backend.batch_sim.BatchSim` (see docs/backends.md):
 
 * **float32** state and views (``wp.to_torch`` of MuJoCo Warp's arrays, zero-copy, on the
-  sim device); on the CPU ``sim.arrays`` are numpy views of the same memory, on CUDA
-  proxies that write into the device tensors.
+  sim device; ``sim.tensors`` maps the state fields to them); on Warp's CPU device
+  ``sim.arrays`` are numpy views of the same memory (``capabilities.host_arrays``), on a
+  GPU there are none (:func:`~embodichain_core.sim.backend.warp_device.host_arrays_for`).
 * **No subset stepping** (``capabilities.subset_step`` is False): a subset step steps every
   world, then puts the other envs' state back (a copy: slow, exact for those envs).
 * **Forward and constants cover every world** (MuJoCo Warp has no world subset); a step
@@ -36,10 +37,16 @@ from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.backend.field_views import FieldViews
 from embodichain_core.sim.backend.env_rows import np_ids
 from embodichain_core.sim.backend.interface import DERIVED_FIELDS, STATE_FIELDS, SimCapabilities
-from embodichain_core.sim.backend.warp_device import StepGraphs, init_warp, resolve_device, torch_device
+from embodichain_core.sim.backend.warp_device import (
+    StepGraphs,
+    host_arrays_for,
+    init_warp,
+    resolve_device,
+    torch_device,
+)
 from embodichain_core.sim.backend.warp_failures import WarpFailures
 from embodichain_core.sim.backend.warp_model import WarpModelFields
-from embodichain_core.sim.backend.warp_views import DeviceArrays, flat_rows
+from embodichain_core.sim.backend.warp_views import flat_rows
 
 _AUTORESET = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
 #: :meth:`WarpSim.advance` checks MuJoCo Warp's contact-overflow flags (a host read) every this many calls.
@@ -60,14 +67,16 @@ class WarpSim(WarpFailures, FieldViews):
         device: ``"cpu"`` (Warp's CPU device), ``"cuda"`` or ``"cuda:N"``.
         nconmax, njmax: contacts and constraint rows per world (default: from the model;
             kept as attributes).
+        host_arrays: numpy views of the state as ``sim.arrays`` (``None``: on Warp's CPU
+            device, unless built inside
+            :func:`~embodichain_core.sim.backend.warp_device.cpu_device_route`; ``False``:
+            the torch views only, as on a GPU).
 
     Raises:
         ConfigError: a device or model feature MuJoCo Warp does not support.
+        ValueError: ``host_arrays=True`` on a GPU.
     """
 
-    #: Numpy views as ``sim.arrays`` on Warp's CPU device; ``False`` gives the CUDA path's
-    #: device proxies there too (tests exercise the GPU code paths of entities this way).
-    host_arrays_on_cpu: bool = True
     #: :meth:`reset` takes no saved state row (the scene's default-row fast path is off).
     restores_state_rows = False
 
@@ -79,6 +88,7 @@ class WarpSim(WarpFailures, FieldViews):
         device: str = "cpu",
         nconmax: Optional[int] = None,
         njmax: Optional[int] = None,
+        host_arrays: Optional[bool] = None,
     ):
         self.wp = init_warp()
         import mujoco_warp
@@ -93,7 +103,7 @@ class WarpSim(WarpFailures, FieldViews):
         on_cpu = self.wp_device == "cpu"
         self.capabilities = SimCapabilities(
             subset_step=False,
-            host_arrays=on_cpu and self.host_arrays_on_cpu,
+            host_arrays=host_arrays_for(self.wp_device, host_arrays),
             float64=False,
             deterministic=on_cpu,
         )
@@ -137,10 +147,8 @@ class WarpSim(WarpFailures, FieldViews):
             n: self.wp.to_torch(getattr(self.wp_data, n)) for n in _KEPT if getattr(self.wp_data, n, None) is not None
         }
         self._overflow = self.wp.to_torch(self.wp_data.overflow)
-        if self.capabilities.host_arrays:
-            self.arrays: Any = {n: getattr(self.wp_data, n).numpy() for n in STATE_FIELDS}
-        else:
-            self.arrays = DeviceArrays({n: self._views[n] for n in STATE_FIELDS})
+        if self.capabilities.host_arrays:  # else no ``arrays``: the state is reached through its tensors
+            self.arrays: dict[str, np.ndarray] = {n: getattr(self.wp_data, n).numpy() for n in STATE_FIELDS}
 
     def mark_dirty(self, env_ids: Any = None) -> None:
         """Note a direct state write; derived views are refreshed before the next read."""

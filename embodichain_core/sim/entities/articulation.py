@@ -170,25 +170,33 @@ class Articulation(JointModelFields, Entity):
         rows = ids.numpy()[:, None]
         acts = self._pos_act_np[cols]
         driven = acts >= 0
+        route = self.state_route
         if driven.all():
-            self.sim.arrays["ctrl"][rows, acts[None, :]] = values
+            route.write("ctrl", (rows, acts[None, :]), values)
         elif driven.any():
-            self.sim.arrays["ctrl"][rows, acts[driven][None, :]] = values[:, driven]
+            route.write("ctrl", (rows, acts[driven][None, :]), values[:, driven])
         if not target:
-            self.sim.arrays["qpos"][rows, self._qpos_adr_np[cols][None, :]] = values
+            route.write("qpos", (rows, self._qpos_adr_np[cols][None, :]), values)
             self._apply_mimic(rows)
             self.sim.mark_dirty(ids)
 
     def _apply_mimic(self, rows: np.ndarray) -> None:
         """Mimic joints of ``rows`` ((n, 1) env indices) follow their parents."""
-        qpos = self.sim.arrays["qpos"]
+        route = self.state_route
         if self._mimic_chained:  # a mimic of a mimic: in order
             for child, parent, k, off in zip(
                 self._mimic_child_adr, self._mimic_parent_adr, self._mimic_k, self._mimic_off
             ):
-                qpos[rows[:, 0], child] = k * qpos[rows[:, 0], parent] + off
+                route.write("qpos", (rows[:, 0], child), k * route.read("qpos", (rows[:, 0], parent)) + off)
         elif self._mimic_child_adr.size:
-            qpos[rows, self._mimic_child_adr] = qpos[rows, self._mimic_parent_adr] * self._mimic_k + self._mimic_off
+            parents = route.read("qpos", (rows, self._mimic_parent_adr))
+            route.write("qpos", (rows, self._mimic_child_adr), parents * self._mimic_k + self._mimic_off)
+
+    def qpos_array(self, env_ids: Any = None, joint_ids: Any = None) -> np.ndarray:
+        """(n, k) joint positions of ``env_ids`` x ``joint_ids`` as numpy, in the simulation's
+        dtype (float64 on ``mujoco_batch``): the cheap form for hot paths (a new array each call)."""
+        rows = self._ids(env_ids).numpy()[:, None]
+        return np.array(self.state_route.read("qpos", (rows, self._qpos_adr_np[self._jids_np(joint_ids)][None, :])))
 
     def get_qvel(self, target: bool = False) -> torch.Tensor:
         """(N, dof) joint velocities, or velocity targets with ``target=True``."""
@@ -206,9 +214,9 @@ class Articulation(JointModelFields, Entity):
         if target:
             acts = self.vel_act[jids]
             driven = acts >= 0
-            self.sim.ctrl[ids[:, None], acts[driven][None, :]] = values[:, driven]
+            self.state_route.write("ctrl", (ids[:, None], acts[driven][None, :]), values[:, driven])
         else:
-            self.sim.qvel[ids[:, None], self.dof_adr[jids][None, :]] = values
+            self.state_route.write("qvel", (ids[:, None], self.dof_adr[jids][None, :]), values)
             self.sim.mark_dirty(ids)
 
     def get_qf(self) -> torch.Tensor:
@@ -219,7 +227,8 @@ class Articulation(JointModelFields, Entity):
     def set_qf(self, qf: Any, joint_ids: Any = None, env_ids: Any = None) -> None:
         """Apply joint efforts (held until changed) through ``qfrc_applied``."""
         ids, jids = self._ids(env_ids), self._jids(joint_ids)
-        self.sim.qfrc_applied[ids[:, None], self.dof_adr[jids][None, :]] = as_values(qf, len(ids), len(jids))
+        values = as_values(qf, len(ids), len(jids))
+        self.state_route.write("qfrc_applied", (ids[:, None], self.dof_adr[jids][None, :]), values)
 
     # -- limits ---------------------------------------------------------------------------------
     def get_qpos_limits(self) -> torch.Tensor:
@@ -267,20 +276,16 @@ class Articulation(JointModelFields, Entity):
             body = int(self.body_ids[self.find_bodies(link_name)[0][0]])
             if isinstance(link_name, str):
                 self._link_body[link_name] = body
-        if env_ids is None and self._host_reads():  # every env: numpy views of the derived fields
-            sim = self.sim
-            pose = self._pose_out(sim.xpos.numpy()[:, body], sim.xquat.numpy()[:, body])
-            return pose_to_matrix(pose) if to_matrix else pose
-        env = self._ids(env_ids)
-        pose = self._out(torch.cat((self.sim.xpos[env, body], self.sim.xquat[env, body]), dim=-1))
+        rows = slice(None) if env_ids is None else self._ids(env_ids)
+        pose = self.state_route.pose("xpos", "xquat", (rows, body))
         return pose_to_matrix(pose) if to_matrix else pose
 
     def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
         """Root link pose, (N, 7) or (N, 4, 4)."""
         if self.is_floating:
-            pose = self._out(self.sim.qpos[:, self.root_qpos_adr : self.root_qpos_adr + 7])
+            pose = self.state_route.rows("qpos", (slice(None), slice(self.root_qpos_adr, self.root_qpos_adr + 7)))
         else:
-            pose = self._out(torch.cat((self.sim.xpos[:, self.root_body_id], self.sim.xquat[:, self.root_body_id]), -1))
+            pose = self.state_route.pose("xpos", "xquat", (slice(None), self.root_body_id))
         return pose_to_matrix(pose) if to_matrix else pose
 
     def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
@@ -291,8 +296,12 @@ class Articulation(JointModelFields, Entity):
 
         ids = self._ids(env_ids)
         pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7)
-        self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = pose7
+        self.state_route.write("qpos", (ids, self._root_cols()), pose7)
         self.sim.mark_dirty(ids)
+
+    def _root_cols(self) -> slice:
+        """The qpos columns of a floating root (position, then wxyz quaternion)."""
+        return slice(self.root_qpos_adr, self.root_qpos_adr + 7)
 
     # -- drives and masses ----------------------------------------------------------------------------
     def set_joint_drive(
@@ -331,11 +340,11 @@ class Articulation(JointModelFields, Entity):
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero joint velocities and applied efforts of ``env_ids``."""
-        rows = self._ids(env_ids).numpy()
-        self.sim.arrays["qvel"][rows[:, None], self._dof_adr_np] = 0.0
-        self.sim.arrays["qfrc_applied"][rows[:, None], self._dof_adr_np] = 0.0
+        rows, route = self._ids(env_ids).numpy(), self.state_route
+        route.write("qvel", (rows[:, None], self._dof_adr_np), 0.0)
+        route.write("qfrc_applied", (rows[:, None], self._dof_adr_np), 0.0)
         if self.is_floating:
-            self.sim.arrays["qvel"][rows, self.root_dof_adr : self.root_dof_adr + 6] = 0.0
+            route.write("qvel", (rows, slice(self.root_dof_adr, self.root_dof_adr + 6)), 0.0)
         self.sim.mark_dirty(rows)
 
     # -- reset ---------------------------------------------------------------------------------------
@@ -355,9 +364,9 @@ class Articulation(JointModelFields, Entity):
         ``init_root_pose``, at rest: zero velocities, velocity targets and applied efforts."""
         ids = self._ids(env_ids)
         if self.is_floating:
-            self.sim.qpos[ids, self.root_qpos_adr : self.root_qpos_adr + 7] = self.init_root_pose
+            self.state_route.write("qpos", (ids, self._root_cols()), self.init_root_pose)
         self.set_qpos(self.default_qpos.expand(len(ids), self.dof), env_ids=ids, target=False)
         mask = self.vel_act >= 0
         if mask.any():
-            self.sim.ctrl[ids[:, None], self.vel_act[mask][None, :]] = 0.0
+            self.state_route.write("ctrl", (ids[:, None], self.vel_act[mask][None, :]), 0.0)
         self.clear_dynamics(ids)

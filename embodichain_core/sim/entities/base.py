@@ -1,4 +1,8 @@
-"""Common plumbing of scene entities: env-id handling and name lookup."""
+"""Common plumbing of scene entities: env-id handling, name lookup and the state route.
+
+Every entity reads and writes the simulation's state through ``self.state_route``, the
+:class:`~embodichain_core.sim.backend.state_route.StateRoute` chosen once when it binds to
+the simulation (numpy views on a backend with host arrays, torch views otherwise)."""
 
 from __future__ import annotations
 
@@ -10,6 +14,7 @@ import mujoco
 import numpy as np
 import torch
 
+from embodichain_core.sim.backend.state_route import StateRoute, state_route
 from embodichain_core.utils.suggest import did_you_mean
 
 if TYPE_CHECKING:
@@ -91,6 +96,8 @@ class Entity:
         self.uid = uid
         self.cfg = cfg
         self.scene = scene
+        self.state_route: StateRoute = state_route(scene.sim, scene.device)
+        """How this entity reads and writes the simulation's state (chosen here, once)."""
 
     @property
     def sim(self):
@@ -115,19 +122,6 @@ class Entity:
 
     def _out(self, t: torch.Tensor) -> torch.Tensor:
         return t.to(dtype=torch.float32, device=self.device)
-
-    def _host_reads(self) -> bool:
-        """Whether reads may use the simulation's numpy views: the backend has them
-        (``sim.capabilities.host_arrays``, decided when it was built) and outputs stay on the CPU."""
-        return self.sim.capabilities.host_arrays and self.device.type == "cpu"
-
-    @staticmethod
-    def _pose_out(pos: np.ndarray, quat: np.ndarray) -> torch.Tensor:
-        """A fresh float32 ``(n, 7)`` pose tensor from ``(n, 3)`` positions and ``(n, 4)`` quaternions."""
-        out = np.empty((len(pos), 7), dtype=np.float32)
-        out[:, :3] = pos
-        out[:, 3:] = quat
-        return torch.from_numpy(out)
 
     def state_slices(self) -> StateSlices:
         """The state columns this entity owns (kept as they are by a scene reset that

@@ -68,18 +68,10 @@ class RigidObject(Entity):
     # -- pose ------------------------------------------------------------------------------
     def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
         """Pose in the env frame, ``(N, 7)`` or ``(N, 4, 4)``."""
-        if self._host_reads():
-            arrays = self.sim.arrays
-            if self.is_dynamic:
-                pose = torch.from_numpy(arrays["qpos"][:, self.qpos_adr : self.qpos_adr + 7].astype(np.float32))
-            else:
-                pose = self._pose_out(arrays["mocap_pos"][:, self.mocap_id], arrays["mocap_quat"][:, self.mocap_id])
-            return pose_to_matrix(pose) if to_matrix else pose
         if self.is_dynamic:
-            pose = self.sim.qpos[:, self.qpos_adr : self.qpos_adr + 7]
+            pose = self.state_route.rows("qpos", (slice(None), slice(self.qpos_adr, self.qpos_adr + 7)))
         else:
-            pose = torch.cat((self.sim.mocap_pos[:, self.mocap_id], self.sim.mocap_quat[:, self.mocap_id]), dim=-1)
-        pose = self._out(pose)
+            pose = self.state_route.pose("mocap_pos", "mocap_quat", (slice(None), self.mocap_id))
         return pose_to_matrix(pose) if to_matrix else pose
 
     def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
@@ -91,14 +83,13 @@ class RigidObject(Entity):
             pose7 = as_values(as_pose7(torch.as_tensor(pose, dtype=torch.float64)), len(ids), 7).numpy()
         quat = pose7[:, 3:]
         quat = quat / np.maximum(np.sqrt(np.einsum("ij,ij->i", quat, quat)), 1e-12)[:, None]
-        rows = ids.numpy()
+        rows, route = ids.numpy(), self.state_route
         if self.is_dynamic:
-            qpos = self.sim.arrays["qpos"]
-            qpos[rows, self.qpos_adr : self.qpos_adr + 3] = pose7[:, :3]
-            qpos[rows, self.qpos_adr + 3 : self.qpos_adr + 7] = quat
+            route.write("qpos", (rows, slice(self.qpos_adr, self.qpos_adr + 3)), pose7[:, :3])
+            route.write("qpos", (rows, slice(self.qpos_adr + 3, self.qpos_adr + 7)), quat)
         else:
-            self.sim.arrays["mocap_pos"][rows, self.mocap_id] = pose7[:, :3]
-            self.sim.arrays["mocap_quat"][rows, self.mocap_id] = quat
+            route.write("mocap_pos", (rows, self.mocap_id), pose7[:, :3])
+            route.write("mocap_quat", (rows, self.mocap_id), quat)
         self.sim.mark_dirty(rows)
 
     # -- velocity --------------------------------------------------------------------------
@@ -122,22 +113,21 @@ class RigidObject(Entity):
         if not self.is_dynamic:
             return
         ids = self._ids(env_ids)
-        rows, vel = ids.numpy(), as_array(velocity, len(ids), 6)
-        qvel = self.sim.arrays["qvel"]
-        qvel[rows, self.dof_adr : self.dof_adr + 3] = vel[:, :3]
+        rows, vel, route = ids.numpy(), as_array(velocity, len(ids), 6), self.state_route
+        route.write("qvel", (rows, slice(self.dof_adr, self.dof_adr + 3)), vel[:, :3])
         angular = vel[:, 3:]
         if np.count_nonzero(angular):  # a push (no spin) needs no rotation into the body frames
-            quat = self.sim.arrays["qpos"][rows, self.qpos_adr + 3 : self.qpos_adr + 7]
+            quat = route.read("qpos", (rows, slice(self.qpos_adr + 3, self.qpos_adr + 7)))
             angular = _rotate_inverse(quat, angular)
-        qvel[rows, self.dof_adr + 3 : self.dof_adr + 6] = angular
+        route.write("qvel", (rows, slice(self.dof_adr + 3, self.dof_adr + 6)), angular)
         self.sim.mark_dirty(rows)
 
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero velocities and applied wrenches of ``env_ids``."""
         rows = self._ids(env_ids).numpy()
         if self.is_dynamic:
-            self.sim.arrays["qvel"][rows, self.dof_adr : self.dof_adr + 6] = 0.0
-        self.sim.arrays["xfrc_applied"][rows, self.body_id] = 0.0
+            self.state_route.write("qvel", (rows, slice(self.dof_adr, self.dof_adr + 6)), 0.0)
+        self.state_route.write("xfrc_applied", (rows, self.body_id), 0.0)
         self.sim.mark_dirty(rows)
 
     # -- physical attributes -----------------------------------------------------------------

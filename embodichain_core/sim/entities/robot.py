@@ -120,7 +120,7 @@ class Robot(Articulation):
         out = np.zeros((len(env), len(bodies), 7))
         data = mujoco.MjData(self.scene.model)
         adr = self.qpos_adr.numpy()
-        current = self.sim.qpos[env].detach().cpu().numpy()  # the sim device may be a GPU
+        current = self.state_route.read("qpos", env)  # host values on either route
         joints = qpos.detach().cpu().numpy()
         for k, e in enumerate(env.tolist()):
             data.qpos[:] = current[k]

@@ -199,7 +199,7 @@ def randomize_robot_qpos(
     low, high = as_range(qpos_range, "randomize_robot_qpos", "qpos_range", len(joints))
     qpos = uniform_np(env, ids, low, high)
     if relative_qpos:
-        qpos += env.sim.arrays["qpos"][ids.numpy()[:, None], art.qpos_adr.numpy()[joints][None, :]]
+        qpos += art.qpos_array(ids, joints)
     limits = art.qpos_limits_array(ids, joints)
     qpos = np.minimum(np.maximum(qpos, limits[..., 0]), limits[..., 1])
     art.set_qpos(qpos, joint_ids=joints, env_ids=ids, target=False)
