@@ -4,7 +4,8 @@
 objects, backgrounds, groups and lights (paths in the gym-config layout:
 ``rigid_object[0].attrs.mass``, ``light.direct[0].intensity``); the rules are
 listed in docs/configuration.md ("Validated values"). Sensor configs check
-their own values when built, and may add ``check_values(path)``.
+their own values when built, and may add ``check_values(path, sim_cfg)`` for what depends on
+the simulation settings (a camera's renderer on the backend and device).
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ def check_scene(cfg: Any) -> None:
         check_pose(sensor, f"sensor[{i}]")
         hook = getattr(sensor, "check_values", None)
         if callable(hook):
-            hook(f"sensor[{i}]")
+            hook(f"sensor[{i}]", cfg.sim_cfg)
 
 
 def check_pose(cfg: Any, path: str) -> None:

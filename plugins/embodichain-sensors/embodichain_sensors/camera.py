@@ -47,7 +47,8 @@ from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
 from embodichain_sensors.render_pool import RenderPool, render_thread_count
 from embodichain_sensors.renderer import SensorRenderer
-from embodichain_sensors.warp_renderer import WarpCameraRenderer, choose_renderer
+from embodichain_sensors.renderer_choice import choose_renderer
+from embodichain_sensors.warp_renderer import WarpCameraRenderer
 
 
 @dataclass

@@ -21,12 +21,11 @@ from typing import Any, List, Literal, Optional, Union
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.cfg import SensorCfg
 from embodichain_core.utils.configclass import MISSING, configclass
+from embodichain_sensors.renderer_choice import RENDERERS, choose_renderer
 
 #: Largest image side accepted (pixels): MuJoCo's offscreen buffer is an OpenGL framebuffer.
 MAX_IMAGE_SIDE = 16384
 #: Bytes per pixel of each camera output (colour is RGBA uint8; depth/mask 4 bytes; normal/position 3 float32).
-#: Camera renderers (``CameraCfg.renderer``).
-RENDERERS = ("warp", "opengl")
 _BYTES_PER_PIXEL = {"color": 4, "depth": 4, "mask": 4, "normal": 12, "position": 12}
 
 
@@ -138,6 +137,20 @@ class CameraCfg(SensorCfg):
         if not (0.0 < float(self.near) < float(self.far)):
             raise ConfigError("near", f"need 0 < near < far, got near={self.near!r}, far={self.far!r}")
         _check_intrinsics(self.intrinsics, "intrinsics")
+
+    def check_values(self, path: str, sim_cfg: Any) -> None:
+        """Check what depends on the simulation settings, before the scene is built (the
+        env's config validation calls it): the renderer must render this backend and device
+        in one batch (:func:`~embodichain_sensors.renderer_choice.choose_renderer`).
+
+        Args:
+            path: this sensor's config path (``sensor[0]``).
+            sim_cfg: the env's ``SimulationManagerCfg``.
+
+        Raises:
+            ConfigError: at ``<path>.renderer`` (or ``sim_cfg.render_cfg.quality``).
+        """
+        choose_renderer(sim_cfg, self.renderer, str(self.uid), path)
 
     def buffer_bytes_per_env(self) -> int:
         """Bytes of one env's images of one update: every enabled output of every view,

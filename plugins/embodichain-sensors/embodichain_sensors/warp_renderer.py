@@ -16,18 +16,22 @@ on the sim device. It keeps the OpenGL path's conventions:
 What the ray tracer does not render is refused (:class:`ConfigError`), never ignored:
 ``render_cfg.quality: high`` (reflections), per-env visual fields that MuJoCo Warp does not
 hold (kept on the host for the OpenGL renderer, e.g. ``light_intensity``) and per-env
-intrinsics. ``renderer: opengl`` on the camera renders those with OpenGL, one world at a time.
+intrinsics. ``renderer: opengl`` on the camera renders those with OpenGL, one world at a time
+(Warp's CPU device only: on a GPU it cannot batch, see :mod:`.renderer_choice`).
 """
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence
+from typing import Any, Sequence
 
 import mujoco
 import numpy as np
 import torch
 
 from embodichain_core.config.errors import ConfigError
+from embodichain_sensors.renderer_choice import choose_renderer, opengl_hint
+
+__all__ = ["WarpCameraRenderer", "choose_renderer", "pixel_rays"]
 
 _GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 #: Alpha 255 in the top byte of an int32 pixel.
@@ -50,31 +54,6 @@ def _no_falloff(attenuation: torch.Tensor) -> None:
         zero = (attenuation == 0).all(dim=-1)
         if bool(zero.any()):
             attenuation[zero] = torch.tensor([1.0, 0.0, 0.0], dtype=attenuation.dtype, device=attenuation.device)
-
-
-def choose_renderer(sim_cfg: Any, renderer: Optional[str], uid: str, path: str) -> str:
-    """The renderer of camera ``uid`` (``renderer``, or the backend's default).
-
-    Raises:
-        ConfigError: ``"warp"`` on another backend (at ``<path>.renderer``), or with
-            ``render_cfg.quality`` other than ``"fast"``.
-    """
-    backend = getattr(sim_cfg, "backend", "mujoco_batch")
-    chosen = renderer or ("warp" if backend == "warp" else "opengl")
-    if chosen == "warp" and backend != "warp":
-        raise ConfigError(
-            f"{path}.renderer",
-            f"renderer 'warp' renders the worlds of sim_cfg.backend 'warp', not backend {backend!r}; "
-            "use renderer 'opengl' (or leave it unset)",
-        )
-    quality = getattr(getattr(sim_cfg, "render_cfg", None), "quality", "fast")
-    if chosen == "warp" and quality != "fast":
-        raise ConfigError(
-            "sim_cfg.render_cfg.quality",
-            f"{quality!r}: MuJoCo Warp's renderer (camera {uid!r}, backend 'warp') has no reflections "
-            "or MSAA; use quality 'fast', or renderer: 'opengl' on this camera",
-        )
-    return chosen
 
 
 class WarpCameraRenderer:
@@ -101,6 +80,7 @@ class WarpCameraRenderer:
         where: str,
     ):
         self.sim, self.where = sim, where
+        self._gpu = str(sim.wp_device).startswith("cuda")
         self.camera_ids = [int(c) for c in camera_ids]
         self.width, self.height = int(width), int(height)
         self.wants, self.near, self.far = dict(wants), float(near), float(far)
@@ -136,8 +116,8 @@ class WarpCameraRenderer:
             raise ConfigError(
                 self.where,
                 f"model field {host[0]!r} has per-env values that MuJoCo Warp's renderer does not use on "
-                "backend 'warp' (only the OpenGL renderer reads it); set renderer: 'opengl' on this camera, "
-                "or randomize a field MuJoCo Warp batches (light_diffuse, mat_rgba, geom_rgba...)",
+                f"backend 'warp' (only the OpenGL renderer reads it); randomize a field MuJoCo Warp batches "
+                f"(light_diffuse, mat_rgba, geom_rgba...), or set {opengl_hint(self._gpu)}",
             )
 
     def set_intrinsics(self, view: int, intrinsics: np.ndarray) -> None:
@@ -147,7 +127,7 @@ class WarpCameraRenderer:
             raise ConfigError(
                 self.where + ".intrinsics",
                 "MuJoCo Warp's renderer traces one set of rays per camera for every world: per-env "
-                "intrinsics need renderer: 'opengl' on this camera",
+                f"intrinsics need {opengl_hint(self._gpu)}",
             )
         if first == self._intrinsics[view]:
             return
