@@ -189,7 +189,7 @@ def _fail(pm: EmbodichainPluginManager, info: PluginInfo) -> None:
 
 def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
     """Run plugin ``name``'s hooks (``PluginValidationError`` for an unknown hook); returns the
-    names it registered per kind. A failure removes what the plugin registered and raises."""
+    names it registered per kind. On a failure the caller removes the plugin (:func:`_drop`)."""
     plugin = pm.get_plugin(name)
     for caller in pm.get_hookcallers(plugin) or []:
         if not caller.has_spec():
@@ -198,16 +198,12 @@ def _activate(pm: EmbodichainPluginManager, name: str) -> dict[str, list[str]]:
                 plugin, f"plugin {name!r} implements unknown hook {caller.name!r}.{hint}"
             )
     trace = os.environ.get(TRACE_ENV, "").strip() not in ("", "0")
-    try:
-        for kind, register in KINDS.items():
-            for impl in getattr(pm.hook, hook_name(kind)).get_hookimpls():
-                if impl.plugin is plugin:
-                    if trace:
-                        sys.stderr.write(f"embodichain plugins: {name}: {hook_name(kind)}\n")
-                    impl.function(*[register(pm.registries[kind], name) for _ in impl.argnames])
-    except BaseException:
-        _drop(pm, name)
-        raise
+    for kind, register in KINDS.items():
+        for impl in getattr(pm.hook, hook_name(kind)).get_hookimpls():
+            if impl.plugin is plugin:
+                if trace:
+                    sys.stderr.write(f"embodichain plugins: {name}: {hook_name(kind)}\n")
+                impl.function(*[register(pm.registries[kind], name) for _ in impl.argnames])
     found = {kind: [e.name for e in r.ordered_entries() if e.provider == name] for kind, r in pm.registries.items()}
     return {kind: names for kind, names in found.items() if names}
 
