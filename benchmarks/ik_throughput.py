@@ -3,6 +3,9 @@
 Contenders, on the same target batches (interleaved rounds, medians):
 
 * ``DLSSolver``: the default, damped least squares on a batched torch serial chain;
+* ``DLSSolver.get_ik_on_device``: the same iterations with no host read (what an
+  ``EefPoseTerm`` step runs on a GPU: all ``max_iterations`` every call, no random
+  restarts), here on the CPU;
 * ``MjDLSSolver``: the same algorithm on MuJoCo Jacobians (``mj_kinematics`` +
   ``mj_comPos`` + ``mj_jac`` env by env on a scratch MjData): the reference;
 * ``Robot.compute_ik``: the default through the Robot API in a 64-env scene
@@ -121,25 +124,33 @@ def _run(solve: Callable[[torch.Tensor, torch.Tensor], tuple], batches: list[tup
     return times, results
 
 
+def _seeded(solver: Any) -> Callable[[torch.Tensor, torch.Tensor], tuple]:
+    """``solver.get_ik(target, qpos_seed=seed)`` as a function of ``(target, seed)``."""
+    return lambda target, seed: solver.get_ik(target, qpos_seed=seed)
+
+
 def bench_solvers(n: int, rounds: int, mj_rounds: int) -> list[dict[str, Any]]:
-    """Rows for both solvers, both modes, both robots (interleaved per round)."""
+    """Rows for every contender, both modes, both robots (interleaved per round)."""
     rows = []
     for robot, (cfg, part) in _robots().items():
         solvers = _solvers(cfg, part)
+        dls = solvers["DLSSolver"]
+        solve = {name: (s, _seeded(s)) for name, s in solvers.items()}
+        solve["DLSSolver.get_ik_on_device"] = (dls, dls.get_ik_on_device)
         for mode in ("tracking", "random"):
-            batches = make_batches(cfg, solvers["DLSSolver"], mode, n, rounds)
-            for s in solvers.values():  # warm-up
-                s.get_ik(*batches[0])
-            per: dict[str, tuple[list, list]] = {name: ([], []) for name in solvers}
+            batches = make_batches(cfg, dls, mode, n, rounds)
+            for _, fn in solve.values():  # warm-up
+                fn(*batches[0])
+            per: dict[str, tuple[list, list]] = {name: ([], []) for name in solve}
             for i, batch in enumerate(batches):
-                for name, s in solvers.items():
+                for name, (_, fn) in solve.items():
                     if name == "MjDLSSolver" and i >= mj_rounds:
                         continue
-                    t, r = _run(lambda tgt, sd, s=s: s.get_ik(tgt, qpos_seed=sd), [batch])
+                    t, r = _run(fn, [batch])
                     per[name][0].extend(t)
                     per[name][1].extend(r)
             for name, (times, results) in per.items():
-                rows.append(_row(robot, name, mode, n, times, _accuracy(solvers[name], batches, results)))
+                rows.append(_row(robot, name, mode, n, times, _accuracy(solve[name][0], batches, results)))
     return rows
 
 

@@ -5,6 +5,12 @@ The functors call ``robot.compute_fk(name=part, to_matrix=True)`` and
 -> (success (n,), qpos (n, k))``; the solvers behind them come from the robot
 config's ``build_solvers(robot)`` (robot plugins such as embodichain-robots).
 ``qpos`` is in the order of ``robot.get_solver(part).joint_ids``.
+
+:func:`solve_ik_on_device` solves every env on the sim device without a host wait, for a
+backend whose state is device memory (``sim.capabilities.host_arrays`` False: ``warp`` on a
+GPU) and a solver with ``ik_on_device`` (embodichain-robots' ``DLSSolver``;
+:func:`device_solver` finds it): the targets go to the part's root frame there, and the
+solver runs a fixed number of iterations with no random restarts.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from typing import Any, Optional
 
 import torch
 
+from embodichain_core.utils.math import pose_to_matrix
 from embodichain_functors._common import ParamError
 
 
@@ -67,10 +74,20 @@ def eef_pose(robot: Any, part: Optional[str]) -> torch.Tensor:
     return robot.compute_fk(name=part, to_matrix=True).to(torch.float32)
 
 
+def device_solver(robot: Any, part: Optional[str]) -> Any:
+    """``part``'s solver when IK runs on the sim device (see the module docstring), else None."""
+    caps = getattr(getattr(robot, "sim", None), "capabilities", None)
+    if caps is None or caps.host_arrays or not callable(getattr(robot, "get_solver", None)):
+        return None
+    solver = robot.get_solver(part)
+    return solver if getattr(solver, "ik_on_device", False) else None
+
+
 def solve_ik(
     robot: Any, pose: torch.Tensor, part: Optional[str], env_ids: torch.Tensor, seed: Optional[torch.Tensor] = None
 ) -> tuple[torch.Tensor, torch.Tensor, list[int]]:
-    """IK for ``env_ids``; failed envs keep the seed. Returns ``(success, qpos, joint ids)``."""
+    """IK for ``env_ids`` through ``robot.compute_ik``; failed envs keep the seed. Returns
+    ``(success, qpos, joint ids)``."""
     joints = part_joints(robot, part)
     if seed is None:
         seed = robot.get_qpos()[env_ids][:, joints]
@@ -82,3 +99,33 @@ def solve_ik(
         seed = robot.get_qpos()[env_ids][:, joints]
     qpos = torch.where(success[:, None], qpos, seed.to(qpos.dtype))
     return success, qpos, joints
+
+
+def solve_ik_on_device(
+    robot: Any, solver: Any, pose: torch.Tensor, part: Optional[str], seed: Optional[torch.Tensor] = None
+) -> tuple[torch.Tensor, torch.Tensor, list[int]]:
+    """IK of every env on the sim device with no host wait: ``pose`` (N, 4, 4) env-frame
+    targets to the root link frame of ``part``, ``solver.get_ik_on_device`` from ``seed``
+    (default: the current joint positions), failed envs kept at the seed.
+
+    Returns:
+        ``(success (N,) bool, qpos (N, k) float32, joint ids)`` on the sim device.
+    """
+    joints = [int(j) for j in solver.joint_ids]
+    if seed is None:  # an index list: a host copy (callers in the step pass the seed)
+        seed = robot.get_qpos()[:, joints]
+    base = robot.get_control_part_base_pose(part, to_matrix=False).to(torch.float64)
+    local = _rigid_inverse(pose_to_matrix(base)) @ pose.to(torch.float64)
+    success, qpos = solver.get_ik_on_device(local, seed)
+    qpos = qpos.to(torch.float32)
+    return success, torch.where(success[:, None], qpos, seed.to(qpos.dtype)), joints
+
+
+def _rigid_inverse(pose: torch.Tensor) -> torch.Tensor:
+    """Inverse of (..., 4, 4) rigid transforms."""
+    out = torch.zeros_like(pose)
+    rot_t = pose[..., :3, :3].transpose(-1, -2)
+    out[..., :3, :3] = rot_t
+    out[..., :3, 3] = -(rot_t @ pose[..., :3, 3:4])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out

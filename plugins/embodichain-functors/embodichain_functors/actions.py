@@ -24,7 +24,7 @@ from embodichain_core.managers.functor import ActionTerm
 from embodichain_core.utils.math import euler_xyz_to_quat, pose_to_matrix
 
 from embodichain_functors._common import ParamError
-from embodichain_functors._kinematics import check_ik, default_part, solve_ik
+from embodichain_functors._kinematics import check_ik, default_part, device_solver, solve_ik, solve_ik_on_device
 
 __all__ = [
     "DeltaQposTerm",
@@ -203,6 +203,11 @@ class EefPoseTerm(_Term):
     fails keep their current joint positions. Returns ``{"qpos": (N, n_active),
     "ik_success": (N,) bool}``; active joints outside the part hold their targets.
 
+    On a backend whose state is device memory (``warp`` on a GPU) with a solver that solves
+    on the device (``DLSSolver``), the IK runs there with no host wait: a fixed number of
+    iterations and no random restarts (docs/performance.md, "Device audit"). Elsewhere it runs
+    through ``robot.compute_ik`` on the CPU, restarts included.
+
     Params: ``scale`` (1.0), ``pose_dim`` (7), ``part_name`` (the env's first control part).
 
     Example:
@@ -224,6 +229,10 @@ class EefPoseTerm(_Term):
         except ParamError as err:
             raise ValueError(f"params.part_name: {err.reason.split(': ', 1)[-1]}") from None
         self._all = torch.arange(env.num_envs)
+        self._solver = device_solver(self.robot, self.part)
+        if self._solver is not None:  # the part's joints in the solver's order, on the device
+            self._seed_cols = torch.as_tensor(self._solver.joint_ids, dtype=torch.long, device=env.device)
+        self._scatter: dict[tuple[int, ...], tuple[torch.Tensor, torch.Tensor]] = {}
 
     @property
     def action_dim(self) -> int:
@@ -247,13 +256,30 @@ class EefPoseTerm(_Term):
         return pose_to_matrix(torch.cat((self.scale * action[:, :3], quat), -1)).float()
 
     def process_action(self, action: torch.Tensor) -> dict[str, torch.Tensor]:
-        success, qpos, joints = solve_ik(self.robot, self.target_pose(action), self.part, self._all)
-        command = self.robot.get_qpos(target=True)[:, self.joints].clone()
-        active = self.joints.tolist()
-        for k, joint in enumerate(joints):
-            if joint in active:
-                command[:, active.index(joint)] = qpos[:, k]
+        pose = self.target_pose(action)
+        if self._solver is not None:
+            seed = self.robot.get_qpos()[:, self._seed_cols]
+            success, qpos, joints = solve_ik_on_device(self.robot, self._solver, pose, self.part, seed)
+        else:
+            success, qpos, joints = solve_ik(self.robot, pose, self.part, self._all)
+        command = self.robot.get_qpos(target=True)[:, self._joints].clone()
+        columns, solved = self._columns_of(joints)
+        command[:, columns] = qpos[:, solved]
         return {"qpos": command, "ik_success": success}
+
+    def _columns_of(self, joints: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
+        """``(columns of the active joints, columns of qpos)`` for the solved ``joints`` that
+        are active, as index tensors on the env's device (made once per joint list)."""
+        key = tuple(joints)
+        if key not in self._scatter:
+            active = self.joints.tolist()
+            pairs = [(active.index(j), k) for k, j in enumerate(joints) if j in active]
+            device = self._joints.device
+            self._scatter[key] = (
+                torch.as_tensor([a for a, _ in pairs], dtype=torch.long, device=device),
+                torch.as_tensor([k for _, k in pairs], dtype=torch.long, device=device),
+            )
+        return self._scatter[key]
 
 
 def _disable_drive(term: _Term, **gains: float) -> None:

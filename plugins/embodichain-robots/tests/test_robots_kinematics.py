@@ -103,6 +103,30 @@ def test_unreachable_target_fails_and_stays_in_limits() -> None:
     assert bool(((q >= limits[:, 0]) & (q <= limits[:, 1])).all())
 
 
+@pytest.mark.parametrize("case", ["w1_left", "arm"])
+def test_ik_on_device_is_the_first_attempt_of_get_ik(case: str) -> None:
+    """``get_ik_on_device`` (fixed iteration count, no host read, no restarts) returns what
+    ``get_ik`` without restarts returns: the same success flags and joint values, for targets
+    near the seed (solved), far from it (most not solved in 20 iterations) and out of reach."""
+    solver, _ = _solver(case)
+    limits = solver.qpos_limits
+    start = random_qpos(limits, 48, seed=5)
+    goal = start.clone()
+    goal[:16] += 0.05  # near
+    goal[16:40] = random_qpos(limits, 24, seed=6)  # far
+    target = solver.get_fk(goal.clamp(limits[:, 0], limits[:, 1]))
+    target[40:, 0, 3] += 3.0  # beyond reach
+    ok_host, q_host = solver.get_ik(target, qpos_seed=start, num_restarts=0)
+    ok_dev, q_dev = solver.get_ik_on_device(target, start)
+    assert bool(ok_host[:16].all())
+    assert not bool(ok_host[40:].any())
+    assert 0 < int(ok_host[16:40].sum()) < 24  # both outcomes among the far targets
+    assert torch.equal(ok_dev, ok_host)
+    assert torch.equal(q_dev, q_host)  # converged envs stand still through the remaining iterations
+    assert solver.ik_on_device
+    assert not MjDLSSolver.ik_on_device
+
+
 def test_mujoco_reference_solver_agrees() -> None:
     solver, _ = _solver("arm", MjDLSSolver)
     target = solver.get_fk(random_qpos(solver.qpos_limits, 8, seed=4))

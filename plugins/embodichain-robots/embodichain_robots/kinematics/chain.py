@@ -45,6 +45,9 @@ class _ChainConsts(NamedTuple):
     b: torch.Tensor  # (n, 4, 4) 1 - cos terms
     u: torch.Tensor  # (n, 4, 4) slide terms
     hinge_f: torch.Tensor  # (n,) 1.0 for hinges
+    hinge: torch.Tensor  # (n,) True for hinges
+    axes: torch.Tensor  # (n, 3) joint axes in their local frames
+    limits: torch.Tensor  # (n, 2) joint limits
 
 
 class SerialChain:
@@ -83,7 +86,10 @@ class SerialChain:
         self._u[slide, :3, 3] = u[slide]
         self._next = nxt
         self._hinge_f = self.hinge.to(_F64)
-        host = _ChainConsts(self.consts[0], self._next, self._a, self._b, self._u, self._hinge_f)
+        self._all_hinges = bool(self.hinge.all())  # a constant, read once on the host
+        host = _ChainConsts(
+            self.consts[0], self._next, self._a, self._b, self._u, self._hinge_f, self.hinge, self.axes, self.limits
+        )
         self._on: dict[torch.device, _ChainConsts] = {torch.device("cpu"): host}
 
     def on(self, device: torch.device) -> "_ChainConsts":
@@ -157,8 +163,9 @@ class SerialChain:
             each joint's axis (N, n, 3) and origin (N, n, 3) in the root frame.
         """
         q = q.to(_F64)
+        k = self.on(q.device)
         motion = self.joint_transforms(q)
-        frame = self.consts[0].expand(q.shape[0], 4, 4)
+        frame = k.base.expand(q.shape[0], 4, 4)
         frames = []
         for i in range(self.n):
             frames.append(frame)
@@ -166,7 +173,7 @@ class SerialChain:
         if tip is not None:
             frame = frame @ tip.to(_F64)
         stacked = torch.stack(frames, 1)
-        axes_w = (stacked[..., :3, :3] @ self.axes[:, :, None])[..., 0]
+        axes_w = (stacked[..., :3, :3] @ k.axes[:, :, None])[..., 0]
         return frame, axes_w, stacked[..., :3, 3]
 
     def fk(self, q: torch.Tensor, tip: Optional[torch.Tensor] = None) -> torch.Tensor:
@@ -184,10 +191,12 @@ class SerialChain:
         return frame if tip is None else frame @ tip.to(_F64)
 
     def jacobian(self, q: torch.Tensor, tip: Optional[torch.Tensor] = None) -> tuple[torch.Tensor, torch.Tensor]:
-        """``(pose (N, 4, 4), J (N, 6, n))``: the geometric Jacobian (linear rows first)."""
+        """``(pose (N, 4, 4), J (N, 6, n))``: the geometric Jacobian (linear rows first),
+        computed where ``q`` is (``tip`` on that device too), with no host read."""
         pose, axes_w, origins = self.forward(q, tip)
+        k = self.on(q.device)
         lin = torch.linalg.cross(axes_w, pose[:, None, :3, 3] - origins, dim=-1)
-        if not bool(self.hinge.all()):
-            lin = torch.where(self.hinge[None, :, None], lin, axes_w)
-        ang = axes_w * self._hinge_f[None, :, None]
+        if not self._all_hinges:
+            lin = torch.where(k.hinge[None, :, None], lin, axes_w)
+        ang = axes_w * k.hinge_f[None, :, None]
         return pose, torch.cat((lin, ang), -1).transpose(1, 2)

@@ -25,6 +25,8 @@ class MjDLSSolver(DLSSolver):
 
     #: FK runs on the host (MuJoCo); the robot hands it CPU joint values.
     fk_on_device = False
+    #: IK runs on the host too (:meth:`DLSSolver.get_ik` only).
+    ik_on_device = False
 
     def __init__(
         self,

@@ -9,6 +9,12 @@ best of a larger random pool, ranked by FK error), solved as one batch, for up
 to ``num_restarts`` rounds. Poses are in the chain's root-link frame; the
 robot converts from the env frame (:meth:`Robot.compute_ik`).
 
+:meth:`DLSSolver.get_ik` runs on the CPU (it reads convergence back to stop early and to pick
+the envs to restart). :meth:`DLSSolver.get_ik_on_device` runs where its target is and never
+waits for the device: every env takes ``max_iterations`` iterations (a converged env's step
+is masked to zero, so its joints stay where they converged: the same values as ``get_ik``'s
+first attempt) and no random restarts (they need the unconverged envs' ids on the host).
+
 Example:
     >>> solver = DLSSolver.from_model(IKSolverCfg(root_link_name="base", end_link_name="hand"), model)
     >>> success, qpos = solver.get_ik(target, qpos_seed=seed)      # (N,), (N, n)
@@ -16,47 +22,38 @@ Example:
 
 from __future__ import annotations
 
-import contextlib
-import functools
 import hashlib
-from typing import Any, Callable, Iterator, List, Optional, Sequence, TypeVar
+from typing import Any, List, Optional, Sequence
 
 import mujoco
 import torch
 
 from embodichain_core.utils.configclass import configclass
 from embodichain_robots.kinematics.chain import SerialChain
+from embodichain_robots.kinematics.ik_math import (
+    one_thread,
+    rotation_angle,
+    rotation_error,
+    sample_joint_values,
+    single_threaded,
+)
+
+__all__ = [
+    "DLSSolver",
+    "IKSolverCfg",
+    "rotation_angle",
+    "rotation_error",
+    "sample_joint_values",
+    "single_threaded",
+]
 
 _F64 = torch.float64
 
 
 def _host(values: Any) -> torch.Tensor:
-    """``values`` as a float64 CPU tensor: IK and Jacobians run on the CPU whatever the sim device."""
+    """``values`` as a float64 CPU tensor (:meth:`DLSSolver.get_ik`, Jacobians and pose errors
+    run on the CPU whatever the sim device)."""
     return torch.as_tensor(values).to("cpu", _F64)
-
-
-_T = TypeVar("_T", bound=Callable[..., Any])
-
-
-@contextlib.contextmanager
-def single_threaded() -> Iterator[None]:
-    """Run torch ops on one thread: the solver's tensors are tiny, and intra-op
-    threads make them up to 10x slower on a busy 2-core machine (measured)."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(threads)
-
-
-def _one_thread(func: _T) -> _T:
-    @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with single_threaded():
-            return func(*args, **kwargs)
-
-    return wrapper  # type: ignore[return-value]
 
 
 @configclass
@@ -100,32 +97,17 @@ class IKSolverCfg:
     seed: int = 0
 
 
-def sample_joint_values(limits: torch.Tensor, n: int, generator: Optional[torch.Generator] = None) -> torch.Tensor:
-    """(n, k) float64 joint values drawn uniformly inside (k, 2) ``limits`` (clipped to +-pi)."""
-    lo = limits[:, 0].to(_F64).clamp(min=-torch.pi)
-    hi = limits[:, 1].to(_F64).clamp(max=torch.pi)
-    return lo + (hi - lo) * torch.rand(n, len(lo), generator=generator, dtype=_F64)
-
-
-def rotation_error(target: torch.Tensor, rot: torch.Tensor) -> torch.Tensor:
-    """(N, 3) orientation error vector ``0.5 * sum_k rot_k x target_k`` (root frame)."""
-    return 0.5 * torch.linalg.cross(rot, target, dim=-2).sum(-1)
-
-
-def rotation_angle(target: torch.Tensor, rot: torch.Tensor) -> torch.Tensor:
-    """(N,) angle of ``target @ rot^T`` in radians (exact, for success checks)."""
-    cos = ((target * rot).sum((-1, -2)) - 1.0) / 2.0
-    return torch.arccos(cos.clamp(-1.0, 1.0))
-
-
 class DLSSolver:
     """Batched damped-least-squares IK of one serial chain (see module docstring).
 
-    FK (:meth:`get_fk`) runs where its input is; IK and the Jacobian on the CPU.
+    FK (:meth:`get_fk`) and :meth:`get_ik_on_device` run where their input is; :meth:`get_ik`
+    and the Jacobian on the CPU.
     """
 
     #: ``get_fk`` computes on its input's device (the robot keeps FK on the sim device).
     fk_on_device: bool = True
+    #: :meth:`get_ik_on_device` solves on its input's device with no host read.
+    ik_on_device: bool = True
 
     def __init__(self, cfg: IKSolverCfg, chain: SerialChain, joint_ids: Optional[Sequence[int]] = None):
         self.cfg = cfg
@@ -174,7 +156,7 @@ class DLSSolver:
         return self.tcp.clone()
 
     # -- kinematics ----------------------------------------------------------------------
-    @_one_thread
+    @one_thread
     def get_fk(self, qpos: torch.Tensor) -> torch.Tensor:
         """(N, 4, 4) float64 TCP pose in the root link frame at ``qpos`` (N, n).
 
@@ -197,16 +179,17 @@ class DLSSolver:
             self._tcp_cache = cached
         return cached[1]
 
-    @_one_thread
+    @one_thread
     def get_jacobian(self, qpos: torch.Tensor) -> torch.Tensor:
         """(N, 6, n) geometric TCP Jacobian (linear rows first) in the root frame."""
         return self.fk_jacobian(_host(qpos).reshape(-1, self.dof))[1]
 
     def fk_jacobian(self, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """``(TCP pose (N, 4, 4), Jacobian (N, 6, n))`` in the root frame (float64 input)."""
-        return self.chain.jacobian(qpos, self.tcp)
+        """``(TCP pose (N, 4, 4), Jacobian (N, 6, n))`` in the root frame (float64 input),
+        computed where ``qpos`` is."""
+        return self.chain.jacobian(qpos, self._tcp_on(qpos.device))
 
-    @_one_thread
+    @one_thread
     def pose_error(self, target: torch.Tensor, qpos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(position error (N,) in m, rotation error (N,) in rad) of ``qpos`` w.r.t. ``target``."""
         pose = self.get_fk(_host(qpos))
@@ -214,7 +197,7 @@ class DLSSolver:
         pos = torch.linalg.norm(target[:, :3, 3] - pose[:, :3, 3], dim=-1)
         return pos, rotation_angle(target[:, :3, :3], pose[:, :3, :3])
 
-    @_one_thread
+    @one_thread
     def get_ik(
         self, target: torch.Tensor, qpos_seed: Optional[torch.Tensor] = None, num_restarts: Optional[int] = None
     ) -> tuple[torch.Tensor, torch.Tensor]:
@@ -237,7 +220,7 @@ class DLSSolver:
         else:
             seed = _host(qpos_seed).reshape(n, self.dof)
         seed = torch.minimum(torch.maximum(seed, self.chain.limits[:, 0]), self.chain.limits[:, 1])
-        q, ok, err = self._solve(target, seed)
+        q, ok, err = self._solve(target, seed, early_exit=True)
         restarts = self.cfg.num_restarts if num_restarts is None else int(num_restarts)
         todo = torch.nonzero(~ok).flatten()
         for round_ in range(restarts):
@@ -245,12 +228,37 @@ class DLSSolver:
                 break
             k = max(int(self.cfg.num_samples), 1)
             owners = todo.repeat_interleave(k)
-            q_try, ok_try, err_try = self._solve(target[owners], self._restart_seeds(target[todo], k, round_))
+            q_try, ok_try, err_try = self._solve(
+                target[owners], self._restart_seeds(target[todo], k, round_), early_exit=True
+            )
             best = err_try.reshape(-1, k).argmin(-1) + torch.arange(len(todo)) * k
             better = err_try[best] < err[todo]
             q[todo[better]], err[todo[better]] = q_try[best][better], err_try[best][better]
             ok[todo] |= ok_try.reshape(-1, k).any(-1)
             todo = todo[~ok[todo]]
+        return ok, q
+
+    @one_thread
+    def get_ik_on_device(self, target: torch.Tensor, qpos_seed: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Solve every target of the batch on its device, without waiting for the device.
+
+        The DLS iterations of :meth:`get_ik`'s first attempt with a fixed count
+        (``max_iterations``; converged envs are masked, not awaited) and no random restarts.
+        Where ``get_ik`` succeeds without a restart, the results are the same.
+
+        Args:
+            target: (N, 4, 4) TCP targets in the root link frame, on the device to solve on.
+            qpos_seed: (N, n) start joint values (clamped to the limits).
+
+        Returns:
+            ``(success (N,) bool, qpos (N, n) float64)`` on the target's device; where
+            ``success`` is False, ``qpos`` is where the iterations ended.
+        """
+        target = target.to(_F64).reshape(-1, 4, 4)
+        lim = self.chain.on(target.device).limits
+        seed = qpos_seed.to(target.device, _F64).reshape(target.shape[0], self.dof)
+        seed = torch.minimum(torch.maximum(seed, lim[:, 0]), lim[:, 1])
+        q, ok, _ = self._solve(target, seed, early_exit=False)
         return ok, q
 
     def _restart_seeds(self, target: torch.Tensor, k: int, round_: int = 0) -> torch.Tensor:
@@ -287,19 +295,26 @@ class DLSSolver:
         grad = (jac.transpose(1, 2) @ err[..., None])[..., 0]
         blocked = ((q <= lo + 1e-9) & (grad < 0)) | ((q >= hi - 1e-9) & (grad > 0))
         jac = jac * (~blocked)[:, None, :]
-        return (jac.transpose(1, 2) @ torch.linalg.solve(jac @ jac.transpose(1, 2) + eye, err[..., None]))[..., 0]
+        # solve_ex: no error check, which would wait for the device (J J^T + lambda^2 I is positive definite)
+        solved = torch.linalg.solve_ex(jac @ jac.transpose(1, 2) + eye, err[..., None], check_errors=False)[0]
+        return (jac.transpose(1, 2) @ solved)[..., 0]
 
-    def _solve(self, target: torch.Tensor, q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """DLS iterations from ``q``: (qpos, converged, combined error)."""
-        lo, hi = self.chain.limits[:, 0], self.chain.limits[:, 1]
-        eye = torch.eye(6, dtype=_F64) * self.cfg.damping**2
+    def _solve(
+        self, target: torch.Tensor, q: torch.Tensor, early_exit: bool
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """DLS iterations from ``q`` on its device: (qpos, converged, combined error).
+        ``early_exit`` stops once every env converged (a host read per iteration);
+        without it all ``max_iterations`` run, converged envs standing still."""
+        consts = self.chain.on(q.device)
+        lo, hi = consts.limits[:, 0], consts.limits[:, 1]
+        eye = torch.eye(6, dtype=_F64, device=q.device) * self.cfg.damping**2
         t_rot, t_pos = target[:, :3, :3], target[:, :3, 3]
         pose = None
         for _ in range(self.cfg.max_iterations):
             pose, jac = self.fk_jacobian(q)
             err = torch.cat((t_pos - pose[:, :3, 3], rotation_error(t_rot, pose[:, :3, :3])), -1)
             ok = (err[:, :3].norm(dim=-1) < self.cfg.pos_tol) & (err[:, 3:].norm(dim=-1) < self.cfg.rot_tol)
-            if bool(ok.all()):
+            if early_exit and bool(ok.all()):
                 break
             step = self._step(jac, err, q, lo, hi, eye) * (~ok)[:, None]
             scale = (self.cfg.max_step / step.abs().amax(-1).clamp(min=1e-12)).clamp(max=1.0)
