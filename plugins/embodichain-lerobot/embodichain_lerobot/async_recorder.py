@@ -67,7 +67,8 @@ class AsyncLeRobotRecorder(LeRobotRecorder):
         """Send the episode to the writer process now (in order with the streamed frames);
         its reply completes a future (errors are reported like the worker thread's)."""
         _, frames, record = self._prepare(episode)
-        future = self._writer_process.submit_episode(episode.env_id, frames, record)  # type: ignore[union-attr]
+        videos = self._episode_videos(episode.env_id)  # with encoder processes: the one finishing its videos
+        future = self._writer_process.submit_episode(episode.env_id, frames, record, **videos)  # type: ignore[union-attr]
         future.add_done_callback(lambda f: self._written(f, episode.env_id, len(episode)))
         self._futures = [f for f in self._futures if not f.done()] + [future]
         bound = self.params.max_pending_episodes

@@ -40,6 +40,8 @@ VIDEO_CODECS = ("libsvtav1", "h264", "hevc", "auto")
 #: image features; ``raw`` keeps the float32/int32 arrays as numeric features (large:
 #: every reader pays for them). Not given: ``video`` when videos are streamed, else ``png16``.
 DEPTH_FORMATS = ("video", "png16", "raw")
+#: The most ``params.encoder_processes`` accepts (each process holds an encoder per env it serves).
+MAX_ENCODER_PROCESSES = 64
 
 _UNSAFE = re.compile(r"[^a-z0-9_.\-]+")
 
@@ -74,6 +76,9 @@ class RecorderParams:
             :mod:`embodichain_lerobot.storage`).
         environment_state: observation keys recorded together as one flat
             ``observation.environment_state`` feature (:mod:`embodichain_lerobot.env_state`).
+        encoder_processes: processes that encode the streamed videos (``"auto"`` or an int
+            from 1 to :data:`MAX_ENCODER_PROCESSES`; :func:`encoder_process_count`). 1: the
+            dataset writer process encodes them itself.
     """
 
     save_path: str = ""
@@ -91,6 +96,7 @@ class RecorderParams:
     min_free_mb: int = DEFAULT_MIN_FREE_MB
     writer_process: Optional[bool] = None
     environment_state: list[str] = field(default_factory=list)
+    encoder_processes: int | str = "auto"
 
     @property
     def task(self) -> str:
@@ -138,7 +144,39 @@ def parse_params(params: Mapping[str, Any]) -> RecorderParams:
             setattr(p, name, _non_negative_int(params[name], name))
     for name in ("image_writer_processes", "max_pending_episodes", "min_free_mb"):
         setattr(p, name, _non_negative_int(params.get(name, getattr(p, name)), name))
+    p.encoder_processes = _encoder_processes(params.get("encoder_processes", "auto"))
     return p
+
+
+def _encoder_processes(value: Any) -> int | str:
+    """The validated ``encoder_processes``: ``"auto"`` or an int from 1 to :data:`MAX_ENCODER_PROCESSES`."""
+    if value == "auto" or (
+        isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= MAX_ENCODER_PROCESSES
+    ):
+        return value
+    raise ConfigError("encoder_processes", f"must be 'auto' or an int from 1 to {MAX_ENCODER_PROCESSES}, got {value!r}")
+
+
+def encoder_process_count(setting: int | str, num_envs: int, cpu_count: Optional[int] = None) -> int:
+    """How many processes encode the streamed videos of ``num_envs`` envs.
+
+    ``"auto"``: one per two cores beyond the two that stepping/rendering and the dataset
+    writer take, ``(cpu_count - 2) // 2``, at least 1: 1 (the writer encodes, as without
+    the setting) up to 5 cores, 3 on 8 cores, 7 on 16. Never more than ``num_envs`` (an
+    env's videos are encoded in one process), also for an explicit count.
+
+    Example:
+        >>> encoder_process_count("auto", num_envs=4, cpu_count=2), encoder_process_count("auto", 64, 16)
+        (1, 7)
+        >>> encoder_process_count(8, num_envs=2)
+        2
+    """
+    if setting == "auto":
+        cpus = cpu_count if cpu_count is not None else (os.cpu_count() or 1)
+        wanted = max(1, (cpus - 2) // 2)
+    else:
+        wanted = int(setting)
+    return max(1, min(wanted, num_envs))
 
 
 def _depth_format(value: Any, streamed_videos: bool) -> str:

@@ -43,6 +43,7 @@ from embodichain_lerobot.config import (
     reserve_dataset_dir,
     robot_type_of,
 )
+from embodichain_lerobot.encoder_pool import EncoderPool, pool_for
 from embodichain_lerobot.encoding import preload_lerobot
 from embodichain_lerobot.env_meta import env_meta_text
 from embodichain_lerobot.episodes import Episode, EpisodeBuffers, StepData
@@ -78,7 +79,9 @@ class LeRobotRecorder(DatasetFunctor):
     ``image_writer_threads``, ``image_writer_processes``, ``max_pending_episodes``
     (async variant only), ``min_free_mb``, ``writer_process`` (write in a child process;
     default off here, on in the async variant), ``environment_state`` (observation keys
-    recorded as one ``observation.environment_state`` vector). lerobot is imported on a thread once the
+    recorded as one ``observation.environment_state`` vector), ``encoder_processes``
+    (streamed videos encoded by that many processes beside the writer process,
+    :mod:`embodichain_lerobot.encoder_pool`). lerobot is imported on a thread once the
     first observation is recorded (the env build does not wait for it); with ``writer_process`` it is
     imported in the child, which starts with the first recorded observation (a recorder closed
     before its env is reset starts none).
@@ -93,7 +96,10 @@ class LeRobotRecorder(DatasetFunctor):
 
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
-        self.params = parse_params(cfg.params or {})
+        try:
+            self.params = parse_params(cfg.params or {})
+        except ConfigError as err:  # named as in the config (the env build adds the functor's path)
+            raise err.under("params") from None
         self.fps = dataset_fps(env.control_frequency)
         check_output_dir(self.params.save_path, self.params.min_free_mb, "params.save_path")
         if self.params.use_videos:
@@ -108,6 +114,8 @@ class LeRobotRecorder(DatasetFunctor):
             self.params.writer_process = self.default_writer_process
         # its child starts with the first recorded observation (_ensure_spec): a recorder never reset starts none
         self._writer_process = WriterProcess() if self.params.writer_process else None
+        # params.encoder_processes > 1: the streamed videos are encoded there, the writer takes them
+        self._encoders: Optional[EncoderPool] = pool_for(self.params, env.num_envs)
         self._finalized = False
         self._path: Optional[str] = None
         self.discarded_episodes = 0
@@ -165,6 +173,8 @@ class LeRobotRecorder(DatasetFunctor):
                 preload_lerobot()  # lerobot takes seconds to import: on a thread, after the env is built
             else:  # the child imports lerobot while the first episodes run
                 self._writer_process.start()
+                if self._encoders is not None:
+                    self._encoders.start()
         return self._spec
 
     def record_reset(self, obs: Any, env_ids: Any) -> None:
@@ -192,8 +202,9 @@ class LeRobotRecorder(DatasetFunctor):
         proc = self._streaming_to()
         if proc is not None:
             self._ensure_writer()  # opened at the first step: the frames go out from then on
+            target = self._encoders if self._encoders is not None else proc  # encoded there
             for snapshot, ids in self._buffers.pending_groups() if proc.streamed else ():
-                proc.stream_frames(snapshot, ids)  # the frames this step completes
+                target.stream_frames(snapshot, ids)  # the frames this step completes
         self._buffers.add(spec.snapshot(obs), step)
 
     def _streaming_to(self) -> Optional[WriterProcess]:
@@ -202,8 +213,10 @@ class LeRobotRecorder(DatasetFunctor):
         return self._writer_process if p.use_videos and p.streaming_encoding else None
 
     def _restart(self, env_ids: list[int]) -> None:
-        """The live episodes of ``env_ids`` ended without a commit (the writer process drops their frames)."""
-        if self._writer_process is not None:
+        """The live episodes of ``env_ids`` ended without a commit (their encoding is cancelled)."""
+        if self._encoders is not None:
+            self._encoders.restart(env_ids)
+        elif self._writer_process is not None:
             self._writer_process.restart(env_ids)
 
     def __call__(
@@ -225,6 +238,7 @@ class LeRobotRecorder(DatasetFunctor):
         depth_format: Optional[str] = None,
         writer_process: Optional[bool] = None,
         environment_state: Optional[list] = None,
+        encoder_processes: int | str = "auto",
     ) -> None:
         """Commit the finished episodes of ``env_ids`` (the params were read at construction).
 
@@ -260,20 +274,32 @@ class LeRobotRecorder(DatasetFunctor):
     def _prepare(self, episode: Episode) -> tuple[DatasetWriter | WriterProcess, Iterator[dict], dict]:
         """Check the free space, then the writer, the frames and the record of ``episode``."""
         where = self._writer.root if self._writer is not None else self.params.save_path
-        ensure_space(
-            where,
-            episode.nbytes(),
-            self.params.min_free_mb,
-            f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}",
-        )
+        try:
+            ensure_space(
+                where,
+                episode.nbytes(),
+                self.params.min_free_mb,
+                f"episode {self.saved_episodes} (env {episode.env_id}, {len(episode)} frames) to {where}",
+            )
+        except BaseException:
+            self._restart([episode.env_id])  # its streamed videos are not kept for the next episode
+            raise
         writer, task = self._ensure_writer(), self.params.task
         subtask = writer.subtask_index(task)
         return writer, episode.frames(task, subtask), self._episode_record(episode, subtask)
 
     def _write_now(self, episode: Episode) -> None:
         writer, frames, record = self._prepare(episode)
-        index = writer.write_episode(frames, record)
+        index = writer.write_episode(frames, record, **self._episode_videos(episode.env_id))
         log.info("saved episode %d of env %d (%d frames) to %s", index, episode.env_id, len(episode), writer.root)
+
+    def _episode_videos(self, env_id: int) -> dict[str, Any]:
+        """``write_episode``'s arguments naming the encoder process that finishes the committed
+        episode's videos (none without encoder processes)."""
+        if self._encoders is None:
+            return {}
+        ticket, sent = self._encoders.finish(env_id)
+        return {"ticket": ticket, "after": sent}
 
     def _ensure_writer(self) -> DatasetWriter | WriterProcess:
         if self._writer is not None:
@@ -296,7 +322,11 @@ class LeRobotRecorder(DatasetFunctor):
         try:
             if self._writer_process is not None:  # not waited for: an error comes with the first episode
                 streamed = [k for k, f in args[1].items() if f["dtype"] == "video"] if self._streaming_to() else []
-                self._writer_process.open(root, *args, *more, streamed=streamed, **kwargs)
+                remote = None
+                if self._encoders is not None:  # they encode the streamed videos; the writer takes them
+                    settings = (self.fps, p.vcodec, p.encoder_threads, streamed, kwargs["lossless_keys"])
+                    remote = self._encoders.open(root, *settings)
+                self._writer_process.open(root, *args, *more, streamed=streamed, remote=remote, **kwargs)
                 self._writer = self._writer_process
             else:
                 self._writer = DatasetWriter(root, *args, *more, **kwargs)
@@ -329,6 +359,8 @@ class LeRobotRecorder(DatasetFunctor):
             return self._path
         self._finalized = True
         dropped = self._buffers.drop(range(self.num_envs))
+        if self._encoders is not None:  # every committed episode's videos finished, then they stop
+            self._encoders.finalize()
         if self._writer is not None:
             path = self._writer.finalize()
         else:  # nothing was saved; a writer process that was started stops

@@ -208,6 +208,7 @@ def finish_orphaned(root: Path) -> bool:
     Returns:
         Whether the folder was finished (or removed).
     """
+    from embodichain_lerobot.encoder_files import ENCODING
     from embodichain_lerobot.folders import STAGING, folder_status
 
     status = folder_status(root)
@@ -217,6 +218,7 @@ def finish_orphaned(root: Path) -> bool:
         shutil.rmtree(root, ignore_errors=True)
         return True
     shutil.rmtree(Path(root) / STAGING, ignore_errors=True)
+    shutil.rmtree(Path(root) / ENCODING, ignore_errors=True)
     (Path(root) / MARKER).unlink(missing_ok=True)
     return True
 

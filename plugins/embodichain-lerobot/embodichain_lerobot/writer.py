@@ -51,6 +51,7 @@ from typing import Any, Iterable, Iterator, Optional, Sequence
 
 import numpy as np
 
+from embodichain_lerobot.encoder_files import remove_encoding_folder
 from embodichain_lerobot.env_meta import write_env_meta_text
 from embodichain_lerobot.encoding import (
     batched_image_embedding,
@@ -358,6 +359,7 @@ class DatasetWriter:
         except Exception as err:  # a broken writer may fail to close; its published episodes are intact
             error = err
         shutil.rmtree(self.staging, ignore_errors=True)
+        remove_encoding_folder(self.root)  # the encoder processes' videos of unsaved episodes
         self._lock.release()
         if self.num_episodes == 0:
             shutil.rmtree(self.root, ignore_errors=True)

@@ -10,7 +10,9 @@ recording process's messages in order:
   frame), so a video is encoded while its episode runs;
 * ``restart``: those envs' live episodes end without a commit (their encoding is cancelled);
 * ``episode``: write a committed episode; with streamed videos, lerobot's ``save_episode``
-  finishes that env's encoder instead of its own (:func:`prefed_encoder`);
+  finishes that env's encoder instead of its own (:func:`prefed_encoder`), or, when encoder
+  processes encode them (``params.encoder_processes``, :mod:`embodichain_lerobot.encoder_pool`),
+  takes the videos they finished under the episode's ticket;
 * ``finalize``: cancel the live encoders, finalize the dataset, exit.
 
 ``open``, ``episode`` and ``finalize`` get one reply each, ``("ok", value)`` or
@@ -43,6 +45,7 @@ from typing import Any, Iterator, Optional
 
 import numpy as np
 
+from embodichain_lerobot.encoder_files import FinishedVideos, wait_exit, wait_result
 from embodichain_lerobot.storage import DiskFullError
 from embodichain_lerobot.writer_process import WriterProcessError, from_columns
 
@@ -116,6 +119,7 @@ class ChildWriter:
         self.streamed: list[str] = []
         self.encoders: dict[int, Any] = {}
         self.live: set[int] = set()  # envs whose encoder has an episode running
+        self.remote: Optional[dict] = None  # the encoder processes' folder and pids, when they encode
 
     def handle(self, command: str, payload: Any) -> Any:
         """Carry out one message; its reply value."""
@@ -140,7 +144,7 @@ class ChildWriter:
             return self._episode(*payload)
         raise WriterProcessError(f"unknown command {command!r}")
 
-    def _open(self, root: str, args: tuple, kwargs: dict, streamed: list[str]) -> None:
+    def _open(self, root: str, args: tuple, kwargs: dict, streamed: list[str], remote: Optional[dict] = None) -> None:
         from embodichain_lerobot.writer import DatasetWriter
 
         try:
@@ -149,7 +153,7 @@ class ChildWriter:
             self.open_error = err
             shutil.rmtree(root, ignore_errors=True)  # the recorder reserved it; nothing was saved
             raise
-        self.streamed = list(streamed)
+        self.streamed, self.remote = list(streamed), remote
 
     def _encoder(self, env_id: int) -> Any:
         if env_id not in self.encoders:  # a RoutedEncoder like the dataset's (lerobot's for colour)
@@ -176,7 +180,15 @@ class ChildWriter:
     def _backlog(self) -> int:
         return sum(enc.backlog() for env_id, enc in self.encoders.items() if env_id in self.live)
 
-    def _episode(self, env_id: int, columns: dict, length: int, record: dict, subtasks: list[str]) -> int:
+    def _episode(
+        self,
+        env_id: int,
+        columns: dict,
+        length: int,
+        record: dict,
+        subtasks: list[str],
+        ticket: Optional[tuple[str, int]] = None,
+    ) -> int:
         _test_gate(self.writer.num_episodes, self.writer.root)
         for name in subtasks:  # the same indices as the recording process gave
             self.writer.subtask_index(name)
@@ -184,6 +196,10 @@ class ChildWriter:
             return int(self.writer.write_episode(from_columns(columns, length), record))
         features = self.writer.dataset.features
         dummies = {k: np.broadcast_to(np.zeros((), np.uint8), tuple(features[k]["shape"])) for k in self.streamed}
+        if ticket is not None and self.remote is not None:  # finished by an encoder process
+            videos = FinishedVideos(wait_result(Path(self.remote["folder"]), *ticket))
+            with prefed_encoder(self.writer.dataset, videos):
+                return int(self.writer.write_episode(from_columns(columns, length, dummies), record))
         self.live.discard(env_id)  # the save finishes its encoder (or cancels it on an error)
         with prefed_encoder(self.writer.dataset, self._encoder(env_id)):
             return int(self.writer.write_episode(from_columns(columns, length, dummies), record))
@@ -192,6 +208,8 @@ class ChildWriter:
         for env_id in self.live:
             self.encoders[env_id].cancel_episode()
         self.live.clear()
+        if self.remote is not None:  # their temporary videos go with the dataset's staging
+            wait_exit(self.remote["pids"])
         path = self.writer.finalize() if self.writer is not None else None
         return str(path) if path is not None else None
 

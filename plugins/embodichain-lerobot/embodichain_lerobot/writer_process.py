@@ -98,6 +98,12 @@ class WriterProcess:
         >>> proc.finalize()                 # doctest: +SKIP
     """
 
+    #: The module the child runs (``python -m MODULE FD``).
+    child_module = "embodichain_lerobot.writer_child"
+    #: What the child is called in errors, and the param that avoids starting it.
+    child_role = "dataset writer process"
+    avoid_hint = "set the recorder's params.writer_process to false to write the dataset in the recording process"
+
     def __init__(self) -> None:
         self.root: Path = Path()
         self.num_episodes = 0
@@ -130,14 +136,13 @@ class WriterProcess:
             return
         mine, theirs = socket.socketpair()
         fd = theirs.fileno()
-        command = [sys.executable, "-m", "embodichain_lerobot.writer_child", str(fd)]
+        command = [sys.executable, "-m", self.child_module, str(fd)]
         try:
             self._proc = subprocess.Popen(command, pass_fds=(fd,), stdin=subprocess.DEVNULL)
         except OSError as err:
             mine.close()
             raise WriterProcessError(
-                f"cannot start the dataset writer process ({' '.join(command[:3])}): {err}; set the "
-                "recorder's params.writer_process to false to write the dataset in the recording process"
+                f"cannot start the {self.child_role} ({' '.join(command[:3])}): {err}; {self.avoid_hint}"
             ) from err
         finally:
             theirs.close()
@@ -145,12 +150,21 @@ class WriterProcess:
         for target, name in ((self._send_loop, "lerobot-writer-send"), (self._receive_loop, "lerobot-writer-receive")):
             threading.Thread(target=target, name=name, daemon=True).start()
 
-    def open(self, root: Path, *args: Any, streamed: Iterable[str] = (), **kwargs: Any) -> Future:
+    @property
+    def pid(self) -> Optional[int]:
+        """The child's process id (``None`` before :meth:`start`)."""
+        return self._proc.pid if self._proc is not None else None
+
+    def open(
+        self, root: Path, *args: Any, streamed: Iterable[str] = (), remote: Optional[dict] = None, **kwargs: Any
+    ) -> Future:
         """Create the dataset at ``root`` in the child (``DatasetWriter``'s arguments); the
-        features in ``streamed`` come with :meth:`stream_frames` instead of with the episode."""
+        features in ``streamed`` come with :meth:`stream_frames` instead of with the episode,
+        or, with ``remote`` (:meth:`~embodichain_lerobot.encoder_pool.EncoderPool.remote`), as
+        videos finished by the encoder processes."""
         self.start()
         self.root, self.streamed = Path(root), frozenset(streamed)
-        return self.submit("open", (str(root), args, kwargs, sorted(self.streamed)))
+        return self.submit("open", (str(root), args, kwargs, sorted(self.streamed), remote))
 
     def finalize(self) -> Optional[Path]:
         """Finalize the dataset in the child (after every message before) and stop it (idempotent)."""
@@ -196,23 +210,44 @@ class WriterProcess:
         if self.streamed and env_ids:
             self.post("restart", list(env_ids))
 
-    def submit_episode(self, env_id: int, frames: Iterable[dict], record: dict) -> Future:
-        """Send one committed episode; the future gives its lerobot episode index once published."""
+    def submit_episode(
+        self,
+        env_id: int,
+        frames: Iterable[dict],
+        record: dict,
+        ticket: Optional[tuple[str, int]] = None,
+        after: Optional[threading.Event] = None,
+    ) -> Future:
+        """Send one committed episode; the future gives its lerobot episode index once published.
+
+        With ``ticket`` (a name and the encoder process's pid, from
+        :meth:`~embodichain_lerobot.encoder_pool.EncoderPool.finish`) its videos are the ones that
+        encoder process finishes under that name; the
+        message then leaves only once ``after`` is set (the encoder process has been sent the
+        finish): a dataset writer that holds the episode never waits for a video nobody finishes.
+        """
         columns, length = to_columns(frames, self.streamed)
         subtasks = sorted(self._subtasks, key=self._subtasks.__getitem__)
-        future = self.submit("episode", (env_id, columns, length, record, subtasks), frames=length)
+        payload: Any = (env_id, columns, length, record, subtasks, ticket)
+        if after is not None:
+            ready, message = after, payload
+            payload = lambda: ready.wait() and message  # noqa: E731  (on the sender thread)
+        future = self.submit("episode", payload, frames=length)
         future.env_id = env_id  # type: ignore[attr-defined]
         return future
 
-    def write_episode(self, frames: Iterable[dict], record: dict) -> int:
-        """Send one episode and wait until the child has published it; its lerobot episode index."""
-        return int(self.submit_episode(int(record.get("env_id", 0)), frames, record).result(_REPLY_TIMEOUT_S))
+    def write_episode(self, frames: Iterable[dict], record: dict, **videos: Any) -> int:
+        """Send one episode and wait until the child has published it; its lerobot episode index
+        (``videos``: :meth:`submit_episode`'s ``ticket`` and ``after``)."""
+        future = self.submit_episode(int(record.get("env_id", 0)), frames, record, **videos)
+        return int(future.result(_REPLY_TIMEOUT_S))
 
     # -- messages ----------------------------------------------------------------------------------
-    def post(self, command: str, payload: Any) -> None:
-        """Queue a message that gets no reply (``payload`` may be a callable, called on the sender thread)."""
+    def post(self, command: str, payload: Any, on_sent: Optional[threading.Event] = None) -> None:
+        """Queue a message that gets no reply (``payload`` may be a callable, called on the sender thread);
+        ``on_sent`` is set once it has left (or is known never to leave: the child is gone)."""
         self._room.acquire()
-        self._outbox.put((command, payload, None))
+        self._outbox.put((command, payload, None, on_sent))
 
     def submit(self, command: str, payload: Any, frames: int = 0) -> Future:
         """Queue a message; the future completes with the child's reply (or its error).
@@ -229,7 +264,7 @@ class WriterProcess:
             future.set_exception(dead)
             return future
         self._room.acquire()
-        self._outbox.put((command, payload, future))
+        self._outbox.put((command, payload, future, None))
         return future
 
     def _send_loop(self) -> None:
@@ -238,32 +273,40 @@ class WriterProcess:
             if item is _STOP or self._conn is None:
                 return
             self._room.release()
-            command, payload, future = item
-            with self._lock:
-                dead = self._dead
-                if future is not None and dead is None:
-                    self._waiting.append(future)  # filed before the message leaves: replies come in order
-            if dead is not None:
-                if future is not None:
-                    if getattr(future, "frames", 0):
-                        self.lost_episodes.append(int(getattr(future, "env_id", -1)))
-                    future.set_exception(dead)
-                continue
+            command, payload, future, on_sent = item
             try:
-                message = (command, payload() if callable(payload) else payload)
-            except Exception as err:  # a frame that cannot be read: its episode's save reports the gap
-                print(f"embodichain writer: cannot send {command!r}: {err!r}", file=sys.stderr)
-                if future is not None:
-                    with self._lock:
-                        self._waiting.remove(future)
-                    future.set_exception(err)
-                continue
-            try:
-                self._conn.send(message)
-            except (OSError, ValueError):  # the child is gone: the receiver fails the waiting calls
-                continue
-            if command == "episode":
-                self.sent_episodes += 1
+                self._send(command, payload, future)
+            finally:
+                if on_sent is not None:
+                    on_sent.set()
+
+    def _send(self, command: str, payload: Any, future: Optional[Future]) -> None:
+        """Send one message of the outbox (the sender thread)."""
+        with self._lock:
+            dead = self._dead
+            if future is not None and dead is None:
+                self._waiting.append(future)  # filed before the message leaves: replies come in order
+        if dead is not None:
+            if future is not None:
+                if getattr(future, "frames", 0):
+                    self.lost_episodes.append(int(getattr(future, "env_id", -1)))
+                future.set_exception(dead)
+            return
+        try:
+            message = (command, payload() if callable(payload) else payload)
+        except Exception as err:  # a frame that cannot be read: its episode's save reports the gap
+            print(f"embodichain writer: cannot send {command!r}: {err!r}", file=sys.stderr)
+            if future is not None:
+                with self._lock:
+                    self._waiting.remove(future)
+                future.set_exception(err)
+            return
+        try:
+            self._conn.send(message)  # type: ignore[union-attr]
+        except (OSError, ValueError):  # the child is gone: the receiver fails the waiting calls
+            return
+        if command == "episode":
+            self.sent_episodes += 1
 
     def _receive_loop(self) -> None:
         conn = self._conn

@@ -1,4 +1,6 @@
-"""A recording process for the crash tests: ``python lerobot_crash_child.py MODE SAVE_PATH FUNC CAMERA``.
+"""A recording process for the crash tests: ``python lerobot_crash_child.py MODE SAVE_PATH FUNC CAMERA [PARAMS]``.
+
+``PARAMS``: more recorder params, as JSON (say ``{"use_videos": true}``).
 
 Prints ``COMMITTED <n>`` (flushed) each time the recorder has saved its n-th
 episode; with a writer process also ``WRITER <pid>`` once it has started and ``SENT <n>`` each
@@ -12,6 +14,7 @@ The test kills it, or it kills itself.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -74,11 +77,11 @@ def _files(info_path) -> int:
     return len(list((info_path.parent.parent / "data").glob("*/*.parquet")))
 
 
-def main(mode: str, save_path: str, func: str, camera: bool) -> None:
+def main(mode: str, save_path: str, func: str, camera: bool, params: dict) -> None:
     _install_fault(mode)
     sensors = [stereo_camera(64, 48)] if camera and have_sensors() else []
     env = __import__("lerobot_helpers").ScriptedEnv(
-        arm_cfg(2, dataset=recorder_cfg(save_path, func=func), sensors=sensors, max_episode_steps=10_000)
+        arm_cfg(2, dataset=recorder_cfg(save_path, func=func, **params), sensors=sensors, max_episode_steps=10_000)
     )
     rec = env.dataset_manager.get_functor("rec")
     reset(env)
@@ -107,4 +110,6 @@ def main(mode: str, save_path: str, func: str, camera: bool) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4] == "1")
+    main(
+        sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4] == "1", json.loads(sys.argv[5]) if len(sys.argv) > 5 else {}
+    )

@@ -36,13 +36,14 @@ class Gated:
     """A recording process (``lerobot_crash_child.py churn``) whose writer process writes only
     as many episodes as the gate file allows."""
 
-    def __init__(self, tmp_path: Path, allowed: int):
+    def __init__(self, tmp_path: Path, allowed: int, camera: bool = False, params: Optional[dict] = None):
         self.gate, self.save_path = tmp_path / "gate", tmp_path / "data"
         self.open(allowed)
         self.stderr = open(tmp_path / "stderr.txt", "w+")
         env = {**os.environ, TEST_GATE_ENV: str(self.gate)}
+        more = [str(int(camera)), json.dumps(params or {})]
         self.proc = subprocess.Popen(
-            [sys.executable, str(CHILD), "churn", str(self.save_path), "AsyncLeRobotRecorder", "0"],
+            [sys.executable, str(CHILD), "churn", str(self.save_path), "AsyncLeRobotRecorder", *more],
             stdout=subprocess.PIPE,
             stderr=self.stderr,
             text=True,
