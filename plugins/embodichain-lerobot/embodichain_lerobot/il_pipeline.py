@@ -36,7 +36,7 @@ import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from embodichain_lerobot.il_recipes import POLICIES, pipeline_config, train_flags
+from embodichain_lerobot.il_recipes import LR_SCHEDULES, POLICIES, pipeline_config, train_flags
 from embodichain_lerobot.il_stats import choose_checkpoint, format_rate, rate_summary
 
 __all__ = ["main", "build_parser", "MAIN_JOB", "STATE_CONFIG", "CAMERA_CONFIG"]
@@ -78,6 +78,12 @@ def build_parser() -> argparse.ArgumentParser:
     add("--seed", type=int, default=0, help="generate's run seed and lerobot-train's seed (default 0)")
     add("--steps", type=int, default=5000, help="lerobot-train steps (default 5000)")
     add("--save_freq", type=int, default=1000, help="steps between checkpoints (default 1000)")
+    add(
+        "--lr_schedule",
+        choices=LR_SCHEDULES,
+        default="constant",
+        help="state recipe: constant (lerobot's ACT preset) or cosine (decayed to 1e-6 by --steps)",
+    )
     add("--batch_size", type=int, default=64, help="lerobot-train batch size (default 64)")
     add("--num_workers", type=int, default=0, help="lerobot-train data loader processes (default 0)")
     add("--val_episodes", type=int, default=50, help="validation episodes per checkpoint (default 50)")
@@ -105,6 +111,8 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     if args.config is None:
         parser.error("--config is required: embodichain-tasks (the default PickFork-v1 configs) is not installed")
     args.config = _resolve_config(parser, args.config)
+    if args.policy == "camera" and args.lr_schedule != "constant":
+        parser.error("--lr_schedule: the camera recipe trains at a constant rate (its backbone has its own)")
 
 
 def _resolve_config(parser: argparse.ArgumentParser, config: Path) -> Path:
@@ -186,7 +194,11 @@ class _Stages:
         if self.train.exists():  # lerobot-train refuses an existing output_dir
             raise SystemExit(f"{self.train} holds a training without a checkpoint to resume from: delete it")
         cmd = [_bin("lerobot-train"), f"--dataset.repo_id=local/{self.demos.name}", f"--dataset.root={self.demos}"]
-        cmd += [*train_flags(a.policy), f"--policy.device={a.device}", f"--output_dir={self.train}"]
+        cmd += [
+            *train_flags(a.policy, a.lr_schedule, a.steps),
+            f"--policy.device={a.device}",
+            f"--output_dir={self.train}",
+        ]
         cmd += [f"--steps={a.steps}", f"--save_freq={a.save_freq}", f"--batch_size={a.batch_size}"]
         cmd += [f"--num_workers={a.num_workers}", "--log_freq=100", "--wandb.enable=false", f"--seed={a.seed}"]
         _run(cmd, self.log)
@@ -222,7 +234,12 @@ def _results(stages: _Stages, validation: list[dict], test: dict, shared: dict, 
         "visual_randomization": not a.no_visual_randomization,
         "cameras": list(a.cameras) if a.policy == "camera" else [],
         "demos": {"path": str(stages.demos), "episodes": len(trained), "seed": a.seed},
-        "policy": {"type": "act", "flags": list(train_flags(a.policy)), "steps": a.steps, "batch_size": a.batch_size},
+        "policy": {
+            "type": "act",
+            "flags": list(train_flags(a.policy, a.lr_schedule, a.steps)),
+            "steps": a.steps,
+            "batch_size": a.batch_size,
+        },
         "validation": {
             "episodes": a.val_episodes,
             "seed": a.val_seed,

@@ -28,10 +28,22 @@ import json
 from pathlib import Path
 from typing import Any, Sequence
 
-__all__ = ["POLICIES", "ACT_FLAGS", "CAMERA_FLAGS", "pipeline_config", "train_flags", "camera_uids"]
+__all__ = [
+    "POLICIES",
+    "LR_SCHEDULES",
+    "ACT_FLAGS",
+    "CAMERA_FLAGS",
+    "pipeline_config",
+    "train_flags",
+    "schedule_flags",
+    "camera_uids",
+]
 
 #: The recipes ``--policy`` accepts.
 POLICIES = ("state", "camera")
+#: The learning-rate schedules ``--lr_schedule`` accepts: lerobot's ACT preset (a constant rate),
+#: or the same AdamW with the rate decayed on a cosine to 1% of it by the last step.
+LR_SCHEDULES = ("constant", "cosine")
 
 #: ACT settings shared by both recipes (lerobot-train flags). ``n_action_steps=1`` with
 #: ``temporal_ensemble_coeff``: a chunk is planned every step and the overlapping predictions
@@ -72,10 +84,47 @@ CAMERA_FLAGS = (
 )
 
 
-def train_flags(policy: str) -> tuple[str, ...]:
-    """The lerobot-train policy (and augmentation) flags of a recipe, each flag once."""
+def schedule_flags(schedule: str, steps: int) -> tuple[str, ...]:
+    """lerobot-train flags of a learning-rate schedule over ``steps`` training steps.
+
+    ``cosine`` replaces ACT's preset (AdamW, lr 1e-4, weight decay 1e-4, gradient norm
+    clipped at 10, constant rate) by the same optimizer with 200 warm-up steps and a cosine
+    decay to 1e-6 at ``steps``: the last checkpoints are then taken at a small rate, where
+    a constant rate leaves every checkpoint a sample of a still-moving model. Its optimizer
+    has one parameter group (the camera recipe's backbone rate would be lost: state only).
+
+    Raises:
+        ValueError: an unknown schedule.
+    """
+    if schedule not in LR_SCHEDULES:
+        raise ValueError(f"lr_schedule: unknown schedule {schedule!r}; choose one of {', '.join(LR_SCHEDULES)}")
+    if schedule == "constant":
+        return ()
+    return (
+        "--use_policy_training_preset=false",
+        "--optimizer.type=adamw",
+        "--optimizer.lr=1e-4",
+        "--optimizer.weight_decay=1e-4",
+        "--optimizer.grad_clip_norm=10",
+        "--scheduler.type=cosine_decay_with_warmup",
+        "--scheduler.num_warmup_steps=200",
+        f"--scheduler.num_decay_steps={int(steps)}",
+        "--scheduler.peak_lr=1e-4",
+        "--scheduler.decay_lr=1e-6",
+    )
+
+
+def train_flags(policy: str, schedule: str = "constant", steps: int = 0) -> tuple[str, ...]:
+    """The lerobot-train policy (augmentation, schedule) flags of a recipe, each flag once.
+
+    Raises:
+        ValueError: ``cosine`` with the camera recipe (its backbone has its own rate), or an
+            unknown schedule.
+    """
+    if policy == "camera" and schedule != "constant":
+        raise ValueError("lr_schedule: the camera recipe trains at a constant rate (its backbone has its own)")
     if policy != "camera":
-        return ACT_FLAGS
+        return ACT_FLAGS + schedule_flags(schedule, steps)
     replaced = {flag.split("=", 1)[0] for flag in CAMERA_FLAGS}
     return tuple(f for f in ACT_FLAGS if f.split("=", 1)[0] not in replaced) + CAMERA_FLAGS
 

@@ -196,3 +196,21 @@ def test_the_shifted_scene_replaces_the_visual_randomization_and_builds(tmp_path
         assert obs["sensor"]["policy_cam"]["color"].shape[-3:-1] == (96, 96)
     finally:
         env.close()
+
+
+def test_the_cosine_schedule_is_flags_lerobot_train_parses_into_a_decay_over_the_steps() -> None:
+    import draccus
+    from lerobot.configs.train import TrainPipelineConfig
+    from lerobot.policies.act.configuration_act import ACTConfig  # registers --policy.type=act
+
+    flags = train_flags("state", "cosine", 4000)
+    assert set(train_flags("state")) < set(flags)  # the recipe's ACT flags, plus the schedule
+    cfg = draccus.parse(TrainPipelineConfig, args=[*flags, "--dataset.repo_id=local/demos", "--steps=4000"])
+    assert isinstance(cfg.policy, ACTConfig)
+    assert cfg.use_policy_training_preset is False
+    assert (cfg.optimizer.lr, cfg.optimizer.weight_decay, cfg.optimizer.grad_clip_norm) == (1e-4, 1e-4, 10.0)
+    assert (cfg.scheduler.num_decay_steps, cfg.scheduler.decay_lr) == (4000, 1e-6)
+    with pytest.raises(ValueError, match="lr_schedule: unknown schedule 'cosin'; choose one of constant, cosine"):
+        train_flags("state", "cosin", 4000)
+    with pytest.raises(ValueError, match="camera recipe trains at a constant rate"):
+        train_flags("camera", "cosine", 4000)
