@@ -14,8 +14,11 @@ between two device syncs):
 * ``demo_ik``: planning the scripted demonstrations (their IK included);
 * ``device_to_host``: the recorder's per-step call (frames and state copied off the device
   and queued to the writer);
-* ``encoding_writing``: the writer process's CPU seconds (video encoding, parquet), and
-  ``flush``: the wall time of the final flush.
+* ``encoding_writing``: the CPU seconds of the writer process and the recorder's encoder
+  processes (video encoding, parquet), and ``flush``: the wall time of the final flush.
+
+``--encoder-processes`` sets the recorder's ``encoder_processes`` (default: the job's config,
+``"auto"``: one encoder process per two cores beyond two, see docs/datasets.md).
 
 With ``--renderer warp`` (the default) the camera renders every world in one MuJoCo Warp
 launch; ``--renderer opengl`` renders one world at a time. The JSON lists what differs from
@@ -88,6 +91,9 @@ def job_config(save_path: str, num_envs: int, episodes: int, args: argparse.Name
     cfg["env"]["dataset"]["lerobot"]["params"]["save_path"] = save_path
     cfg.update(num_envs=num_envs, max_episodes=episodes, backend="warp", device=device)
     changes = [f"backend warp on {device}", f"{num_envs} envs", f"camera renderer {renderer}"]
+    if args.encoder_processes != "auto":
+        cfg["env"]["dataset"]["lerobot"]["params"]["encoder_processes"] = int(args.encoder_processes)
+        changes.append(f"{args.encoder_processes} encoder processes")
     for sensor in cfg["sensor"]:
         sensor["renderer"] = renderer
         if args.image_size:
@@ -174,7 +180,7 @@ def measure_main_job(num_envs: int, args: argparse.Namespace, workdir: str) -> d
 
 
 def _children_cpu(resource: Any) -> float:
-    """CPU seconds of this process's finished children (the recorder's writer process)."""
+    """CPU seconds of this process's finished children (the recorder's writer and encoder processes)."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
 
@@ -233,6 +239,12 @@ def _parse(argv: Optional[list[str]] = None) -> argparse.Namespace:
         "--image-size", type=int, nargs=2, metavar=("W", "H"), help="the job's camera size (its own: 320x180)"
     )
     p.add_argument("--steps", type=int, default=50, help="timed env steps per camera row")
+    p.add_argument(
+        "--encoder-processes",
+        default="auto",
+        type=lambda v: v if v == "auto" else int(v),
+        help="the recorder's encoder_processes: an int, or auto (the job's default)",
+    )
     p.add_argument("--out", default=DEFAULT_OUT)
     p.add_argument("--smoke", action="store_true", help="2 envs on Warp's CPU device, both cases, few steps")
     args = p.parse_args(argv)
