@@ -91,17 +91,24 @@ class EncoderChild:
         return self.encoders[env_id]
 
     def _frames(self, arrays: dict[str, np.ndarray], env_ids: list[int]) -> None:
+        if not self._dataset_exists():
+            return
         while self._backlog() > MAX_ENCODER_BACKLOG:  # the recording process then waits too
             time.sleep(0.005)
         rgb = {key: _rgb(arrays[key]) for key in self.streamed}
         for row, env_id in enumerate(env_ids):
             encoder = self._encoder(env_id)
             if env_id not in self.live:
-                self.folder.mkdir(parents=True, exist_ok=True)  # type: ignore[union-attr]
+                self.folder.mkdir(exist_ok=True)  # type: ignore[union-attr]
                 encoder.start_episode(video_keys=self.streamed, temp_dir=self.folder)
                 self.live.add(env_id)
             for key in self.streamed:
                 encoder.feed_frame(key, rgb[key][row])
+
+    def _dataset_exists(self) -> bool:
+        """Whether the dataset folder is there (the dataset writer removes it when it cannot
+        create the dataset; that error reaches the recording with the first episode)."""
+        return self.folder is not None and self.folder.parent.is_dir()
 
     def _backlog(self) -> int:
         return sum(enc.backlog() for env_id, enc in self.encoders.items() if env_id in self.live)
@@ -110,6 +117,8 @@ class EncoderChild:
         """Finish env ``env_id``'s videos and publish them (or the error) under ``ticket``."""
         if self.folder is None:
             raise ValueError("'finish' before 'open'")
+        if not self._dataset_exists():  # nobody waits for it: the dataset writer has no dataset
+            return
         try:
             if self.open_error is not None:
                 raise self.open_error

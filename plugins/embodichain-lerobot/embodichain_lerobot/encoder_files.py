@@ -37,7 +37,7 @@ def write_result(folder: Path, ticket: str, status: str, value: Any) -> None:
     """Publish the result of ``ticket`` (``status`` ``"ok"`` or ``"error"``) atomically."""
     dest = result_path(folder, ticket)
     tmp = dest.with_name(f".{dest.name}.tmp")
-    dest.parent.mkdir(parents=True, exist_ok=True)
+    dest.parent.mkdir(exist_ok=True)  # inside the dataset folder, which must exist
     tmp.write_bytes(pickle.dumps((status, value)))
     os.replace(tmp, dest)
 

@@ -97,6 +97,16 @@ def test_an_encoder_process_cancels_a_restart_and_publishes_a_finished_episode(t
     assert not result_path(folder, "env1_0").exists()
 
 
+def test_an_encoder_process_never_recreates_a_dataset_folder_the_writer_removed(tmp_path: Path) -> None:
+    folder = tmp_path / "dataset" / ENCODING  # the writer could not create the dataset and removed its folder
+    child = EncoderChild()
+    child.handle("open", (str(folder), 10, "h264", None, ["cam"], []))
+    child.handle("frames", ({"cam": _frames(9)}, [0, 1]))
+    child.handle("finish", (0, "env0_0"))
+    child.finalize()
+    assert not (tmp_path / "dataset").exists()
+
+
 def test_the_writer_does_not_wait_for_a_video_whose_encoder_is_gone(tmp_path: Path) -> None:
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()
