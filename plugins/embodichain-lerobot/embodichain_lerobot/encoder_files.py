@@ -67,9 +67,10 @@ def wait_result(folder: Path, ticket: str, pid: int, timeout: float = 3600.0) ->
         RuntimeError: the encoder process exited without finishing them, or ``timeout`` passed.
         Exception: the encoder process's own error for this episode.
     """
-    path, deadline = result_path(folder, ticket), time.monotonic() + timeout
+    path, deadline, polls = result_path(folder, ticket), time.monotonic() + timeout, 0
     while not path.exists():
-        if not alive(pid) and not path.exists():
+        polls += 1
+        if polls % 20 == 0 and not alive(pid) and not path.exists():  # every ~0.1 s: /proc reads cost
             raise RuntimeError(
                 f"the video encoder process (pid {pid}) exited before it finished the videos of episode "
                 f"{ticket!r}; the episode is not saved (the encoder's own error, if any, is on stderr above)"
