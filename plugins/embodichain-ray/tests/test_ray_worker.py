@@ -16,8 +16,6 @@ from ray_helpers import episode_arrays, generate_spec, load, sidecar
 from embodichain_core.envs.episode_rng import derive_seed
 
 
-
-
 def test_episode_seeds_are_a_function_of_seed_episode_and_attempt() -> None:
     assert episode_seed(7, 3) == int(derive_seed(7, 3))
     assert episode_seed(7, 3, 2) == int(derive_seed(7, 3, 2))
