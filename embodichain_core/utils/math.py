@@ -49,6 +49,7 @@ ArrayLike = Union[np.ndarray, torch.Tensor, Sequence[Any]]
 """What a function reads: a numpy array, a torch tensor or a (nested) sequence of numbers."""
 
 __all__ = [
+    "transform_inverse",
     "quat_mul",
     "quat_conjugate",
     "quat_normalize",
@@ -406,6 +407,23 @@ def pose_inverse(pose: Array) -> Array:
     xp, pose = _ns(pose)
     quat = quat_conjugate(pose[..., 3:7])
     return xp.concatenate((-quat_rotate(quat, pose[..., :3]), quat), axis=-1)
+
+
+def transform_inverse(transform: torch.Tensor) -> torch.Tensor:
+    """Inverse of ``(..., 4, 4)`` rigid transforms: the rotation transposed, no general
+    matrix inverse (a LAPACK call, slow on busy threads, and a host sync on some devices).
+
+    Example:
+        >>> t = torch.eye(4); t[:3, 3] = torch.tensor([1.0, 2.0, 3.0])
+        >>> transform_inverse(t)[:3, 3]
+        tensor([-1., -2., -3.])
+    """
+    out = torch.zeros_like(transform)
+    rot_t = transform[..., :3, :3].transpose(-1, -2)
+    out[..., :3, :3] = rot_t
+    out[..., :3, 3] = -(rot_t @ transform[..., :3, 3:4])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out
 
 
 @_numpy_views

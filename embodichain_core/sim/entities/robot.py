@@ -28,7 +28,7 @@ import torch
 
 from embodichain_core.sim.entities.articulation import Articulation
 from embodichain_core.config.joint_check import match_part_patterns
-from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix
+from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix, transform_inverse
 from embodichain_core.utils.suggest import did_you_mean
 
 
@@ -246,19 +246,9 @@ class Robot(Articulation):
             target = pose_to_matrix(target)
         target = target.reshape(len(env), 4, 4)
         seed = self._part_qpos(solver, joint_seed, env)
-        local = _rigid_inverse(self._base_matrix(solver, None, env)) @ target
+        local = transform_inverse(self._base_matrix(solver, None, env)) @ target
         success, qpos = solver.get_ik(local, qpos_seed=seed)
         return torch.as_tensor(success, dtype=torch.bool).to(self.device), self._out(torch.as_tensor(qpos))
-
-
-def _rigid_inverse(pose: torch.Tensor) -> torch.Tensor:
-    """Inverse of (..., 4, 4) rigid transforms (no LAPACK call: it is slow on busy threads)."""
-    out = torch.zeros_like(pose)
-    rot_t = pose[..., :3, :3].transpose(-1, -2)
-    out[..., :3, :3] = rot_t
-    out[..., :3, 3] = -(rot_t @ pose[..., :3, 3:4])[..., 0]
-    out[..., 3, 3] = 1.0
-    return out
 
 
 class PartFKCache:

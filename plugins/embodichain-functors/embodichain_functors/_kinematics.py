@@ -19,7 +19,7 @@ from typing import Any, Optional
 
 import torch
 
-from embodichain_core.utils.math import pose_to_matrix
+from embodichain_core.utils.math import pose_to_matrix, transform_inverse
 from embodichain_functors._common import ParamError
 
 
@@ -115,17 +115,7 @@ def solve_ik_on_device(
     if seed is None:  # an index list: a host copy (callers in the step pass the seed)
         seed = robot.get_qpos()[:, joints]
     base = robot.get_control_part_base_pose(part, to_matrix=False).to(torch.float64)
-    local = _rigid_inverse(pose_to_matrix(base)) @ pose.to(torch.float64)
+    local = transform_inverse(pose_to_matrix(base)) @ pose.to(torch.float64)
     success, qpos = solver.get_ik_on_device(local, seed)
     qpos = qpos.to(torch.float32)
     return success, torch.where(success[:, None], qpos, seed.to(qpos.dtype)), joints
-
-
-def _rigid_inverse(pose: torch.Tensor) -> torch.Tensor:
-    """Inverse of (..., 4, 4) rigid transforms."""
-    out = torch.zeros_like(pose)
-    rot_t = pose[..., :3, :3].transpose(-1, -2)
-    out[..., :3, :3] = rot_t
-    out[..., :3, 3] = -(rot_t @ pose[..., :3, 3:4])[..., 0]
-    out[..., 3, 3] = 1.0
-    return out
