@@ -24,9 +24,6 @@ are finished), then cancels the live episodes and exits.
 
 from __future__ import annotations
 
-import os
-import signal
-import sys
 import time
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -35,7 +32,7 @@ from typing import Any, Optional
 import numpy as np
 
 from embodichain_lerobot.encoder_files import write_result
-from embodichain_lerobot.writer_child import MAX_ENCODER_BACKLOG, NICENESS, Inbox, _picklable, _rgb, _say
+from embodichain_lerobot.writer_child import MAX_ENCODER_BACKLOG, Inbox, _picklable, _rgb, _say, run_child, start_child
 
 
 class EncoderChild:
@@ -163,28 +160,10 @@ def serve(conn: Connection, inbox: Inbox) -> None:
 
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point of the encoder process."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # like a Ctrl-C: the recording process decides
-    fd = int((argv if argv is not None else sys.argv[1:])[0])
-    os.environ.setdefault("SVT_LOG", "1")
-    conn = Connection(fd)
-    inbox = Inbox(conn)  # reading starts now, during the import below
-    try:
-        os.nice(NICENESS)
-    except OSError:
-        pass
-    import av
+    conn, inbox = start_child(argv)
     import lerobot.datasets.video_utils  # noqa: F401  (seconds: now, before the first frame arrives)
-    import torch
 
-    from embodichain_lerobot.encoding import sampled_video_stats
-
-    torch.set_num_threads(1)
-    av.logging.set_libav_level(av.logging.ERROR)
-    with sampled_video_stats():  # lerobot's sampled statistics, as in the dataset writer process
-        serve(conn, inbox)
-    sys.stderr.flush()
-    os._exit(0)  # every video is closed: skip the interpreter's teardown
+    run_child(serve, conn, inbox)
 
 
 if __name__ == "__main__":

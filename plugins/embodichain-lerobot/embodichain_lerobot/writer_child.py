@@ -353,33 +353,47 @@ def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
             return
 
 
-def main(argv: Optional[list[str]] = None) -> None:
-    """Entry point of the child."""
+def start_child(argv: Optional[list[str]]) -> tuple[Connection, "Inbox"]:
+    """The first moments of a writer or encoder process: the socket of ``argv[0]`` (a file
+    descriptor) read from now on (while lerobot is imported), signals left to the recording
+    process (a Ctrl-C or a ``kill`` of the process group reaches the child too), a lower
+    priority than the recording (:data:`NICENESS`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # like a Ctrl-C: the recording process decides
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     fd = int((argv if argv is not None else sys.argv[1:])[0])
     os.environ.setdefault("SVT_LOG", "1")
     conn = Connection(fd)
-    inbox = Inbox(conn)  # reading starts now, during the import below
+    inbox = Inbox(conn)
     try:
         os.nice(NICENESS)
     except OSError:
         pass
+    return conn, inbox
+
+
+def run_child(serve_fn: Any, conn: Connection, inbox: "Inbox") -> None:
+    """Serve the recording process's messages until it is done, then exit at once."""
     import av
-    import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: now, before the first episode arrives)
     import torch
 
     from embodichain_lerobot.encoding import sampled_video_stats
 
     torch.set_num_threads(1)  # its few ops here are small: a thread pool would only spin
     av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's per-video encoder summaries (x264 prints ~12 lines)
-
-    with sampled_video_stats():  # for the per-env encoders too, which start outside any save
-        serve(conn, inbox)
-    # the dataset is finalized and every file closed: skip the interpreter's teardown
+    with sampled_video_stats():  # lerobot's sampled statistics, also for encoders started outside a save
+        serve_fn(conn, inbox)
+    # every file is closed: skip the interpreter's teardown
     # (a second of unloading torch and lerobot that the recording process would wait for)
     sys.stderr.flush()
     os._exit(0)
+
+
+def main(argv: Optional[list[str]] = None) -> None:
+    """Entry point of the child."""
+    conn, inbox = start_child(argv)
+    import lerobot.datasets.lerobot_dataset  # noqa: F401  (seconds: now, before the first episode arrives)
+
+    run_child(serve, conn, inbox)
 
 
 if __name__ == "__main__":
