@@ -1,4 +1,5 @@
-"""The imitation pipeline's success curve: validation rates per checkpoint with 95% intervals.
+"""The imitation pipeline's plots: the success curve (validation rates per checkpoint) and the
+visual-randomization table (:func:`plot_rate_table`), every rate with its 95% interval.
 
 Drawn with matplotlib (a dependency of this plugin) on its file backend (``Agg``), so it
 needs no display.
@@ -13,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence
 
-__all__ = ["plot_success_curve"]
+__all__ = ["plot_success_curve", "plot_rate_table"]
 
 
 def _errors(rows: Sequence[Mapping[str, Any]]) -> list[list[float]]:
@@ -75,6 +76,45 @@ def plot_success_curve(
     ax.set(xlabel="training step", ylabel="success rate", ylim=(-0.02, 1.02), title=title)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
+    fig.text(0.99, 0.01, "bars: 95% Wilson interval", ha="right", va="bottom", fontsize=7, color="0.4")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_rate_table(cells: Mapping[str, Mapping[str, Any]], path: Path, title: str) -> Path:
+    """Grouped bars of a table of rates: one group per scene, one bar per trained policy.
+
+    Args:
+        cells: ``"<policy>/<scene>"`` -> a rate summary (``success_rate``, ``ci95``,
+            ``episodes``), as ``table.json``'s ``cells``.
+        path: the PNG to write.
+        title: the plot's title.
+
+    Returns:
+        ``path``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = list(dict.fromkeys(key.split("/")[0] for key in cells))
+    scenes = list(dict.fromkeys(key.split("/")[1] for key in cells))
+    fig, ax = plt.subplots(figsize=(7, 4.2), dpi=110)
+    width = 0.8 / len(policies)
+    for k, policy in enumerate(policies):
+        rows = [cells[f"{policy}/{scene}"] for scene in scenes]
+        xs = [i + (k - (len(policies) - 1) / 2) * width for i in range(len(scenes))]
+        bars = ax.bar(xs, [r["success_rate"] for r in rows], width, yerr=_errors(rows), capsize=5, label=policy)
+        ax.bar_label(bars, labels=[f"{r['success_rate']:.2f}" for r in rows], label_type="center", fontsize=8)
+    ax.set_xticks(range(len(scenes)), [f"{scene} scene" for scene in scenes])
+    episodes = next(iter(cells.values()))["episodes"]
+    ax.set(ylabel=f"success rate ({episodes} test episodes)", ylim=(0, 1.05), title=title)
+    ax.legend(title="trained on data", loc="upper left", fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
     fig.text(0.99, 0.01, "bars: 95% Wilson interval", ha="right", va="bottom", fontsize=7, color="0.4")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

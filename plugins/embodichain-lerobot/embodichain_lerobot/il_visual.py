@@ -13,7 +13,7 @@ test seeds in
   policy camera moved by up to 2 cm (its look-at target by up to 3 cm).
 
 It writes ``DIR/table.json`` (the 2x2 rates with 95% Wilson intervals, every episode) and
-prints the table. Physical randomization (fork pose, mesh, mass) stays on everywhere.
+``DIR/table.png`` (:func:`~embodichain_lerobot.il_plots.plot_rate_table`) and prints the table. Physical randomization (fork pose, mesh, mass) stays on everywhere.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
+from embodichain_lerobot.il_plots import plot_rate_table
 from embodichain_lerobot.il_stats import format_rate, rate_summary
 
 __all__ = ["SHIFT", "nominal_scene", "shifted_scene", "main"]
@@ -143,6 +144,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             cell = _evaluate(policy, out / f"{scene}.json", out / "eval" / f"{name}_{scene}.json", args)
             table["cells"][f"{name}/{scene}"] = {"step": step, **cell}
     (out / "table.json").write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
+    title = f"{base['id']} camera policy: with and without visual randomization"
+    plot_rate_table(
+        {k: {x: v for x, v in c.items() if x != "per_episode"} for k, c in table["cells"].items()},
+        out / "table.png",
+        title,
+    )
     print(f"{'trained':<12}{'nominal scene':<30}shifted scene")
     for name in runs:
         cells = [format_rate(table["cells"][f"{name}/{s}"]) for s in scenes]

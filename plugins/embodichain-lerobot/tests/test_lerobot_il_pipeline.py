@@ -142,6 +142,21 @@ def test_the_success_curve_is_a_plot_with_interval_bars(tmp_path: Path) -> None:
     assert len(image.convert("RGB").getcolors(maxcolors=1 << 16) or []) > 50  # axes, text, markers: not blank
 
 
+def test_the_visual_randomization_table_is_a_bar_plot_with_interval_bars(tmp_path: Path) -> None:
+    from PIL import Image
+
+    from embodichain_lerobot.il_plots import plot_rate_table
+
+    cell = {"success_rate": 0.5, "ci95": [0.4, 0.6], "episodes": 100}
+    cells = {f"{p}/{s}": cell for p in ("randomized", "plain") for s in ("nominal", "shifted")}
+    image = Image.open(plot_rate_table(cells, tmp_path / "table.png", "PickFork-v1"))
+    assert image.size == (770, 462)
+    # two colours of bars, their labels, axes and text: far from a blank or one-colour image
+    assert len(image.convert("RGB").getcolors(maxcolors=1 << 16) or []) > 50
+    with pytest.raises(KeyError, match="plain/shifted"):  # a missing cell is not drawn as a zero
+        plot_rate_table({k: v for k, v in cells.items() if k != "plain/shifted"}, tmp_path / "t.png", "x")
+
+
 def test_the_camera_pipeline_runs_end_to_end(tmp_path: Path) -> None:
     """Generate 2 demos with the 96x96 policy camera, train 2 steps, validate and test 1 episode each."""
     out = tmp_path / "run"
