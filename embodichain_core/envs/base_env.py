@@ -241,11 +241,11 @@ class BaseEnv(TaskApi, gym.Env):
         if self._task_truncates:
             truncated = self.check_truncated(obs, info).to(truncated.device) | truncated
         dones = terminated | truncated
-        flags = torch.stack((dones, diverged)).cpu()
-        if bool(flags[1].any()):
-            ids = torch.nonzero(flags[1]).flatten().tolist()
+        any_done, any_diverged = torch.stack((dones, diverged)).any(dim=1).tolist()
+        if any_diverged:
+            ids = torch.nonzero(diverged.cpu()).flatten().tolist()
             warnings.warn(f"simulation diverged in env(s) {ids}; resetting them", RuntimeWarning, stacklevel=3)
-        return terminated, truncated, dones if bool(flags[0].any()) else None
+        return terminated, truncated, dones if any_done else None
 
     # -- the overrides of a BaseEnv task ---------------------------------------------------------
     def check_cfg(self) -> None:

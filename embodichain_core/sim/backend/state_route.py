@@ -150,10 +150,15 @@ class DeviceRoute(StateRoute):
 
 
 def _host_index(index: Any) -> Any:
-    """``index`` with torch index tensors as numpy arrays."""
+    """``index`` with torch index tensors as numpy arrays (``index`` itself when it has none:
+    the entities' cached numpy indices, on every read of the step)."""
+    if isinstance(index, torch.Tensor):
+        return index.numpy()
     if isinstance(index, tuple):
-        return tuple(k.numpy() if isinstance(k, torch.Tensor) else k for k in index)
-    return index.numpy() if isinstance(index, torch.Tensor) else index
+        for k in index:
+            if isinstance(k, torch.Tensor):
+                return tuple(k.numpy() if isinstance(k, torch.Tensor) else k for k in index)
+    return index
 
 
 def state_route(sim: Any, device: Any) -> StateRoute:
