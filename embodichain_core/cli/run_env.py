@@ -75,8 +75,14 @@ class Terminated(KeyboardInterrupt):
     """``SIGTERM`` arrived: the run stops the way a Ctrl-C stops it (env closed, summary printed)."""
 
 
+#: Set when ``SIGTERM`` arrived: a library that turns any exception of a signal handler into a
+#: plain ``KeyboardInterrupt`` (Ray's waits do) must not make a SIGTERM read as a Ctrl-C.
+_SIGTERM_SEEN = threading.Event()
+
+
 def _raise_terminated(signum: int, frame: Any) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the closing short
+    _SIGTERM_SEEN.set()
     raise Terminated
 
 
@@ -86,6 +92,7 @@ def sigterm_as_interrupt() -> Any:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    _SIGTERM_SEEN.clear()
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         yield
@@ -95,7 +102,8 @@ def sigterm_as_interrupt() -> Any:
 
 def _interrupt_code(err: KeyboardInterrupt) -> tuple[int, str]:
     """The exit code and the ``stopped`` reason of a Ctrl-C or a ``SIGTERM``."""
-    return (143, "terminated (SIGTERM)") if isinstance(err, Terminated) else (130, "interrupted (Ctrl-C)")
+    terminated = isinstance(err, Terminated) or _SIGTERM_SEEN.is_set()
+    return (143, "terminated (SIGTERM)") if terminated else (130, "interrupted (Ctrl-C)")
 
 
 def build_parser() -> argparse.ArgumentParser:
