@@ -24,6 +24,18 @@ def _errors(rows: Sequence[Mapping[str, Any]]) -> list[list[float]]:
     return [below, above]
 
 
+def _save(fig: Any, path: Path) -> Path:
+    """Write ``fig`` to ``path`` with the interval-bar footnote, and close it."""
+    import matplotlib.pyplot as plt
+
+    fig.text(0.99, 0.01, "bars: 95% Wilson interval", ha="right", va="bottom", fontsize=7, color="0.4")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 def plot_success_curve(
     validation: Sequence[Mapping[str, Any]],
     test: Optional[Mapping[str, Any]],
@@ -76,12 +88,7 @@ def plot_success_curve(
     ax.set(xlabel="training step", ylabel="success rate", ylim=(-0.02, 1.02), title=title)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
-    fig.text(0.99, 0.01, "bars: 95% Wilson interval", ha="right", va="bottom", fontsize=7, color="0.4")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_rate_table(cells: Mapping[str, Mapping[str, Any]], path: Path, title: str) -> Path:
@@ -115,9 +122,4 @@ def plot_rate_table(cells: Mapping[str, Mapping[str, Any]], path: Path, title: s
     ax.set(ylabel=f"success rate ({episodes} test episodes)", ylim=(0, 1.05), title=title)
     ax.legend(title="trained on data", loc="upper left", fontsize=8)
     ax.grid(axis="y", alpha=0.3)
-    fig.text(0.99, 0.01, "bars: 95% Wilson interval", ha="right", va="bottom", fontsize=7, color="0.4")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
