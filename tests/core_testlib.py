@@ -95,3 +95,29 @@ def ids_list(env_ids: Any) -> Any:
     if env_ids is None:
         return None
     return torch.as_tensor(env_ids).reshape(-1).tolist()
+
+
+def audited_push_cube(actions: Any = None) -> Iterator[tuple[Any, Any]]:
+    """PushCube-v1 on backend warp (Warp's CPU device, 2 envs), built and reset inside a
+    :class:`~embodichain_core.sim.backend.device_audit.HostWaitAudit` (so it takes the device
+    code paths and the audit knows its tensors); ``actions`` replaces the task's action terms.
+    A generator for module fixtures: yields ``(env, audit)``, closes the env after."""
+    import gymnasium as gym
+
+    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
+    from embodichain_core.sim.backend.device_audit import HostWaitAudit
+    from embodichain_tasks.rl.push_cube import PushCubeCfg
+
+    cfg = PushCubeCfg()
+    cfg.sim_cfg.backend = "warp"
+    cfg.sim_cfg.sim_device = "cpu"
+    if actions is not None:
+        cfg.actions = actions
+    audit = HostWaitAudit("cpu")
+    with audit:
+        env = gym.make("PushCube-v1", cfg=cfg, num_envs=2, seed=0, verbose=False).unwrapped
+        env.reset(seed=0)
+        try:
+            yield env, audit
+        finally:
+            env.close()

@@ -15,6 +15,8 @@ from typing import Any, Iterator
 import pytest
 import torch
 
+from core_testlib import audited_push_cube
+
 from embodichain_core.sim.backend.device_audit import HostWaitAudit
 
 #: The most host waits an env step of PushCube-v1 may make on the device route.
@@ -27,22 +29,7 @@ def audited() -> Iterator[tuple[Any, HostWaitAudit]]:
     """PushCube-v1 on backend warp (Warp's CPU device, 2 envs), built and reset inside the
     audit so that the tensors it makes on its device are known (and it takes the device
     code paths: the audit builds it without host arrays)."""
-    import gymnasium as gym
-
-    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
-    from embodichain_tasks.rl.push_cube import PushCubeCfg
-
-    cfg = PushCubeCfg()
-    cfg.sim_cfg.backend = "warp"
-    cfg.sim_cfg.sim_device = "cpu"
-    audit = HostWaitAudit("cpu")
-    with audit:
-        env = gym.make("PushCube-v1", cfg=cfg, num_envs=2, seed=0, verbose=False).unwrapped
-        env.reset(seed=0)
-        try:
-            yield env, audit
-        finally:
-            env.close()
+    yield from audited_push_cube()
 
 
 def _count(audit: HostWaitAudit, fn: Any) -> dict[str, float]:

@@ -15,6 +15,8 @@ from typing import Any, Iterator
 import pytest
 import torch
 
+from core_testlib import audited_push_cube
+
 from embodichain_core.sim.backend.device_audit import HostWaitAudit
 from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix
 
@@ -28,25 +30,10 @@ PART = "arm"
 def audited() -> Iterator[tuple[Any, HostWaitAudit]]:
     """PushCube-v1 with an ``EefPoseTerm`` action instead of joint deltas, on backend warp
     (Warp's CPU device, 2 envs), built and reset inside the audit (so on the device paths)."""
-    import gymnasium as gym
-
-    import embodichain_core  # noqa: F401  (loads the plugins: PushCube-v1)
     import embodichain_functors.actions as actions
     from embodichain_core.managers import ActionTermCfg
-    from embodichain_tasks.rl.push_cube import PushCubeCfg
 
-    cfg = PushCubeCfg()
-    cfg.sim_cfg.backend = "warp"
-    cfg.sim_cfg.sim_device = "cpu"
-    cfg.actions = {"eef": ActionTermCfg(func=actions.EefPoseTerm, params={"part_name": PART})}
-    audit = HostWaitAudit("cpu")
-    with audit:
-        env = gym.make("PushCube-v1", cfg=cfg, num_envs=2, seed=0, verbose=False).unwrapped
-        env.reset(seed=0)
-        try:
-            yield env, audit
-        finally:
-            env.close()
+    yield from audited_push_cube({"eef": ActionTermCfg(func=actions.EefPoseTerm, params={"part_name": PART})})
 
 
 def _targets(env: Any, shift: tuple[float, float, float], yaw: float = 0.0) -> torch.Tensor:
