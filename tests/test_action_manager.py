@@ -234,3 +234,33 @@ def test_action_term_errors(make_env) -> None:
         make_env(actions={"arm": ActionTermCfg(func=not_a_term)})
     with pytest.raises(ConfigError, match=r"env\.actions\.arm\.mode"):
         make_env(actions={"arm": ActionTermCfg(func=ScaledQpos, mode="during")})
+
+
+class InvertibleQpos(ScaledQpos):
+    """ScaledQpos that can express joint targets as its action."""
+
+    def action_from_qpos(self, qpos: torch.Tensor) -> torch.Tensor:
+        return qpos / self.scale
+
+
+def test_joint_targets_become_the_terms_actions(make_env) -> None:
+    """A scripted demo's joint targets in the env's action space: each pre term's action
+    side by side; a term without the inverse is named; no terms: the targets as they are."""
+    env = make_env(actions={"arm": ActionTermCfg(func=InvertibleQpos, params={"scale": 0.5})})
+    env.reset()
+    qpos = torch.linspace(-0.2, 0.2, ARM_ACTIVE).expand(2, -1)
+    action = env.action_manager.action_from_qpos(qpos)
+    assert torch.allclose(action, 2 * qpos)
+    env.step(action)
+    assert torch.allclose(pos_ctrl(env), qpos.double(), atol=1e-6)
+    assert env.action_manager.action_names() == [str(env.robot.joint_names[j]) for j in env.active_joint_ids]
+    two = make_env(actions={"a": ActionTermCfg(func=InvertibleQpos), "vel": ActionTermCfg(func=JointVelocity)})
+    with pytest.raises(ValueError, match=r"actions\.vel: JointVelocity cannot express joint position targets"):
+        two.action_manager.action_from_qpos(qpos)
+    plain = make_env()
+    assert torch.equal(plain.action_manager.action_from_qpos(qpos), qpos)
+
+
+def test_a_term_of_its_own_width_names_its_values(make_env) -> None:
+    env = make_env(actions={"first": ActionTermCfg(func=FirstJointQpos)})
+    assert env.action_manager.action_names() == ["FirstJointQpos.0"]

@@ -95,6 +95,32 @@ class ActionManager(ManagerBase[ActionTermCfg]):
             _merge(out, term.input_key, term.process_action(torch.as_tensor(action[key], dtype=torch.float32)))
         return out
 
+    def action_names(self) -> list[str]:
+        """A name per value of the policy action (the ``pre`` terms' names, in order)."""
+        return [name for term in self.terms("pre").values() for name in term.action_names()]
+
+    def action_from_qpos(self, qpos: Any) -> torch.Tensor:
+        """The policy action that commands the (N, n_active) joint position targets ``qpos``
+        (the ``pre`` terms' actions side by side; ``qpos`` itself without ``pre`` terms).
+
+        Raises:
+            ValueError: a ``pre`` term cannot express joint targets; names the term.
+        """
+        qpos = torch.as_tensor(qpos, dtype=torch.float32)
+        terms = self.terms("pre")
+        if not terms:
+            return qpos
+        parts = []
+        for name, term in terms.items():
+            try:
+                parts.append(torch.as_tensor(term.action_from_qpos(qpos), dtype=torch.float32))
+            except NotImplementedError as err:
+                raise ValueError(
+                    f"actions.{name}: {err}; a scripted demonstration gives joint position targets, so "
+                    "every pre action term of the env must implement action_from_qpos"
+                ) from None
+        return torch.cat(parts, dim=-1)
+
     def summary_rows(self) -> list[tuple[str, str, str]]:
         return [
             (e.cfg.mode, n, f"{type(e.func).__name__} ({e.func.input_key}, dim {e.func.action_dim})")

@@ -69,6 +69,22 @@ class ActionTerm(Functor):
         """Map the (N, action_dim) policy action to a command."""
         raise NotImplementedError(f"{type(self).__name__} must implement process_action")
 
+    def action_names(self) -> list[str]:
+        """A name per value of this term's action (the recorded ``action`` columns): the
+        active joints' names when it takes one value per active joint, else ``<class>.<i>``."""
+        joints = list(self._env.active_joint_ids)
+        if self.action_dim == len(joints):
+            return [str(self._env.robot.joint_names[j]) for j in joints]
+        return [f"{type(self).__name__}.{i}" for i in range(self.action_dim)]
+
+    def action_from_qpos(self, qpos: torch.Tensor) -> torch.Tensor:
+        """The (N, action_dim) action that commands the (N, n_active) joint position targets
+        ``qpos``: how a scripted demonstration written as joint targets drives, and is
+        recorded in, this action space. A term that cannot express a joint target (one
+        relative to the current state, a velocity or an effort) raises NotImplementedError.
+        """
+        raise NotImplementedError(f"{type(self).__name__} cannot express joint position targets as its action")
+
     def __call__(self, action: torch.Tensor) -> Any:
         return self.process_action(action)
 

@@ -146,8 +146,9 @@ class ToySolver:
         return target[:, :3, 3].norm(dim=-1) <= 1.0, q
 
 
-def toy_ik_arm_cfg(**kwargs: Any) -> RobotCfg:
-    """The demo arm whose config builds a :class:`ToySolver` for part ``arm``."""
+def toy_ik_arm_cfg(parts: dict | None = None, **kwargs: Any) -> RobotCfg:
+    """The demo arm whose config builds a :class:`ToySolver` for part ``arm`` (its control
+    parts: ``parts``, default ``arm`` = all seven joints)."""
     from embodichain_core.utils.configclass import configclass
 
     @configclass
@@ -155,4 +156,4 @@ def toy_ik_arm_cfg(**kwargs: Any) -> RobotCfg:
         def build_solvers(self, robot: Any) -> dict:
             return {"arm": ToySolver(robot.get_joint_ids("arm"))}
 
-    return ToyIKArmCfg(uid="arm", fpath=str(ARM7_PATH), control_parts={"arm": ["joint[1-7]"]}, **kwargs)
+    return ToyIKArmCfg(uid="arm", fpath=str(ARM7_PATH), control_parts=parts or {"arm": ["joint[1-7]"]}, **kwargs)

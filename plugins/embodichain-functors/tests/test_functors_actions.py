@@ -4,6 +4,7 @@ terms that really drive velocity and effort; bad params are construction errors.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -92,6 +93,51 @@ def test_eef_pose_7d_and_6d_through_ik(build) -> None:
         next(iter(env6.action_manager.terms().values())).process_action(torch.zeros(4, 5))
 
 
+HAND = {"arm": ["joint[1-4]"], "hand": ["joint[5-7]"]}  # the toy solver solves joints 1-4
+
+
+def eef_with_hand(build, **robot: Any):
+    return build(
+        robot=toy_ik_arm_cfg(parts=HAND, **robot),
+        control_parts=["arm", "hand"],
+        actions=term(actions.EefPoseTerm, part_name="arm", gripper_part="hand"),
+    )
+
+
+def test_eef_pose_with_a_gripper_part_expresses_joint_targets(build) -> None:
+    """Pose then the hand's joint targets; joint targets -> action (FK) -> step drives them."""
+    env = eef_with_hand(build)
+    assert env.single_action_space.shape == (10,)
+    assert np.allclose(env.single_action_space.low[7:], -2.8)
+    names = env.action_manager.action_names()
+    assert names[:7] == ["arm.x", "arm.y", "arm.z", "arm.qw", "arm.qx", "arm.qy", "arm.qz"]
+    assert names[7:] == [str(env.robot.joint_names[j]) for j in env.robot.get_joint_ids("hand")]
+    env.reset()
+    qpos = torch.tensor([0.3, 0.1, 0.2, 0.5, 0.4, -0.3, 0.2]).expand(4, NA)
+    action = env.action_manager.action_from_qpos(qpos)
+    expected = [0.3, 0.1, 0.2, math.cos(0.25), 0, 0, math.sin(0.25), 0.4, -0.3, 0.2]
+    assert torch.allclose(action, torch.tensor(expected).expand(4, 10), atol=1e-6)
+    env.step(action)
+    assert torch.allclose(pos_ctrl(env), qpos, atol=1e-5)
+    with pytest.raises(ValueError, match="takes 10 values per env"):
+        env.action_manager.process_action(torch.zeros(4, 7))
+
+
+def test_eef_pose_actions_stay_in_one_quaternion_hemisphere(build) -> None:
+    """Yaws of +-2.7 rad are 0.9 rad apart; written with w >= 0 their quaternions would be
+    1.95 apart. In the hemisphere of the default pose (yaw 2.8) they stay close, and the
+    flipped quaternion still commands the same rotation."""
+    env = eef_with_hand(build, init_qpos=[0.0, 0.0, 0.0, 2.8, 0.0, 0.0, 0.0, 0.0, 0.0])
+    env.reset()
+    qpos = torch.zeros(4, NA)
+    qpos[:, 3] = torch.tensor([2.7, -2.7, 2.7, -2.7])
+    action = env.action_manager.action_from_qpos(qpos)
+    assert (action[1, 3:7] - action[0, 3:7]).norm() < 0.5
+    assert action[1, 3] < 0  # -q of the w >= 0 quaternion
+    env.step(action)
+    assert torch.allclose(pos_ctrl(env)[:, 3], qpos[:, 3], atol=1e-5)
+
+
 def test_qvel_term_drives_velocity(build) -> None:
     env = build(actions=term(actions.QvelTerm, scale=0.5))
     env.reset()
@@ -127,14 +173,25 @@ def test_qf_term_drives_effort(build) -> None:
         (actions.QposNormalizedTerm, {"range": [1, 0]}, "range"),
         (actions.EefPoseTerm, {"pose_dim": 5}, "pose_dim"),
         (actions.EefPoseTerm, {"part_name": "leg"}, "part_name"),
+        (actions.EefPoseTerm, {"part_name": "arm", "gripper_part": "hnad"}, "gripper_part"),
+        (actions.EefPoseTerm, {"part_name": "arm", "gripper_part": "arm"}, "gripper_part"),
     ],
 )
 def test_bad_params(build, func, params, param) -> None:
     with pytest.raises(ConfigError) as err:
-        build(robot=toy_ik_arm_cfg(), actions=term(func, **params))
+        build(robot=toy_ik_arm_cfg(parts=HAND), control_parts=["arm", "hand"], actions=term(func, **params))
     assert err.value.path == "env.actions.a"
     assert f"params.{param}" in str(err.value)
     assert func.__name__ in str(err.value)
+
+
+def test_a_gripper_part_must_be_active(build) -> None:
+    with pytest.raises(ConfigError, match=r"params\.gripper_part: joints .* of 'hand' are not active .*add 'hand'"):
+        build(
+            robot=toy_ik_arm_cfg(parts=HAND),
+            control_parts=["arm"],
+            actions=term(actions.EefPoseTerm, part_name="arm", gripper_part="hand"),
+        )
 
 
 def test_eef_pose_needs_a_solver(build) -> None:

@@ -124,7 +124,9 @@ def test_doc_lines_are_read_from_the_source(tmp_path: Path) -> None:
 def test_source_files_of_packages_and_modules() -> None:
     names = {p.name for p in source_files("embodichain_functors.events")}
     assert {"__init__.py", "assets.py", "settling.py"} <= names
-    assert [p.name for p in source_files("embodichain_functors.actions")] == ["actions.py"]
+    names = {p.name for p in source_files("embodichain_functors.actions")}
+    assert names == {"__init__.py", "base.py", "drive.py", "eef.py", "position.py"}
+    assert [p.name for p in source_files("embodichain_functors.catalogue")] == ["catalogue.py"]
 
 
 def test_registering_imports_no_functor_module() -> None:

@@ -204,6 +204,9 @@ class FeatureSpec:
         self.sources: list[Any] = state_source(sources, environment_state)[0]
         self._check_names()
         self.action_dim: Optional[int] = None
+        manager = getattr(env, "action_manager", None)
+        #: the policy action's names when the env has action terms (e.g. a TCP pose), else the joints'
+        self.action_names = manager.action_names() if manager is not None and manager.terms("pre") else None
 
     def _check_names(self) -> None:
         seen: dict[str, str] = {}
@@ -226,7 +229,8 @@ class FeatureSpec:
         """The lerobot ``features`` dict (without lerobot's default features)."""
         if self.action_dim is None:
             raise RuntimeError("no action recorded yet")
-        names = self.joint_names if self.action_dim == len(self.joint_names) else None
+        names = self.action_names or self.joint_names
+        names = names if self.action_dim == len(names) else None
         out = {s.name: s.feature(use_videos) for s in self.sources}
         out["action"] = {"dtype": "float32", "shape": (self.action_dim,), "names": names}
         out.update({k: dict(v) for k, v in FIXED_FEATURES.items()})

@@ -27,7 +27,7 @@ from lerobot_helpers import (
 )
 
 from embodichain_core.config.errors import ConfigError
-from embodichain_core.managers import ObservationCfg
+from embodichain_core.managers import ActionTerm, ActionTermCfg, ObservationCfg
 
 SCRIPT_1 = [["."], ["."], ["."], ["s"], ["."], ["f"], ["."], ["."], ["s"], ["."], ["."]]
 SCRIPT_3 = [
@@ -68,6 +68,7 @@ def test_round_trip_through_lerobot_dataset(make_env: Any, tmp_path: Path, num_e
     assert len(ds) == sum(len(rows) for _, rows in expected)
     assert ds.features["observation.state"]["names"] == JOINTS
     assert ds.features["action"]["shape"] == (7,)
+    assert ds.features["action"]["names"] == JOINTS
     for e, (env_id, rows) in enumerate(expected):
         items = episode_items(ds, e)
         for t, (item, (obs, action)) in enumerate(zip(items, rows)):
@@ -187,3 +188,26 @@ def test_extra_observations_and_dict_actions_are_recorded(make_env: Any, tmp_pat
     assert ds.features["observation.object.cube.pose"]["shape"] == (7,)
     assert [float(ds[i]["row_tag"]) for i in range(6)] == [0, 1, 2, 10, 11, 12]
     np.testing.assert_allclose(as_np(ds[2]["action"]), np.full(7, 0.2, np.float32))
+
+
+class OffsetQpos(ActionTerm):
+    """qpos = action + 0.1, its values named by the term (not the joints)."""
+
+    def action_names(self) -> list[str]:
+        return [f"offset_{i}" for i in range(self.action_dim)]
+
+    def process_action(self, action: torch.Tensor) -> torch.Tensor:
+        return action + 0.1
+
+
+def test_the_action_columns_take_the_action_terms_names(make_env: Any, tmp_path: Path) -> None:
+    """An action term's values are not joint targets: the recorded names are the term's."""
+    actions = {"offset": ActionTermCfg(func=OffsetQpos)}
+    env = make_env(arm_cfg(1, dataset=recorder_cfg(tmp_path), actions=actions))
+    reset(env)
+    for t in range(3):
+        env.success_flags[:] = t == 2
+        env.step(torch.zeros(1, 7))
+    env.close()
+    ds = load(env.dataset_manager.finalize()[0])
+    assert ds.features["action"]["names"] == [f"offset_{i}" for i in range(7)]

@@ -81,6 +81,29 @@ def test_json_config_is_equivalent_to_the_python_cfg(task_id: str) -> None:
     assert cfg.max_episode_steps == default.max_episode_steps == 300
 
 
+def test_the_scripted_demo_drives_an_eef_pose_action_space() -> None:
+    """pick_fork_state_eef.json: an EefPoseTerm (right_arm's TCP pose, then right_eef's two
+    fingers). The demo's joint targets arrive as TCP poses and finger targets; stepped through
+    IK they put the TCP where the actions say and lift the fork."""
+    overrides = {"num_envs": 2, "verbose": False}
+    task_id, cfg, _ = load_gym_config(str(CONFIG_DIR / "pick_fork_state_eef.json"), overrides, cfg_cls=PickForkCfg)
+    cfg.sensor, cfg.dataset = [], {}  # no camera, no recorder: only the action space is tested
+    env = gym.make(task_id, cfg=cfg).unwrapped
+    assert env.single_action_space.shape == (ACTION_DIM,)
+    assert env.action_manager.action_names()[:3] == ["right_arm.x", "right_arm.y", "right_arm.z"]
+    env.reset()
+    actions = env.create_demo_action_list()
+    assert all(a.shape == (2, ACTION_DIM) for a in actions)
+    assert torch.allclose(actions[0][:, 3:7].norm(dim=-1), torch.ones(2), atol=1e-5)  # unit quaternions
+    settled = 56  # the gripper opened (1), reach (30), align (5), descend (15), settle (5)
+    for action in actions[:settled]:
+        env.step(action)
+    tcp = env.robot.compute_fk(name="right_arm")[:, :3, 3]
+    assert (tcp - actions[settled - 1][:, :3]).norm(dim=-1).max() < 0.005
+    assert run_demo(env)[0].all()
+    env.close()
+
+
 def test_open_drawer_success_is_the_slide_joint_opening() -> None:
     env = gym.make("OpenDrawer-v1", num_envs=2, verbose=False).unwrapped
     env.reset(seed=0)

@@ -45,3 +45,10 @@ def test_pick_fork_camera_config_is_the_main_job_plus_a_policy_camera():
     assert policy_cam[0]["width"] == policy_cam[0]["height"] == 96
     camera["sensor"] = [s for s in camera["sensor"] if s["uid"] != "policy_cam"]
     assert camera == _load("main_job.json")
+
+
+def test_pick_fork_state_eef_config_is_the_state_config_plus_an_eef_pose_action():
+    eef = _load("pick_fork_state_eef.json")
+    term = eef["env"].pop("actions")["eef_pose"]
+    assert term == {"func": "EefPoseTerm", "params": {"part_name": "right_arm", "gripper_part": "right_eef"}}
+    assert eef == _load("pick_fork_state.json")

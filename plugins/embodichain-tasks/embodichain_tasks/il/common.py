@@ -175,8 +175,14 @@ class DemoBuilder:
 
     # -- output ---------------------------------------------------------------------------
     def actions(self) -> list[torch.Tensor]:
-        """The demo: one (num_envs, action_dim) float32 tensor per step."""
-        return list(self._rows)
+        """The demo: one (num_envs, action_dim) float32 tensor per step, in the env's action
+        space: the joint targets themselves without action terms, else what the env's
+        ``pre`` action terms make of them (``ActionManager.action_from_qpos``: the TCP pose and
+        the gripper targets for an ``EefPoseTerm``)."""
+        manager = getattr(self.env, "action_manager", None)
+        if manager is None or not manager.terms("pre"):
+            return list(self._rows)
+        return [manager.action_from_qpos(row) for row in self._rows]
 
     def __len__(self) -> int:
         return len(self._rows)
