@@ -32,7 +32,8 @@ from typing import Any, Optional
 import numpy as np
 
 from embodichain_lerobot.encoder_files import write_result
-from embodichain_lerobot.writer_child import MAX_ENCODER_BACKLOG, Inbox, _picklable, _rgb, _say, run_child, start_child
+from embodichain_lerobot.child_io import Inbox, _picklable, _say, run_child, start_child
+from embodichain_lerobot.writer_child import MAX_ENCODER_BACKLOG, _rgb
 
 
 class EncoderChild:

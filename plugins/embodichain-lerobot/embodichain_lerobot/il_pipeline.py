@@ -10,7 +10,8 @@ prints before each step, the commands a user would type:
 2. ``lerobot-train``: lerobot's ACT on what the recipe reads (``DIR/train``), a checkpoint
    every ``--save_freq`` steps;
 3. ``embodichain eval-policy`` of every checkpoint on ``--val_episodes`` validation episodes
-   (``--val_seed``), results in ``DIR/eval/val_<step>.json``;
+   (``--val_seed``), results in ``DIR/eval/val_<step>.json``, in the training config or in
+   ``--eval_config`` (its recipe copy ``DIR/eval_config.json``);
 4. ``embodichain eval-policy`` of the checkpoint with the best validation rate on
    ``--test_episodes`` test episodes (``--test_seed``), ``DIR/eval/test_<step>.json``: the
    reported rate, from episodes that chose nothing.
@@ -36,7 +37,7 @@ import time
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
-from embodichain_lerobot.il_recipes import LR_SCHEDULES, POLICIES, pipeline_config, train_flags
+from embodichain_lerobot.il_recipes import CHUNK_SIZE, LR_SCHEDULES, POLICIES, pipeline_config, train_flags
 from embodichain_lerobot.il_stats import choose_checkpoint, format_rate, rate_summary
 
 __all__ = ["main", "build_parser", "MAIN_JOB", "STATE_CONFIG", "CAMERA_CONFIG"]
@@ -71,6 +72,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="gym config with a LeRobot recorder, a path or the name of one embodichain-tasks ships "
         "(e.g. open_drawer_record.json; default: the recipe's PickFork-v1 config)",
     )
+    add(
+        "--eval_config",
+        type=Path,
+        help="evaluate (validation and test) in this gym config instead of --config, a path or a "
+        "shipped name (e.g. demonstrations from perturbed starts, evaluated on the task as it is)",
+    )
     add("--cameras", nargs="+", default=["policy_cam"], help="camera recipe: the cameras it reads (default policy_cam)")
     add("--demos", type=int, default=100, help="demonstrations to generate (default 100)")
     add("--workers", type=int, default=2, help="Ray workers of embodichain generate (default 2)")
@@ -83,6 +90,12 @@ def build_parser() -> argparse.ArgumentParser:
         choices=LR_SCHEDULES,
         default="constant",
         help="state recipe: constant (lerobot's ACT preset) or cosine (decayed to 1e-6 by --steps)",
+    )
+    add(
+        "--chunk_size",
+        type=int,
+        default=CHUNK_SIZE,
+        help=f"actions ACT predicts per chunk (default {CHUNK_SIZE}: 0.8 s at 25 Hz)",
     )
     add("--batch_size", type=int, default=64, help="lerobot-train batch size (default 64)")
     add("--num_workers", type=int, default=0, help="lerobot-train data loader processes (default 0)")
@@ -102,8 +115,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    names = ("demos", "steps", "save_freq", "batch_size", "val_episodes", "test_episodes", "workers", "num_envs")
-    for name in (*names, "max_steps"):
+    counts = "demos steps save_freq chunk_size batch_size val_episodes test_episodes workers num_envs max_steps"
+    for name in counts.split():
         if getattr(args, name) is not None and getattr(args, name) < 1:
             parser.error(f"--{name} must be at least 1, got {getattr(args, name)}")
     if args.config is None:
@@ -111,11 +124,13 @@ def _check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     if args.config is None:
         parser.error("--config is required: embodichain-tasks (the default PickFork-v1 configs) is not installed")
     args.config = _resolve_config(parser, args.config)
+    if args.eval_config is not None:
+        args.eval_config = _resolve_config(parser, args.eval_config, "--eval_config")
     if args.policy == "camera" and args.lr_schedule != "constant":
         parser.error("--lr_schedule: the camera recipe trains at a constant rate (its backbone has its own)")
 
 
-def _resolve_config(parser: argparse.ArgumentParser, config: Path) -> Path:
+def _resolve_config(parser: argparse.ArgumentParser, config: Path, flag: str = "--config") -> Path:
     """``config`` itself when it is a file, else the embodichain-tasks config of that name."""
     if config.is_file():
         return config
@@ -125,7 +140,7 @@ def _resolve_config(parser: argparse.ArgumentParser, config: Path) -> Path:
     folder = _tasks_config("")
     names = sorted(p.name for p in folder.glob("*.json")) if folder is not None and folder.is_dir() else []
     parser.error(
-        f"--config: no file {str(config)!r}"
+        f"{flag}: no file {str(config)!r}"
         + (f"; the configs embodichain-tasks ships: {', '.join(names)}" if names else "")
     )
 
@@ -162,6 +177,8 @@ class _Stages:
     def __init__(self, args: argparse.Namespace, out: Path):
         self.args, self.out = args, out
         self.config, self.demos, self.train = out / "config.json", out / "demos", out / "train"
+        #: the config validation and test run in (``--eval_config``, else the training one)
+        self.eval_config = out / "eval_config.json" if args.eval_config is not None else self.config
         self.log: list[str] = []
         self.seconds: dict[str, float] = {}
 
@@ -195,7 +212,7 @@ class _Stages:
             raise SystemExit(f"{self.train} holds a training without a checkpoint to resume from: delete it")
         cmd = [_bin("lerobot-train"), f"--dataset.repo_id=local/{self.demos.name}", f"--dataset.root={self.demos}"]
         cmd += [
-            *train_flags(a.policy, a.lr_schedule, a.steps),
+            *train_flags(a.policy, a.lr_schedule, a.steps, a.chunk_size),
             f"--policy.device={a.device}",
             f"--output_dir={self.train}",
         ]
@@ -207,7 +224,7 @@ class _Stages:
         """One eval-policy run (skipped when its JSON exists); its rate summary."""
         result = self.out / "eval" / f"{split}_{step:06d}.json"
         if not result.is_file():
-            cmd = [_bin("embodichain"), "eval-policy", "--policy", str(policy), "--gym_config", str(self.config)]
+            cmd = [_bin("embodichain"), "eval-policy", "--policy", str(policy), "--gym_config", str(self.eval_config)]
             cmd += ["--episodes", str(episodes), "--num_envs", str(self.args.num_envs), "--headless"]
             cmd += ["--max_steps", str(self.args.max_steps)] if self.args.max_steps else []
             _run([*cmd, "--seed", str(seed), "--json", str(result), "--quiet"], self.log)
@@ -231,12 +248,13 @@ def _results(stages: _Stages, validation: list[dict], test: dict, shared: dict, 
     return {
         "recipe": a.policy,
         "config": str(a.config),
+        "eval_config": str(a.eval_config or a.config),
         "visual_randomization": not a.no_visual_randomization,
         "cameras": list(a.cameras) if a.policy == "camera" else [],
         "demos": {"path": str(stages.demos), "episodes": len(trained), "seed": a.seed},
         "policy": {
             "type": "act",
-            "flags": list(train_flags(a.policy, a.lr_schedule, a.steps)),
+            "flags": list(train_flags(a.policy, a.lr_schedule, a.steps, a.chunk_size)),
             "steps": a.steps,
             "batch_size": a.batch_size,
         },
@@ -266,16 +284,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     _check_args(parser, args)
     try:
-        config = pipeline_config(args.config, args.policy, args.cameras)
+        configs = [pipeline_config(c, args.policy, args.cameras) for c in (args.config, args.eval_config) if c]
     except ValueError as err:
         parser.error(str(err))
-    if args.no_visual_randomization:
+    for config in configs if args.no_visual_randomization else ():
         config.setdefault("env", {})["filter_visual_rand"] = True
+    config = configs[0]
     go_offline()  # lerobot-train and eval-policy read local folders only
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     stages = _Stages(args, out)
-    stages.config.write_text(json.dumps(config, indent=1), encoding="utf-8")
+    for path, data in zip((stages.config, stages.eval_config), configs):
+        path.write_text(json.dumps(data, indent=1), encoding="utf-8")
     stages.timed("generate", stages.generate)
     stages.timed("train", stages.train_policy)
     ckpts = [(s, p) for s, p in _checkpoints(stages.train) if s >= args.val_from]

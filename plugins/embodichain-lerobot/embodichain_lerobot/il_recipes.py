@@ -45,13 +45,17 @@ POLICIES = ("state", "camera")
 #: or the same AdamW with the rate decayed on a cosine to 1% of it by the last step.
 LR_SCHEDULES = ("constant", "cosine")
 
+#: Actions per predicted chunk (``--chunk_size``): 0.8 s at the IL tasks' 25 Hz.
+CHUNK_SIZE = 20
+
+
 #: ACT settings shared by both recipes (lerobot-train flags). ``n_action_steps=1`` with
 #: ``temporal_ensemble_coeff``: a chunk is planned every step and the overlapping predictions
 #: of the same step are averaged, the older ones weighted by ``exp(-0.01 * age)``; both are
 #: inference settings (they do not enter the loss).
 ACT_FLAGS = (
     "--policy.type=act",
-    "--policy.chunk_size=20",
+    f"--policy.chunk_size={CHUNK_SIZE}",
     "--policy.n_action_steps=1",
     "--policy.temporal_ensemble_coeff=0.01",
     "--policy.dim_model=256",
@@ -114,19 +118,26 @@ def schedule_flags(schedule: str, steps: int) -> tuple[str, ...]:
     )
 
 
-def train_flags(policy: str, schedule: str = "constant", steps: int = 0) -> tuple[str, ...]:
-    """The lerobot-train policy (augmentation, schedule) flags of a recipe, each flag once.
+def train_flags(
+    policy: str, schedule: str = "constant", steps: int = 0, chunk_size: int = CHUNK_SIZE
+) -> tuple[str, ...]:
+    """The lerobot-train policy (augmentation, schedule, chunk) flags of a recipe, each flag once.
 
     Raises:
-        ValueError: ``cosine`` with the camera recipe (its backbone has its own rate), or an
-            unknown schedule.
+        ValueError: ``cosine`` with the camera recipe (its backbone has its own rate), an
+            unknown schedule, or a ``chunk_size`` below 1.
     """
     if policy == "camera" and schedule != "constant":
         raise ValueError("lr_schedule: the camera recipe trains at a constant rate (its backbone has its own)")
+    if int(chunk_size) < 1:
+        raise ValueError(f"chunk_size: at least 1 action per chunk, got {chunk_size}")
+    act = tuple(
+        f if f != f"--policy.chunk_size={CHUNK_SIZE}" else f"--policy.chunk_size={int(chunk_size)}" for f in ACT_FLAGS
+    )
     if policy != "camera":
-        return ACT_FLAGS + schedule_flags(schedule, steps)
+        return act + schedule_flags(schedule, steps)
     replaced = {flag.split("=", 1)[0] for flag in CAMERA_FLAGS}
-    return tuple(f for f in ACT_FLAGS if f.split("=", 1)[0] not in replaced) + CAMERA_FLAGS
+    return tuple(f for f in act if f.split("=", 1)[0] not in replaced) + CAMERA_FLAGS
 
 
 def camera_uids(data: dict[str, Any]) -> list[str]:

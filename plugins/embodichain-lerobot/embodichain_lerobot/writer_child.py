@@ -18,7 +18,7 @@ recording process's messages in order:
 ``open``, ``episode`` and ``finalize`` get one reply each, ``("ok", value)`` or
 ``("error", exception)``. The child reads its socket on a thread from its first moment
 (:class:`Inbox`: the recording process never waits for lerobot's import), runs at a lower
-priority (:data:`NICENESS`), and ignores ``SIGINT`` and ``SIGTERM`` (a Ctrl-C in the
+priority (:data:`~embodichain_lerobot.child_io.NICENESS`), and ignores ``SIGINT`` and ``SIGTERM`` (a Ctrl-C in the
 terminal, or a ``kill`` of the process group, reaches it too; the recording process
 decides what happens). When the recording process dies (even by ``SIGKILL``), the child
 sees the socket close, writes every episode and frame message it had already received
@@ -30,14 +30,10 @@ terminal back (the prompt is shown: the dataset on disk tells the rest).
 
 from __future__ import annotations
 
-import collections
 import contextlib
 import os
-import pickle
 import shutil
-import signal
 import sys
-import threading
 import time
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -46,18 +42,12 @@ from typing import Any, Iterator, Optional
 import numpy as np
 
 from embodichain_lerobot.encoder_files import FinishedVideos, wait_exit, wait_result
-from embodichain_lerobot.storage import DiskFullError
+from embodichain_lerobot.child_io import Inbox, _picklable, _say, run_child, start_child
 from embodichain_lerobot.writer_process import WriterProcessError, from_columns
 
 
 #: Frames queued in the encoders (all envs and cameras) above which the child stops reading.
 MAX_ENCODER_BACKLOG = 512
-#: Bytes of received, unhandled messages above which the child stops reading (:class:`Inbox`).
-INBOX_BYTES = 512 * 2**20
-#: The child's scheduling priority, relative to the recording process: on a busy machine
-#: stepping and rendering go first, and the child (whose inbox holds the frames meanwhile)
-#: catches up in their idle time (end to end, the main job ran about 10 % faster than at +0).
-NICENESS = 5
 #: Tests only: a file holding a number ``N``; the child starts its episode ``i`` only once the
 #: file exists and ``i < N`` (it polls; a held episode is announced in ``<file>.held``), so a
 #: test decides exactly how many episodes the child has written when it kills a process.
@@ -232,16 +222,6 @@ def _test_gate(index: int, root: Path) -> None:
         time.sleep(0.02)
 
 
-def _picklable(err: BaseException) -> BaseException:
-    """``err`` if it survives pickling, else a :class:`WriterProcessError` with its text."""
-    try:
-        pickle.loads(pickle.dumps(err))
-        return err
-    except Exception:
-        kind = DiskFullError if isinstance(err, DiskFullError) else WriterProcessError
-        return kind(f"{type(err).__name__}: {err}")
-
-
 def _orphaned(state: ChildWriter, inbox: "Inbox") -> None:
     """The recording process is gone: write every message already received (episodes, their
     streamed frames), then finalize. Every episode that left the recording process is saved,
@@ -277,58 +257,6 @@ def _orphaned(state: ChildWriter, inbox: "Inbox") -> None:
         )
 
 
-def _say(line: str) -> None:
-    """Print ``line`` on stderr, unless stderr is a terminal that the shell has taken back
-    (the recording process is gone and the prompt is back: the dataset on disk says the rest)."""
-    try:
-        if os.isatty(2) and os.tcgetpgrp(2) != os.getpgrp():
-            return
-    except OSError:
-        pass
-    print(line, file=sys.stderr, flush=True)
-
-
-class Inbox:
-    """Reads the socket on its own thread from the child's first moment (lerobot's import takes
-    seconds, and the recording process must not wait for it), keeping up to ``limit`` bytes of
-    messages; above that it stops reading, and the recording process's sender waits."""
-
-    def __init__(self, conn: Connection, limit: int = INBOX_BYTES):
-        self._conn, self._limit = conn, limit
-        self._messages: collections.deque[bytes] = collections.deque()
-        self._bytes, self._closed = 0, False
-        self._cv = threading.Condition()
-        threading.Thread(target=self._read, name="writer-inbox", daemon=True).start()
-
-    def _read(self) -> None:
-        while True:
-            try:
-                data = self._conn.recv_bytes()
-            except (EOFError, OSError):
-                break
-            with self._cv:
-                while self._bytes > self._limit:
-                    self._cv.wait()
-                self._messages.append(data)
-                self._bytes += len(data)
-                self._cv.notify_all()
-        with self._cv:
-            self._closed = True
-            self._cv.notify_all()
-
-    def get(self) -> Any:
-        """The next message; ``EOFError`` once the recording process is gone and all are read."""
-        with self._cv:
-            while not self._messages and not self._closed:
-                self._cv.wait()
-            if not self._messages:
-                raise EOFError
-            data = self._messages.popleft()
-            self._bytes -= len(data)
-            self._cv.notify_all()
-        return pickle.loads(data)
-
-
 def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
     """Answer the recording process's messages until ``finalize`` or until it goes away."""
     state, inbox = ChildWriter(), inbox or Inbox(conn)
@@ -351,41 +279,6 @@ def serve(conn: Connection, inbox: Optional[Inbox] = None) -> None:
             return _orphaned(state, inbox)
         if command == "finalize" and reply[0] == "ok":
             return
-
-
-def start_child(argv: Optional[list[str]]) -> tuple[Connection, "Inbox"]:
-    """The first moments of a writer or encoder process: the socket of ``argv[0]`` (a file
-    descriptor) read from now on (while lerobot is imported), signals left to the recording
-    process (a Ctrl-C or a ``kill`` of the process group reaches the child too), a lower
-    priority than the recording (:data:`NICENESS`)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    fd = int((argv if argv is not None else sys.argv[1:])[0])
-    os.environ.setdefault("SVT_LOG", "1")
-    conn = Connection(fd)
-    inbox = Inbox(conn)
-    try:
-        os.nice(NICENESS)
-    except OSError:
-        pass
-    return conn, inbox
-
-
-def run_child(serve_fn: Any, conn: Connection, inbox: "Inbox") -> None:
-    """Serve the recording process's messages until it is done, then exit at once."""
-    import av
-    import torch
-
-    from embodichain_lerobot.encoding import sampled_video_stats
-
-    torch.set_num_threads(1)  # its few ops here are small: a thread pool would only spin
-    av.logging.set_libav_level(av.logging.ERROR)  # FFmpeg's per-video encoder summaries (x264 prints ~12 lines)
-    with sampled_video_stats():  # lerobot's sampled statistics, also for encoders started outside a save
-        serve_fn(conn, inbox)
-    # every file is closed: skip the interpreter's teardown
-    # (a second of unloading torch and lerobot that the recording process would wait for)
-    sys.stderr.flush()
-    os._exit(0)
 
 
 def main(argv: Optional[list[str]] = None) -> None:

@@ -229,3 +229,42 @@ def test_the_cosine_schedule_is_flags_lerobot_train_parses_into_a_decay_over_the
         train_flags("state", "cosin", 4000)
     with pytest.raises(ValueError, match="camera recipe trains at a constant rate"):
         train_flags("camera", "cosine", 4000)
+
+
+def test_an_eval_config_by_shipped_name_is_where_validation_and_test_run(tmp_path: Path, capsys) -> None:
+    from embodichain_lerobot.il_pipeline import _check_args, _Stages, build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["--out", str(tmp_path), "--eval_config", "pick_fork_state_eef.json"])
+    _check_args(parser, args)
+    assert args.eval_config == MAIN_JOB.parent / "pick_fork_state_eef.json"
+    assert _Stages(args, tmp_path).eval_config == tmp_path / "eval_config.json"
+    plain = parser.parse_args(["--out", str(tmp_path)])
+    _check_args(parser, plain)
+    assert _Stages(plain, tmp_path).eval_config == tmp_path / "config.json"
+    with pytest.raises(SystemExit):
+        _check_args(parser, parser.parse_args(["--out", str(tmp_path), "--eval_config", "pick_fork_stat.json"]))
+    err = capsys.readouterr().err
+    assert "--eval_config: no file 'pick_fork_stat.json'" in err
+    assert "pick_fork_state.json" in err
+
+
+def test_the_chunk_size_is_one_flag_lerobot_train_parses(tmp_path: Path, capsys) -> None:
+    import draccus
+    from lerobot.configs.train import TrainPipelineConfig
+    from lerobot.policies.act.configuration_act import ACTConfig  # noqa: F401  (registers act)
+
+    from embodichain_lerobot.il_pipeline import _check_args, build_parser
+
+    for policy in ("state", "camera"):
+        flags = train_flags(policy, chunk_size=100)
+        assert [f for f in flags if f.startswith("--policy.chunk_size")] == ["--policy.chunk_size=100"]
+        cfg = draccus.parse(TrainPipelineConfig, args=[*flags, "--dataset.repo_id=local/demos"])
+        assert cfg.policy.chunk_size == 100
+    assert "--policy.chunk_size=20" in train_flags("state")
+    with pytest.raises(ValueError, match="chunk_size: at least 1 action per chunk, got 0"):
+        train_flags("state", chunk_size=0)
+    parser = build_parser()
+    with pytest.raises(SystemExit):
+        _check_args(parser, parser.parse_args(["--out", str(tmp_path), "--chunk_size", "0"]))
+    assert "--chunk_size must be at least 1, got 0" in capsys.readouterr().err

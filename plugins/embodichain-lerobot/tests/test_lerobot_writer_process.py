@@ -13,7 +13,8 @@ import pytest
 from embodichain_lerobot.episodes import EpisodeBuffers, StepData
 from embodichain_lerobot.lossless_video import RoutedEncoder
 from embodichain_lerobot.storage import DiskFullError
-from embodichain_lerobot.writer_child import ChildWriter, _picklable
+from embodichain_lerobot.child_io import _picklable
+from embodichain_lerobot.writer_child import ChildWriter
 from embodichain_lerobot.writer_process import WriterProcess, WriterProcessError, from_columns, to_columns
 
 
