@@ -52,3 +52,12 @@ def test_pick_fork_state_eef_config_is_the_state_config_plus_an_eef_pose_action(
     term = eef["env"].pop("actions")["eef_pose"]
     assert term == {"func": "EefPoseTerm", "params": {"part_name": "right_arm", "gripper_part": "right_eef"}}
     assert eef == _load("pick_fork_state.json")
+
+
+def test_pick_fork_state_eef_perturbed_is_the_eef_config_plus_perturbed_arm_starts():
+    perturbed = _load("pick_fork_state_eef_perturbed.json")
+    event = perturbed["env"]["events"].pop("arm_start")
+    assert event["func"] == "randomize_robot_eef_pose"
+    assert event["mode"] == "reset"
+    assert event["params"]["position_range"] == [[-0.04, -0.04, -0.03], [0.04, 0.04, 0.03]]
+    assert perturbed == _load("pick_fork_state_eef.json")
