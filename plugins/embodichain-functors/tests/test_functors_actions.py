@@ -138,6 +138,48 @@ def test_eef_pose_actions_stay_in_one_quaternion_hemisphere(build) -> None:
     assert torch.allclose(pos_ctrl(env)[:, 3], qpos[:, 3], atol=1e-5)
 
 
+def noisy_eef_run(build, episodes: int = 1) -> list[torch.Tensor]:
+    """The toy arm's (x, y, z) joint targets over 5 steps of one clean action, (5, N, 3) per
+    episode, each episode from reset seed 0."""
+    env = build(robot=toy_ik_arm_cfg(), actions=term(actions.EefPoseTerm, noise_std=0.02, noise_steps=3))
+    action = torch.tensor([[0.3, 0.1, 0.2, 1.0, 0.0, 0.0, 0.0]]).expand(4, 7)
+    runs = []
+    for _ in range(episodes):
+        env.reset(seed=0)
+        targets = []
+        for _ in range(5):
+            env.step(action)
+            targets.append(pos_ctrl(env)[:, :3].clone())
+        runs.append(torch.stack(targets))
+    return runs
+
+
+def test_eef_execution_noise_moves_the_executed_target_not_the_action(build) -> None:
+    """Offsets in the first noise_steps steps only, different per env, the same again from the
+    same seed (so an episode replays); the action a recorder keeps is untouched."""
+    first, again = noisy_eef_run(build, episodes=2)
+    clean = torch.tensor([0.3, 0.1, 0.2])
+    offsets = first - clean
+    assert (offsets[:3].norm(dim=-1) > 1e-4).all()  # every env, the first 3 steps
+    assert offsets[:3].abs().max() < 0.1
+    assert not torch.allclose(offsets[0, 0], offsets[0, 1])  # envs draw their own
+    assert torch.allclose(offsets[3:], torch.zeros_like(offsets[3:]), atol=1e-6)  # then gone
+    assert torch.equal(first, again)
+
+
+@pytest.mark.parametrize(
+    "params, param",
+    [
+        ({"noise_std": -0.01}, "noise_std"),
+        ({"noise_std": 0.01, "noise_tau": 0}, "noise_tau"),
+        ({"noise_std": 0.01, "noise_steps": 0}, "noise_steps"),
+    ],
+)
+def test_bad_execution_noise_params(build, params, param) -> None:
+    with pytest.raises(ConfigError, match=rf"params\.{param}"):
+        build(robot=toy_ik_arm_cfg(), actions=term(actions.EefPoseTerm, **params))
+
+
 def test_qvel_term_drives_velocity(build) -> None:
     env = build(actions=term(actions.QvelTerm, scale=0.5))
     env.reset()

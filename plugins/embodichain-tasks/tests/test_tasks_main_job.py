@@ -61,3 +61,10 @@ def test_pick_fork_state_eef_perturbed_is_the_eef_config_plus_perturbed_arm_star
     assert event["mode"] == "reset"
     assert event["params"]["position_range"] == [[-0.04, -0.04, -0.03], [0.04, 0.04, 0.03]]
     assert perturbed == _load("pick_fork_state_eef.json")
+
+
+def test_pick_fork_state_eef_dart_is_the_eef_config_plus_execution_noise_over_the_reach():
+    dart = _load("pick_fork_state_eef_dart.json")
+    params = dart["env"]["actions"]["eef_pose"]["params"]
+    assert (params.pop("noise_std"), params.pop("noise_tau"), params.pop("noise_steps")) == (0.005, 10.0, 35)
+    assert dart == _load("pick_fork_state_eef.json")

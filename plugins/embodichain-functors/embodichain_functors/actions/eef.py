@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+import numpy as np
 import torch
 
 from embodichain_core.utils.math import euler_xyz_to_quat, pose_to_matrix, quat_to_euler_xyz
@@ -41,15 +43,32 @@ class EefPoseTerm(_Term):
     iterations and no random restarts (docs/performance.md, "Device audit"). Elsewhere it runs
     through ``robot.compute_ik`` on the CPU, restarts included.
 
+    **Execution noise** (for recording demonstrations, in the style of DART): with ``noise_std``
+    (metres) above 0 the TCP position the IK solves for is the action's plus an offset that
+    wanders per env (an Ornstein-Uhlenbeck process with time constant ``noise_tau`` steps and
+    standard deviation ``noise_std``), during the first ``noise_steps`` steps of each episode
+    (every step when None), after which it is gone. The action itself, which a recorder keeps,
+    stays clean: the data then holds states off the plan labelled with the plan's absolute
+    target. The draws come from the env's per-episode random streams, so an episode replays
+    exactly from its seed and its recorded actions.
+
     Params: ``scale`` (1.0), ``pose_dim`` (7), ``part_name`` (the env's first control part),
-    ``gripper_part`` (None).
+    ``gripper_part`` (None), ``noise_std`` (0.0), ``noise_tau`` (10.0), ``noise_steps`` (None).
 
     Example:
         ``{"func": "EefPoseTerm", "params": {"part_name": "right_arm", "gripper_part": "right_eef"}}``
     """
 
     input_key = "eef_pose"
-    defaults = {"scale": 1.0, "pose_dim": 7, "part_name": None, "gripper_part": None}
+    defaults = {
+        "scale": 1.0,
+        "pose_dim": 7,
+        "part_name": None,
+        "gripper_part": None,
+        "noise_std": 0.0,
+        "noise_tau": 10.0,
+        "noise_steps": None,
+    }
 
     def __init__(self, cfg: Any, env: Any):
         super().__init__(cfg, env)
@@ -70,6 +89,12 @@ class EefPoseTerm(_Term):
             self._seed_cols = torch.as_tensor(self._solver.joint_ids, dtype=torch.long, device=env.device)
         self._scatter: dict[tuple[int, ...], tuple[torch.Tensor, torch.Tensor]] = {}
         self._reference: torch.Tensor | None = None
+        self._noise = _ExecutionNoise(env, self.params) if self.params["noise_std"] else None
+
+    def reset(self, env_ids: Any = None) -> None:
+        super().reset(env_ids)
+        if self._noise is not None:
+            self._noise.reset(env_ids)
 
     def _gripper_columns(self, part: Any) -> torch.Tensor:
         """Columns of the active joints that ``gripper_part``'s joints (mimic ones left out) fill."""
@@ -126,6 +151,8 @@ class EefPoseTerm(_Term):
                 f"then {len(self._gripper)} gripper joint targets), got shape {tuple(action.shape)}"
             )
         pose = self.target_pose(action[:, : self.pose_dim])
+        if self._noise is not None:
+            pose[:, :3, 3] += self._noise.step().to(pose)
         if self._solver is not None:
             seed = self.robot.get_qpos()[:, self._seed_cols]
             success, qpos, joints = solve_ik_on_device(self.robot, self._solver, pose, self.part, seed)
@@ -179,3 +206,33 @@ class EefPoseTerm(_Term):
                 torch.as_tensor([k for _, k in pairs], dtype=torch.long, device=device),
             )
         return self._scatter[key]
+
+
+class _ExecutionNoise:
+    """Per-env TCP position offsets of :class:`EefPoseTerm`'s ``noise_*`` params."""
+
+    def __init__(self, env: Any, params: dict):
+        std, tau, steps = params["noise_std"], params["noise_tau"], params["noise_steps"]
+        for name, value, low in (("noise_std", std, 0.0), ("noise_tau", tau, 0.0)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > low:
+                raise ValueError(f"params.{name}: a number above {low:g}, got {value!r}")
+        if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 1):
+            raise ValueError(f"params.noise_steps: a whole number of steps, at least 1 (or null), got {steps!r}")
+        self.env, self.std, self.steps = env, float(std), steps
+        self.decay = math.exp(-1.0 / float(tau))
+        self.offset = torch.zeros(env.num_envs, 3, dtype=torch.float64)
+        self.age = torch.zeros(env.num_envs, dtype=torch.long)
+
+    def reset(self, env_ids: Any = None) -> None:
+        ids = slice(None) if env_ids is None else torch.as_tensor(env_ids, dtype=torch.long).cpu()
+        self.offset[ids] = 0.0
+        self.age[ids] = 0
+
+    def step(self) -> torch.Tensor:
+        """(N, 3) offsets of this step (zero past ``noise_steps``)."""
+        draw = torch.as_tensor(self.env.rng.normal(np.arange(self.env.num_envs), shape=(3,)))
+        self.offset = self.decay * self.offset + math.sqrt(1.0 - self.decay**2) * self.std * draw
+        if self.steps is not None:
+            self.offset[self.age >= self.steps] = 0.0
+        self.age += 1
+        return self.offset
