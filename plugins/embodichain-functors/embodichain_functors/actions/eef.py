@@ -83,6 +83,7 @@ class EefPoseTerm(_Term):
         except ParamError as err:
             raise ValueError(f"params.part_name: {err.reason.split(': ', 1)[-1]}") from None
         self._gripper = self._gripper_columns(self.params["gripper_part"]).to(self._joints.device)
+        self._part_joints = part_joints(self.robot, self.part)  # the part's joints, in the solver's order
         self._all = torch.arange(env.num_envs)
         self._solver = device_solver(self.robot, self.part)
         if self._solver is not None:  # the part's joints in the solver's order, on the device
@@ -177,16 +178,15 @@ class EefPoseTerm(_Term):
     def _tcp_pose(self, qpos: torch.Tensor) -> torch.Tensor:
         """(N, 7) TCP poses of ``part`` at active-joint targets ``qpos`` (other joints of the
         part at their current targets)."""
-        joints = part_joints(self.robot, self.part)
-        part_q = self.robot.get_qpos(target=True)[:, joints].to(torch.float64).clone()
-        columns, solved = self._columns_of(joints)
+        part_q = self.robot.get_qpos(target=True)[:, self._part_joints].to(torch.float64).clone()
+        columns, solved = self._columns_of(self._part_joints)
         part_q[:, solved] = qpos[:, columns]
         return self.robot.compute_fk(qpos=part_q, name=self.part, to_matrix=False).to(torch.float64)
 
     def _quat_reference(self) -> torch.Tensor:
         """(N, 4) TCP orientation at the robot's default joint positions (computed once)."""
         if self._reference is None:
-            joints = part_joints(self.robot, self.part)
+            joints = self._part_joints
             default = self.robot.default_qpos[joints].to(torch.float64).expand(self.num_envs, len(joints))
             self._reference = self.robot.compute_fk(qpos=default, name=self.part, to_matrix=False)[:, 3:].to(
                 torch.float64
