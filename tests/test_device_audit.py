@@ -51,6 +51,28 @@ def test_the_audit_counts_reads_and_host_copies(audited: tuple) -> None:
     assert _count(audit, lambda: torch.zeros(2)[torch.tensor([1])]) == {}  # host ops neither
 
 
+def _mixed(audit: HostWaitAudit, fn: Any) -> int:
+    audit.clear()
+    fn()
+    return sum(m["count"] for m in audit.per_step(1)["mixed"])
+
+
+def test_the_audit_lists_ops_that_would_mix_devices_on_cuda(audited: tuple) -> None:
+    env, audit = audited
+    qpos = env.sim.qpos[:, :2]
+    host = torch.ones(2, 2)
+    assert _mixed(audit, lambda: qpos + host) == 1  # CUDA: expected all tensors on the same device
+    assert _mixed(audit, lambda: torch.stack((qpos, host))) == 1
+    assert _mixed(audit, lambda: host.clone().__setitem__((slice(None), [0]), qpos[:, :1])) == 1
+    assert _mixed(audit, lambda: qpos * torch.tensor(2.0)) == 0  # a host scalar is allowed
+    assert _mixed(audit, lambda: qpos.clone().copy_(host)) == 0  # an explicit copy is a wait, not an error
+    assert _mixed(audit, lambda: qpos + host.to(env.device)) == 0
+    # a factory naming a host tensor's device on the CPU may stand for either side
+    eye = torch.eye(2, device=host.device)
+    assert _mixed(audit, lambda: (host @ eye, qpos @ eye)) == 0
+    assert audit.per_step(1)["per_step"] == 0  # listed apart from the waits
+
+
 def test_the_audit_refuses_an_env_on_host_views(audited: tuple) -> None:
     env, _ = audited
     HostWaitAudit.check_env(env)  # the device route: accepted
@@ -73,5 +95,6 @@ def test_an_env_step_waits_for_the_device_at_most_twice(audited: tuple) -> None:
     report = audit.per_step(STEPS)
     sites = "\n".join(f"{s['per_step']:.2f} {s['kind']}: {s['site']}" for s in report["sites"])
     assert report["per_step"] <= WAIT_BUDGET, f"{report['per_step']} host waits per step:\n{sites}"
+    assert not report["mixed"], f"ops that raise on CUDA: {report['mixed']}"
     assert report["per_step"] >= 1, "the done flags are read every step: the audit counted nothing"
     assert env.sim.qpos.abs().sum() > 0

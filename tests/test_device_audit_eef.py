@@ -62,6 +62,7 @@ def test_an_eef_pose_step_waits_for_the_device_at_most_twice(audited: tuple) -> 
     sites = "\n".join(f"{s['per_step']:.2f} {s['kind']}: {s['site']}" for s in report["sites"])
     assert report["per_step"] <= WAIT_BUDGET, f"{report['per_step']} host waits per step:\n{sites}"
     assert report["per_step"] >= 1, "the done flags are read every step: the audit counted nothing"
+    assert not report["mixed"], f"ops that raise on CUDA: {report['mixed']}"
     command = term.process_action(action)
     assert bool(command["ik_success"].all())
 

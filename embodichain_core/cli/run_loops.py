@@ -57,10 +57,20 @@ def _as_torch(value: Any) -> Any:
     return torch.as_tensor(value)
 
 
-def _flags(value: Any, n: int) -> Any:
+def _host_flags(n: int, *values: Any) -> Any:
+    """(len(values), n) bool flags on the host, read from the env's device in one copy (a
+    scalar flag stands for every env)."""
     import torch
 
-    return torch.as_tensor(value, dtype=torch.bool).reshape(-1).expand(n)
+    device = next((v.device for v in values if isinstance(v, torch.Tensor)), None)
+    rows = [torch.as_tensor(v, device=device).reshape(-1).to(torch.bool).expand(n) for v in values]
+    return torch.stack(rows).cpu()
+
+
+def _done_success(terminated: Any, truncated: Any, info: dict, n: int) -> tuple[Any, Any]:
+    """Per-env ``(done, success)`` of a step, on the host."""
+    flags = _host_flags(n, terminated, truncated, info["success"])
+    return flags[0] | flags[1], flags[2]
 
 
 def run_episodes(env: Any, extras: dict, stats: RunStats, show_bar: bool = False) -> None:
@@ -141,10 +151,10 @@ def _random_step(env: Any, stats: RunStats) -> None:
     n = env.unwrapped.num_envs
     _, _, terminated, truncated, info = env.step(_as_torch(env.action_space.sample()))
     stats.env_steps += n
-    done = _flags(terminated, n) | _flags(truncated, n)
+    done, success = _done_success(terminated, truncated, info, n)
     if done.any():
         stats.episodes += int(done.sum())
-        stats.successes += int((_flags(info["success"], n) & done).sum())
+        stats.successes += int((success & done).sum())
 
 
 def _demo_round(env: Any, max_attempts: int, stats: RunStats) -> None:
@@ -193,14 +203,15 @@ def _replay_demo(env: Any, stats: RunStats) -> tuple[Any, Any]:
     for action in base.create_demo_action_list() or []:
         _, _, terminated, truncated, info = env.step(_as_torch(action))
         stats.env_steps += n
-        done = (_flags(terminated, n) | _flags(truncated, n)) & ~ended
-        success |= done & _flags(info["success"], n)
+        done, succeeded = _done_success(terminated, truncated, info, n)
+        done &= ~ended
+        success |= done & succeeded
         ended |= done
         stats.episodes += int(done.sum())
         stats.successes += int((done & success).sum())
         if ended.all():
             return success, ended
-    success |= ~ended & _flags(base.is_task_success(), n)
+    success |= ~ended & _host_flags(n, base.is_task_success())[0]
     return success, ended
 
 

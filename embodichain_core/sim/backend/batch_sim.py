@@ -199,6 +199,15 @@ class BatchSim(FieldViews):
             values = np.broadcast_to(base, (self.num_envs,) + base.shape)
         return values
 
+    def model_tensor(self, name: str) -> torch.Tensor:
+        """:meth:`model_field` as a CPU tensor (a view of per-env values, else the shared
+        values expanded)."""
+        values = self.batch.expanded(name)
+        if values is not None:
+            return torch.from_numpy(values)
+        base = torch.from_numpy(np.array(getattr(self.model, name)))
+        return base.expand((self.num_envs,) + tuple(base.shape))
+
     def declare_per_env(self, names: Iterable[str]) -> None:
         """Give model fields per-env values now (``Batch.expand``)."""
         for name in names:

@@ -10,7 +10,8 @@ position actuator, a light; MuJoCo's own autoreset disabled, as in every scene t
 builds, so that a divergence stays visible) and raises ``AssertionError`` naming what broke: persistent
 views, stepping every env and a subset (the others untouched, a subset step equal to a
 full one on a deterministic backend), reset, lazy forward, model field writes and reads
-with their derived constants, and divergence reported by both kinds of step.
+(as arrays and as device tensors) with their derived constants, and divergence reported by
+both kinds of step.
 """
 
 from __future__ import annotations
@@ -140,6 +141,16 @@ def check_model_fields(factory: Factory) -> None:
     assert np.isclose(
         sim.model_field("body_inertia")[0, box, 0], model.body_inertia[box, 0] * 4.0 / model.body_mass[box]
     ), "set_body_masses did not scale the inertia"
+    _check_model_tensors(sim, ("body_mass", "geom_friction", "body_pos"))
+
+
+def _check_model_tensors(sim: SimBackend, names: tuple) -> None:
+    """``model_tensor`` holds ``model_field``'s values, on the sim's device, per-env or shared."""
+    for name in names:
+        tensor, values = sim.model_tensor(name), sim.model_field(name)
+        assert tensor.device == torch.device(sim.device), f"model_tensor({name!r}) is on {tensor.device}"
+        assert tuple(tensor.shape) == values.shape, f"model_tensor({name!r}) has shape {tuple(tensor.shape)}"
+        assert np.array_equal(tensor.detach().cpu().numpy(), values), f"model_tensor({name!r}) differs from model_field"
 
 
 def check_divergence(factory: Factory) -> None:

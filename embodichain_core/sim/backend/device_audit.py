@@ -5,7 +5,8 @@ On a CUDA device every read of device memory by the host (``.item()``, ``.tolist
 until the queued kernels finish, and so does every blocking copy of host data into an op
 on the device (an index list, a numpy array, a CPU tensor). :class:`HostWaitAudit` counts
 those calls by call site while a block runs, so a test on Warp's CPU device catches a wait
-that would stall the GPU.
+that would stall the GPU. It also lists the ops that mix device tensors with host tensors
+(other than scalars and explicit copies): on the CPU they run, on CUDA they raise.
 
 It tells device tensors from host tensors by where they came from, since on the CPU both
 live in the same memory: Warp's arrays as torch tensors (``wp.to_torch``: the simulation's
@@ -66,6 +67,11 @@ _READS = {
 }
 _INDEXING = {torch.Tensor.__getitem__, torch.Tensor.__setitem__}
 _MOVES = {torch.Tensor.to, torch.as_tensor, torch.tensor, torch.Tensor.new_tensor}
+#: Explicit copies: a host source is a blocking host-to-device copy, not an error.
+_COPIES = {torch.Tensor.copy_}
+#: The kind of an op mixing device tensors with host tensors (not scalars): CUDA raises there.
+MIXED = "mixed_devices"
+_DEVICE, _EITHER, _HOST = "device", "either", "host"
 _WARP_WAITS = ("synchronize", "synchronize_device", "synchronize_stream", "synchronize_event")
 _PROJECT = re.compile(r"(embodichain_\w+)/(.+\.py)$")
 
@@ -104,6 +110,7 @@ class HostWaitAudit(TorchFunctionMode):
         self.device = torch.device(device)
         self.waits: Counter[tuple[str, str]] = Counter()
         self._device: dict[int, weakref.ref] = {}
+        self._either: dict[int, weakref.ref] = {}
         self._storages: set[int] = set()
         self._undo: list[Callable[[], None]] = []
 
@@ -174,46 +181,93 @@ class HostWaitAudit(TorchFunctionMode):
                 return True
         return False
 
-    def _classify(self, func: Any, args: tuple, kwargs: dict) -> tuple[str | None, bool]:
-        """``(wait kind or None, whether the result is a device tensor)``."""
-        tensors = [a for a in (*_flat(args), *_flat(kwargs.values())) if isinstance(a, torch.Tensor)]
-        on_device = any(self.is_device(t) for t in tensors)
+    def _classify(self, func: Any, args: tuple, kwargs: dict) -> tuple[str | None, str]:
+        """``(wait kind or None, the side of the result: device, either or host)``."""
+        sides = [
+            (self._side(a), a.dim()) for a in (*_flat(args), *_flat(kwargs.values())) if isinstance(a, torch.Tensor)
+        ]
+        on_device = any(side != _HOST for side, _ in sides)
         if func in _MOVES:
-            target = self._target(args[1:] if func is torch.Tensor.to else (), kwargs)
-            if target is None:
-                return None, on_device
-            to_device = self._names_device(target)
-            if on_device and not to_device:
-                return "to_host", False
-            if to_device and not on_device:
-                return "to_device", True
-            return None, on_device
+            return self._move(func, args, kwargs, on_device, sides)
         if "device" in kwargs:  # a factory: zeros(..., device=sim.device)
-            return None, self._names_device(kwargs["device"])
-        if not on_device:
-            return None, False
-        if func in _READS:
-            return _READS[func], False
+            return None, self._factory_side(kwargs["device"])
         if func in _INDEXING:
-            key = args[1]
-            keys = key if isinstance(key, tuple) else (key,)
-            if any(isinstance(k, torch.Tensor) and k.dtype == torch.bool for k in keys):
-                return "bool_mask", True
-            if self._host_operands(_flat(args[1:])):
-                return "host_index", True
-            return None, True
-        return None, True  # a host operand in a device op is an error on CUDA, not a wait
+            return self._indexing(func, args)
+        if not on_device:
+            return None, _HOST
+        if func in _READS:
+            return _READS[func], _HOST
+        certain = any(side == _DEVICE for side, _ in sides)
+        host = any(side == _HOST and dim > 0 for side, dim in sides)
+        if func in _COPIES:
+            return ("to_device" if self._side(args[1]) == _HOST else None), self._side(args[0])
+        if certain and host:
+            return MIXED, _DEVICE  # CUDA raises: expected all tensors to be on the same device
+        return None, _DEVICE if certain else (_HOST if host else _EITHER)
+
+    def _move(self, func: Any, args: tuple, kwargs: dict, on_device: bool, sides: list) -> tuple[str | None, str]:
+        """A ``.to()`` / ``as_tensor`` / ``tensor``: a copy to the host or to the device, or none."""
+        target = self._target(args[1:] if func is torch.Tensor.to else (), kwargs)
+        if target is None:
+            return None, sides[0][0] if sides else _HOST
+        to_device = self._names_device(target)
+        if on_device and not to_device:
+            return "to_host", _HOST
+        if to_device and not on_device:
+            return "to_device", self._factory_side(target)
+        return None, sides[0][0] if sides else _HOST
+
+    def _factory_side(self, device: Any) -> str:
+        """A factory naming ``device``: on a CPU audit a ``torch.device`` may be a host
+        tensor's (``torch.eye(6, device=q.device)``), so its tensors take either side."""
+        if not self._names_device(device):
+            return _HOST
+        return _EITHER if isinstance(device, torch.device) and device.type == "cpu" else _DEVICE
+
+    def _indexing(self, func: Any, args: tuple) -> tuple[str | None, str]:
+        """The wait kind of ``t[key]`` / ``t[key] = value``, and the side of the result."""
+        base, key = self._side(args[0]), args[1]
+        keys = key if isinstance(key, tuple) else (key,)
+        value = args[2:] if func is torch.Tensor.__setitem__ else ()
+        advanced = any(isinstance(k, (torch.Tensor, np.ndarray, list)) for k in keys)
+        if base == _HOST:
+            device_keys = any(self._side(k) == _DEVICE for k in _flat(keys))
+            device_value = any(self._side(v) == _DEVICE and v.dim() > 0 for v in value)
+            if device_keys or (device_value and advanced):
+                return MIXED, _HOST  # device indices into host memory, or index_put_ of device values
+            return ("to_host" if device_value else None), _HOST
+        if any(isinstance(k, torch.Tensor) and k.dtype == torch.bool for k in keys):
+            return "bool_mask", base
+        if advanced and base == _DEVICE and self._host_tensors(value):
+            return MIXED, base  # index_put_ of host values into device memory
+        if self._host_operands(_flat(args[1:])):
+            return "host_index", base
+        return None, base
+
+    def _side(self, t: Any) -> str:
+        """``"device"``, ``"either"`` (a CPU audit's factory named the device: see
+        :meth:`_factory_side`) or ``"host"``."""
+        if not self.is_device(t):
+            return _HOST
+        ref = self._either.get(id(t))
+        return _EITHER if ref is not None and ref() is t else _DEVICE
+
+    def _host_tensors(self, values: Any) -> bool:
+        """Whether a host tensor that is not a scalar is among ``values``."""
+        return any(isinstance(v, torch.Tensor) and v.dim() > 0 and self._side(v) == _HOST for v in values)
 
     def __torch_function__(self, func: Any, types: Any, args: tuple = (), kwargs: Any = None) -> Any:
         kwargs = kwargs or {}
-        kind, on_device = self._classify(func, args, kwargs)
+        kind, side = self._classify(func, args, kwargs)
         if kind is not None:
             self.record(kind)
         out = func(*args, **kwargs)
-        if kind in ("cpu", "to_host") and any(out is a for a in args):
-            out = out.clone()  # on the CPU a move to the host returns its input: keep the copy apart
-        if on_device:
+        if kind in ("cpu", "to_host", "to_device") and any(out is a for a in args):
+            out = out.clone()  # on the CPU a move returns its input: keep the copy apart
+        if side != _HOST:
             self.mark_device(*_flat((out,)))
+        if side == _EITHER:
+            self._either.update((id(t), weakref.ref(t)) for t in _flat((out,)) if isinstance(t, torch.Tensor))
         return out
 
     # -- Warp ----------------------------------------------------------------------------------------
@@ -246,9 +300,11 @@ class HostWaitAudit(TorchFunctionMode):
     def __enter__(self) -> "HostWaitAudit":
         from embodichain_core.utils import math as math_utils
 
-        was = math_utils.NUMPY_VIEWS
+        was, consts = math_utils.NUMPY_VIEWS, dict(math_utils._CONSTS)
         math_utils.NUMPY_VIEWS = False  # the torch code a GPU runs, not the CPU's numpy fast path
+        math_utils._CONSTS.clear()  # per-device constants made before would be host tensors here
         self._undo.append(lambda: setattr(math_utils, "NUMPY_VIEWS", was))
+        self._undo.append(lambda: math_utils._CONSTS.update(consts))
         route = contextlib.ExitStack()
         route.enter_context(cpu_device_route())  # envs built inside take a GPU's code paths
         self._undo.append(route.close)
@@ -262,14 +318,18 @@ class HostWaitAudit(TorchFunctionMode):
             self._undo.pop()()
 
     def per_step(self, steps: int) -> dict[str, Any]:
-        """Waits per step in all, by kind, and by call site (most frequent first)."""
+        """Waits per step in all, by kind, and by call site (most frequent first); the ops that
+        mix device and host tensors (errors on CUDA, not waits) apart, under ``"mixed"``."""
         kinds: Counter[str] = Counter()
         for (kind, _), n in self.waits.items():
-            kinds[kind] += n
+            if kind != MIXED:
+                kinds[kind] += n
+        counted = self.waits.most_common()
         return {
             "per_step": sum(kinds.values()) / steps,
             "by_kind": {k: n / steps for k, n in kinds.most_common()},
-            "sites": [{"kind": k, "site": s, "per_step": n / steps} for (k, s), n in self.waits.most_common()],
+            "sites": [{"kind": k, "site": s, "per_step": n / steps} for (k, s), n in counted if k != MIXED],
+            "mixed": [{"site": s, "count": n} for (k, s), n in counted if k == MIXED],
         }
 
 

@@ -160,6 +160,12 @@ class SimBackend(Protocol):
         """``(num_envs, ...)`` read-only values of a model field."""
         ...
 
+    def model_tensor(self, name: str) -> torch.Tensor:
+        """``(num_envs, ...)`` values of a model field as a tensor on :attr:`device`, without
+        a copy through the host where the backend holds them on the device (read it; write
+        with :meth:`set_model_field`)."""
+        ...
+
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into ``field[index]`` of each env (a list ``index`` selects several
         elements: values ``(n, k, ...)``). ``set_const=False``: the caller writes the derived

@@ -49,6 +49,7 @@ class WarpModelFields:
         self._graphs = graphs
         self._expanded: set[str] = set()
         self._views: dict[str, torch.Tensor] = {}
+        self._shared: dict[str, torch.Tensor] = {}  # device copies of shared fields (model_tensor)
         self._host: dict[str, np.ndarray] = {}  # visual fields MuJoCo Warp does not hold
         self.mirrored: set[str] = set()
         """Host fields whose writer also folds their effect into a field MuJoCo Warp batches
@@ -81,6 +82,7 @@ class WarpModelFields:
             self._graphs.clear()
         self._expanded.add(name)
         self._views.pop(name, None)
+        self._shared.pop(name, None)
 
     def _view(self, name: str) -> torch.Tensor:
         """``(num_envs, ...)`` torch view of an expanded field, shaped as in ``MjModel``."""
@@ -136,6 +138,19 @@ class WarpModelFields:
         values = values.view()
         values.flags.writeable = False
         return values
+
+    def model_tensor(self, name: str, device: torch.device) -> torch.Tensor:
+        """``(num_envs, ...)`` values on ``device``: the torch view of a per-env field, a copy
+        of a shared field made once (until it is expanded), host-side visual values copied."""
+        if name in self._expanded:
+            return self._view(name)
+        if name in self._host:
+            return torch.as_tensor(np.array(self._host[name]), device=device)
+        shared = self._shared.get(name)
+        if shared is None:
+            base = torch.as_tensor(np.array(self._template(name)), device=device)
+            shared = self._shared[name] = base.expand((self.num_envs,) + tuple(base.shape))
+        return shared
 
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into ``name[index]`` of each env (see the interface); a field

@@ -280,6 +280,11 @@ class WarpSim(WarpFailures, FieldViews):
         """Read-only ``(num_envs, ...)`` values of model field ``name``."""
         return self.fields.model_field(name)
 
+    def model_tensor(self, name: str) -> torch.Tensor:
+        """``(num_envs, ...)`` values of model field ``name`` on the sim's device (MuJoCo Warp's
+        own array where per env: no host copy)."""
+        return self.fields.model_tensor(name, self.device)
+
     def set_model_field(self, name: str, env_ids: Any, index: Any, values: Any, set_const: bool = True) -> None:
         """Write ``values`` into ``name[index]`` of each env (ConfigError where MuJoCo Warp cannot)."""
         self.fields.set_model_field(name, env_ids, index, values, set_const)

@@ -133,7 +133,7 @@ class RigidObject(Entity):
     # -- physical attributes -----------------------------------------------------------------
     def get_mass(self) -> torch.Tensor:
         """(N,) body masses."""
-        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_mass")[:, self.body_id])))
+        return self._out(self.sim.model_tensor("body_mass")[:, self.body_id])
 
     def set_mass(self, mass: Any, env_ids: Any = None) -> None:
         """Set per-env masses; inertia scales with the mass (same density distribution)."""
@@ -145,7 +145,7 @@ class RigidObject(Entity):
 
     def get_com(self) -> torch.Tensor:
         """(N, 3) centre of mass in the body frame."""
-        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_ipos")[:, self.body_id])))
+        return self._out(self.sim.model_tensor("body_ipos")[:, self.body_id])
 
     def set_com(self, com: Any, env_ids: Any = None) -> None:
         ids = self._ids(env_ids)
@@ -154,7 +154,7 @@ class RigidObject(Entity):
     def get_friction(self) -> torch.Tensor:
         """(N,) sliding friction of the collision geoms (first geom)."""
         gid = self.geom_ids[0] if self.geom_ids else self.visual_geom_ids[0]
-        return self._out(torch.as_tensor(np.array(self.sim.model_field("geom_friction")[:, gid, 0])))
+        return self._out(self.sim.model_tensor("geom_friction")[:, gid, 0])
 
     def set_friction(self, friction: Any, env_ids: Any = None) -> None:
         ids = self._ids(env_ids)

@@ -204,14 +204,15 @@ class Robot(Articulation):
         """(n, 4, 4) float64 TCP pose of part ``name`` in the env frame, where FK runs
         (the sim's device for solvers with ``fk_on_device``, else the CPU).
 
-        With ``qpos`` and ``env_ids`` None on the CPU, the result of the last call is reused
-        while its inputs (joint values, root link pose, solver and TCP) are unchanged.
+        With ``qpos`` and ``env_ids`` None on the host route (the CPU backends' state), the
+        result of the last call is reused while its inputs (joint values, root link pose,
+        solver and TCP) are unchanged.
         """
         solver = self.get_solver(name)
         device = self._fk_device(solver)
         q = self._part_qpos(solver, qpos, env_ids, device)
         base = self._base_matrix(solver, qpos, env_ids, device)
-        current = qpos is None and env_ids is None and device.type == "cpu"
+        current = qpos is None and env_ids is None and device.type == "cpu" and self.state_route.host
         hit = self._fk_cache.get(name, solver, q, base) if current else None
         if hit is not None:
             return hit
@@ -258,8 +259,8 @@ class PartFKCache:
     the part's joint values and the root link pose, compared by value (so a reset, a state
     write or a step within the control step that moves anything is a miss). Only solvers
     with ``fk_on_device`` are cached (their FK depends on nothing else), and only on the
-    CPU: on an accelerator the value comparison would wait for the device, which costs
-    more than recomputing there.
+    host route: on an accelerator the value comparison would wait for the device, which
+    costs more than recomputing there.
     """
 
     def __init__(self) -> None:

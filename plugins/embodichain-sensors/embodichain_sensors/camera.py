@@ -42,6 +42,7 @@ from embodichain_core.sim.sensor_base import BaseSensor
 from embodichain_core.utils.math import compose_frames, quat_normalize, quat_to_matrix
 from embodichain_sensors import geometry as geo
 from embodichain_sensors.camera_arrays import _add_spec_camera, _alloc, _host, _pose_out, _tensor, _trailing
+from embodichain_sensors.device_poses import DevicePoses
 from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
 from embodichain_sensors.mount import Mount, resolve_mount
@@ -84,6 +85,7 @@ class Camera(BaseSensor):
         self._pool: Optional[RenderPool] = None
         self._threaded = False  # the GL backend hands contexts between threads (set by bind)
         self._warp: Optional[WarpCameraRenderer] = None
+        self._device_poses = DevicePoses()
         self._path = f"sensor {self.uid!r}"
         self._ids: Optional[EntityIds] = None
         self._data: dict[str, torch.Tensor] = {}
@@ -242,7 +244,8 @@ class Camera(BaseSensor):
 
     def _update_warp(self) -> None:
         """Every env and view in one MuJoCo Warp launch, from the device state."""
-        self._data = self._outputs(self.warp_renderer.update(self.views, self.get_view_poses(), self._bound_ids()))
+        renderer = self.warp_renderer
+        self._data = self._outputs(renderer.update(self.views, self._device_poses(self), self._bound_ids()))
 
     def _render_view(self, renderer: SensorRenderer, sfx: str, i: int, wants: dict, raw: dict) -> None:
         rgb, depth = renderer.render(color=wants["color"], depth=wants["depth"])
@@ -315,6 +318,7 @@ class Camera(BaseSensor):
         else:
             pos, rot = p[..., :3], quat_to_matrix(quat_normalize(p[..., 3:7]))
         self._local_pos[ids], self._local_rot[ids] = pos, rot
+        self._device_poses.invalidate()
 
     def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
         """Point the camera from ``eye`` at ``target`` (parent frame), for ``env_ids``."""
@@ -326,6 +330,7 @@ class Camera(BaseSensor):
         self._local_pos[ids], self._local_rot[ids] = geo.look_at(
             eye, target, None if up is None else np.asarray(up, float)
         )
+        self._device_poses.invalidate()
 
     def get_intrinsics(self) -> torch.Tensor:
         """``(N, 3, 3)`` intrinsic matrices (float32)."""

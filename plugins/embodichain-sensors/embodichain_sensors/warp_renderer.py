@@ -8,8 +8,10 @@ on the sim device. It keeps the OpenGL path's conventions:
   (OpenCV pixels, pixel centres at integer coordinates), not from MuJoCo's camera
   model, so a ``set_intrinsics`` shows at the next update (one value for every env).
 * **Extrinsics**: each view's pose is written into the worlds' ``cam_xpos``/``cam_xmat``
-  before the launch, from the same :meth:`Camera.get_view_poses` the OpenGL path uses
-  (cameras on moving links, ``set_local_pose`` and ``look_at`` included).
+  before the launch, composed on the device from the mount body's pose in MuJoCo Warp's
+  state (:class:`~embodichain_sensors.device_poses.DevicePoses`: the poses
+  :meth:`Camera.get_view_poses` gives the OpenGL path, without a host round trip; cameras on
+  moving links, ``set_local_pose`` and ``look_at`` included).
 * **Images**: rows top-down; colour uint8 RGBA (alpha 255); depth float32 z-depth in
   metres, ``far`` where nothing is hit within ``far``; masks int32 entity ids, -1 none.
 
@@ -47,13 +49,12 @@ def pixel_rays(intrinsics: Sequence[float], width: int, height: int) -> np.ndarr
     return (rays / np.linalg.norm(rays, axis=1, keepdims=True)).astype(np.float32)
 
 
-def _no_falloff(attenuation: torch.Tensor) -> None:
+def _no_falloff(attenuation: torch.Tensor, falloff: torch.Tensor) -> None:
     """Zero attenuation (MuJoCo 4.0's default) means no falloff, as in the OpenGL path:
-    write it as ``(1, 0, 0)``, which the ray tracer reads that way."""
-    if attenuation.numel():
-        zero = (attenuation == 0).all(dim=-1)
-        if bool(zero.any()):
-            attenuation[zero] = torch.tensor([1.0, 0.0, 0.0], dtype=attenuation.dtype, device=attenuation.device)
+    write it as ``falloff`` = ``(1, 0, 0)`` (on the device), which the ray tracer reads that way."""
+    if attenuation.numel():  # a select on the device, not a read of the mask
+        zero = (attenuation == 0).all(dim=-1, keepdim=True)
+        attenuation.copy_(torch.where(zero, falloff, attenuation))
 
 
 class WarpCameraRenderer:
@@ -81,6 +82,8 @@ class WarpCameraRenderer:
     ):
         self.sim, self.where = sim, where
         self._gpu = str(sim.wp_device).startswith("cuda")
+        # numpy conversions where the backend's state is host memory (Warp's CPU device)
+        self._numpy = bool(sim.capabilities.host_arrays)
         self.camera_ids = [int(c) for c in camera_ids]
         self.width, self.height = int(width), int(height)
         self.wants, self.near, self.far = dict(wants), float(near), float(far)
@@ -107,6 +110,8 @@ class WarpCameraRenderer:
         self._cam_xmat = wp.to_torch(sim.wp_data.cam_xmat)
         self._ids = torch.as_tensor(self.camera_ids, device=dev, dtype=torch.long)
         self._lut: torch.Tensor | None = None
+        attenuation = wp.to_torch(sim.wp_model.light_attenuation)
+        self._falloff = torch.tensor([1.0, 0.0, 0.0], dtype=attenuation.dtype, device=attenuation.device)
 
     # -- inputs ---------------------------------------------------------------------------------
     def check_supported(self) -> None:
@@ -136,19 +141,20 @@ class WarpCameraRenderer:
         self._rays[view * n : (view + 1) * n] = rays
         self._intrinsics[view] = first
 
-    def set_poses(self, poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> None:
-        """Write each view's ``(pos (N, 3), rot (N, 3, 3))`` into the worlds' camera frames."""
+    def set_poses(self, poses: Sequence[tuple[Any, Any]]) -> None:
+        """Write each view's ``(pos (N, 3), rot (N, 3, 3))`` into the worlds' camera frames
+        (tensors on the sim's device, or host arrays copied there)."""
         dev = self._cam_xpos.device
-        pos = torch.as_tensor(np.stack([p for p, _ in poses], axis=1), dtype=torch.float32, device=dev)
-        rot = torch.as_tensor(np.stack([r for _, r in poses], axis=1), dtype=torch.float32, device=dev)
-        self._cam_xpos[:, self._ids] = pos
-        self._cam_xmat[:, self._ids] = rot
+        pos = torch.stack([torch.as_tensor(p, device=dev) for p, _ in poses], dim=1)
+        rot = torch.stack([torch.as_tensor(r, device=dev) for _, r in poses], dim=1)
+        self._cam_xpos[:, self._ids] = pos.to(torch.float32)
+        self._cam_xmat[:, self._ids] = rot.to(torch.float32)
 
     # -- rendering --------------------------------------------------------------------------------
     def render(self) -> None:
         """Refit the scene's bounding volumes and trace every view of every world (one launch)."""
         sim = self.sim
-        _no_falloff(sim.wp.to_torch(sim.wp_model.light_attenuation))
+        _no_falloff(sim.wp.to_torch(sim.wp_model.light_attenuation), self._falloff)
         with sim.wp.ScopedDevice(sim.wp_device):
             sim.mjw.refit_bvh(sim.wp_model, sim.wp_data, self.rc)
             sim.mjw.render(sim.wp_model, sim.wp_data, self.rc)
@@ -173,7 +179,8 @@ class WarpCameraRenderer:
 
     # The conversions run in numpy on the CPU (zero-copy views of Warp's buffers): torch's
     # intra-op threads cost ~8 ms per small elementwise op on a loaded 2-core machine, numpy
-    # ~0.02 ms. On a GPU they are torch ops on the device. The expressions serve both.
+    # ~0.02 ms. On a GPU (and on the CPU device route, where the backend offers no host
+    # views) they are torch ops on the device. The expressions serve both.
     def color(self, view: int) -> torch.Tensor:
         """``(N, H, W, 4)`` uint8 RGBA of view ``view`` (alpha 255)."""
         packed = self._slice(self.rc.rgb_data, view).contiguous()  # (N, H, W) uint32 ARGB
@@ -186,7 +193,7 @@ class WarpCameraRenderer:
     def depth(self, view: int) -> torch.Tensor:
         """``(N, H, W)`` float32 z-depth in metres, ``far`` where nothing is hit."""
         z = self._slice(self.rc.depth_data, view)
-        if z.device.type == "cpu":
+        if self._numpy:
             zn = z.numpy()
             return torch.from_numpy(np.where((zn <= 0) | (zn > self.far), np.float32(self.far), zn))
         far = torch.tensor(self.far, dtype=z.dtype, device=z.device)
@@ -196,7 +203,7 @@ class WarpCameraRenderer:
         """``(N, H, W)`` int32 entity ids (``geom_to_id`` of the hit geom), -1 where none."""
         seg = self._slice(self.rc.seg_data, view)  # (N, H, W, 2): object id, object type
         lut = np.append(np.asarray(geom_to_id, dtype=np.int32), np.int32(-1))  # index -1 -> -1
-        if seg.device.type == "cpu":
+        if self._numpy:
             sn = seg.numpy()
             return torch.from_numpy(lut[np.where(sn[..., 1] == _GEOM, sn[..., 0], -1)])
         if self._lut is None:
@@ -204,10 +211,9 @@ class WarpCameraRenderer:
         geom = torch.where(seg[..., 1] == _GEOM, seg[..., 0], torch.full_like(seg[..., 0], -1))
         return self._lut[geom.long()]
 
-    @staticmethod
-    def _xp(t: torch.Tensor) -> Any:
-        """``t`` as a numpy view on the CPU, else ``t``."""
-        return t.numpy() if t.device.type == "cpu" else t
+    def _xp(self, t: torch.Tensor) -> Any:
+        """``t`` as a numpy view on the host route, else ``t``."""
+        return t.numpy() if self._numpy else t
 
     def _slice(self, array: Any, view: int) -> torch.Tensor:
         """One view's pixels of a context buffer ``(nworld, views * H * W, ...)`` as ``(N, H, W, ...)``."""

@@ -202,3 +202,31 @@ def test_push_cube_renders_alike_with_both_renderers() -> None:
     assert edges <= 0.02 * images["gl"]["mask"].numel()
     assert images["rt"]["mask"].eq(env.sensors["rt"].mask_id_of("cube")).any()
     assert psnr(images["gl"]["color"], images["rt"]["color"]) >= PUSH_CUBE_PSNR_DB
+
+
+def test_the_poses_composed_on_the_device_follow_the_link_and_later_pose_changes() -> None:
+    """The Warp renderer's view poses, composed on the device, equal the host composition
+    (``get_view_poses``) for both stereo views on a moving link, also after a ``look_at``
+    made once the device copies of the local pose exist."""
+    cfg = StereoCameraCfg(
+        uid="head", width=W, height=H, intrinsics=INTR, extrinsics=StereoCameraCfg.ExtrinsicsCfg(parent="eyes")
+    )
+    scene, (cam,) = make_scene(
+        cfg.replace(renderer="warp"), num_envs=2, robot=True, sim_cfg=SimulationManagerCfg(backend="warp")
+    )
+    scene["arm"].set_qpos(torch.tensor([[0.0], [1.0]]), target=False)
+    scene.sim.step(1)
+
+    def assert_equal_poses() -> None:
+        on_device, on_host = cam._device_poses(cam), cam.get_view_poses()
+        assert len(on_device) == len(on_host) == 2
+        for (pos, rot), (pos_h, rot_h) in zip(on_device, on_host):
+            assert pos.device == scene.sim.device
+            np.testing.assert_allclose(pos.cpu().numpy(), pos_h, atol=1e-5)
+            np.testing.assert_allclose(rot.cpu().numpy(), rot_h, atol=1e-5)
+
+    cam.update()
+    assert_equal_poses()
+    cam.look_at((0.2, 0.1, 0.3), (0.6, 0.0, -0.4), env_ids=[1])
+    assert_equal_poses()
+    cam.close()

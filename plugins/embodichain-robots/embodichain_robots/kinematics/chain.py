@@ -90,16 +90,18 @@ class SerialChain:
         host = _ChainConsts(
             self.consts[0], self._next, self._a, self._b, self._u, self._hinge_f, self.hinge, self.axes, self.limits
         )
-        self._on: dict[torch.device, _ChainConsts] = {torch.device("cpu"): host}
+        self._host = host
+        self._on: dict[torch.device, _ChainConsts] = {}
 
     def on(self, device: torch.device) -> "_ChainConsts":
-        """The chain's constant terms on ``device`` (copied there once, then cached)."""
+        """The chain's constant terms on ``device`` (copied there once, then cached; on the
+        CPU the host tensors themselves, which a device audit tells apart from device ones)."""
         device = torch.device(device)
         if device.type == "cuda" and device.index is None:
             device = torch.device("cuda", torch.cuda.current_device())
         consts = self._on.get(device)
         if consts is None:
-            consts = _ChainConsts(*(t.to(device) for t in self._on[torch.device("cpu")]))
+            consts = _ChainConsts(*(t.to(device) for t in self._host))
             self._on[device] = consts
         return consts
 

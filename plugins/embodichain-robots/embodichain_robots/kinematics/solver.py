@@ -170,8 +170,6 @@ class DLSSolver:
     def _tcp_on(self, device: torch.device) -> torch.Tensor:
         """``self.tcp`` on ``device``, cached until the TCP changes (``set_tcp``, a new or
         an in-place edited ``tcp`` tensor)."""
-        if device.type == "cpu":
-            return self.tcp
         key = (device, id(self.tcp), self.tcp._version)
         cached = self._tcp_cache
         if cached is None or cached[0] != key:

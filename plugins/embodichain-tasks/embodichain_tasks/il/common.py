@@ -12,7 +12,7 @@ one arm part and one end-effector part of the robot and appends segments:
   hand or gripper (a fraction of its joint range) while the arm holds still.
 
 Every IK call is batched over the envs, so one demo serves every env of a batch
-(each from its own randomized state).
+(each from its own randomized state). The targets stay on the env's device (a GPU's).
 
 Example:
     >>> demo = DemoBuilder(env, arm="right_arm", eef="right_eef")  # doctest: +SKIP
@@ -76,7 +76,7 @@ def top_down_grasp_frame(yaw: torch.Tensor) -> torch.Tensor:
     """
     yaw = torch.as_tensor(yaw, dtype=torch.float64).reshape(-1)
     closing = torch.stack([-torch.sin(yaw), torch.cos(yaw), torch.zeros_like(yaw)], dim=-1)
-    down = torch.tensor([0.0, 0.0, -1.0], dtype=torch.float64).expand(len(yaw), 3)
+    down = torch.tensor([0.0, 0.0, -1.0], dtype=torch.float64, device=yaw.device).expand(len(yaw), 3)
     return frame_from_axes(down, closing)
 
 
@@ -91,10 +91,11 @@ def yaw_of(rotation: torch.Tensor, fold: bool = True) -> torch.Tensor:
 
 
 def make_pose(rotation: torch.Tensor, position: torch.Tensor) -> torch.Tensor:
-    """(N, 4, 4) homogeneous poses from (N, 3, 3) rotations and (N, 3) positions."""
+    """(N, 4, 4) homogeneous poses from (N, 3, 3) rotations and (N, 3) positions (on the
+    positions' device)."""
     position = torch.as_tensor(position, dtype=torch.float64)
     rotation = torch.as_tensor(rotation, dtype=torch.float64).expand(position.shape[0], 3, 3)
-    pose = torch.eye(4, dtype=torch.float64).repeat(position.shape[0], 1, 1)
+    pose = torch.eye(4, dtype=torch.float64, device=position.device).repeat(position.shape[0], 1, 1)
     pose[:, :3, :3] = rotation
     pose[:, :3, 3] = position
     return pose
@@ -107,8 +108,8 @@ def smooth_step(steps: int) -> torch.Tensor:
 
 
 def interpolate_joints(start: torch.Tensor, goal: torch.Tensor, steps: int) -> torch.Tensor:
-    """(steps, N, k) joint targets from ``start`` to ``goal`` (both (N, k)), smooth-step."""
-    s = smooth_step(steps).to(start.dtype).view(-1, 1, 1)
+    """(steps, N, k) joint targets from ``start`` to ``goal`` (both (N, k), on one device), smooth-step."""
+    s = smooth_step(steps).to(start.device, start.dtype).view(-1, 1, 1)
     return start.unsqueeze(0) + s * (goal - start).unsqueeze(0)
 
 
@@ -125,14 +126,19 @@ class DemoBuilder:
 
     def __init__(self, env: Any, arm: str, eef: Optional[str] = None, eef_closed_high: bool = True):
         self.env, self.robot, self.arm = env, env.robot, arm
-        self.arm_ids = self.robot.get_solver(arm).joint_ids
-        self.eef_ids = self.robot.get_joint_ids(eef, remove_mimic=True) if eef else []
-        limits = self.robot.get_qpos_limits()[:, self.eef_ids].to(torch.float64)
+        self.full = self.robot.get_qpos(target=True).to(torch.float64)
+
+        def index(ids: Any) -> torch.Tensor:  # copied to the device once, not at every row
+            return torch.as_tensor(list(ids), dtype=torch.long, device=self.full.device)
+
+        self.arm_ids = index(self.robot.get_solver(arm).joint_ids)
+        self.eef_ids = index(self.robot.get_joint_ids(eef, remove_mimic=True) if eef else [])
+        self._active = index(env.active_joint_ids)
+        limits = self.robot.get_qpos_limits().to(self.full.device)[:, self.eef_ids].to(torch.float64)
         self._eef_open = limits[..., 0] if eef_closed_high else limits[..., 1]
         self._eef_closed = limits[..., 1] if eef_closed_high else limits[..., 0]
-        self.full = self.robot.get_qpos(target=True).to(torch.float64)
         self.arm_q = self.full[:, self.arm_ids].clone()
-        self.ik_ok = torch.ones(env.num_envs, dtype=torch.bool)
+        self.ik_ok = torch.ones(env.num_envs, dtype=torch.bool, device=self.full.device)
         self._rows: list[torch.Tensor] = []
 
     # -- segments -------------------------------------------------------------------------
@@ -141,8 +147,8 @@ class DemoBuilder:
         failures are recorded in :attr:`ik_ok` (the best attempt is still returned)."""
         seed = self.arm_q if seed is None else seed
         ok, q = self.robot.compute_ik(pose, joint_seed=seed, name=self.arm)
-        self.ik_ok &= ok.cpu()
-        return q.to(torch.float64).cpu()
+        self.ik_ok &= ok.to(self.ik_ok.device)
+        return q.to(self.full.device, torch.float64)
 
     def move_to_pose(self, pose: torch.Tensor, steps: int) -> torch.Tensor:
         """Joint-space move to the IK solution of ``pose``; returns that solution."""
@@ -194,7 +200,7 @@ class DemoBuilder:
             self._rows.append(self._row())
 
     def _row(self) -> torch.Tensor:
-        return self.full[:, self.env.active_joint_ids].to(torch.float32).clone()
+        return self.full[:, self._active].to(torch.float32)
 
 
 # -- scene pieces shared by the IL tasks ------------------------------------------------------

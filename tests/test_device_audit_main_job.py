@@ -1,0 +1,90 @@
+"""The main job on the device route: PickFork-v1 as ``main_job.json`` configures it (the W1, its
+stereo head camera through the Warp renderer, the visual and physical randomization, the
+scripted demonstration) on backend ``warp``, 2 envs on Warp's CPU device, built and run inside
+the device audit (the code paths a GPU takes; the recorder is left out: copying frames to the
+host is its job).
+
+Two promises for the GPU run: no op mixes device and host tensors anywhere in the build, the
+demonstration planning and the steps (on CUDA each would raise), and a step of the scripted
+episode, with the data-generation loop's bookkeeping, waits for the device at most twice (the
+env's done flags and the loop's one read of the per-env flags). Slow: the Warp kernels of the
+W1 scene and the renderer compile once (about a minute cold).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Any, Iterator
+
+import pytest
+
+from embodichain_core.sim.backend.device_audit import HostWaitAudit
+
+pytest.importorskip("embodichain_tasks")
+pytest.importorskip("embodichain_sensors")
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), os.pardir, "benchmarks"))
+from gpu_main_job import job_config  # noqa: E402
+
+WAIT_BUDGET = 2
+STEPS = 5
+
+
+@pytest.fixture(scope="module")
+def audited(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, HostWaitAudit]]:
+    from embodichain_core.cli.run_env import build_parser, prepare
+    from embodichain_core.cli.run_loops import make_env
+
+    work = tmp_path_factory.mktemp("main_job")
+    args = argparse.Namespace(device="cpu", renderer="warp", encoder_processes="auto", image_size=(64, 36))
+    path, _ = job_config(str(work), 2, 2, args)
+    with open(path, encoding="utf-8") as f:
+        cfg = json.load(f)
+    cfg["env"].pop("dataset")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(cfg, f)
+    argv = ["--gym_config", path, "--headless", "--quiet", "--max_episodes", "2", "--seed", "0"]
+    audit = HostWaitAudit("cpu")
+    with audit:
+        env = make_env(prepare(build_parser().parse_args(argv)))
+        try:
+            yield env, audit
+        finally:
+            env.close()
+
+
+def test_the_main_job_runs_with_no_op_mixing_device_and_host_tensors(audited: tuple) -> None:
+    from embodichain_core.cli.run_loops import RunStats, run_episodes
+
+    env, audit = audited
+    HostWaitAudit.check_env(env.unwrapped)
+    stats = RunStats()
+    run_episodes(env, {"max_episodes": 2}, stats)  # reset, plan, step, commit: one scripted round
+    assert stats.episodes >= 2
+    assert stats.env_steps > 0
+    mixed = audit.per_step(1)["mixed"]  # counted since the build
+    assert not mixed, "ops that raise on CUDA:\n" + "\n".join(f"{m['count']} x {m['site']}" for m in mixed)
+
+
+def test_a_scripted_step_waits_for_the_device_at_most_twice(audited: tuple) -> None:
+    from embodichain_core.cli.run_loops import _done_success
+
+    env, audit = audited
+    base = env.unwrapped
+    env.reset(options={"save_data": False})
+    actions = base.create_demo_action_list()
+    n = base.num_envs
+    env.step(actions[0])  # first-step work (lazy caches) stays out of the count
+    audit.clear()
+    for action in actions[1 : STEPS + 1]:  # mid-episode: no reset in these steps
+        _, _, terminated, truncated, info = env.step(action)
+        _done_success(terminated, truncated, info, n)
+    report = audit.per_step(STEPS)
+    sites = "\n".join(f"{s['per_step']:.2f} {s['kind']}: {s['site']}" for s in report["sites"])
+    assert report["per_step"] <= WAIT_BUDGET, f"{report['per_step']} host waits per step:\n{sites}"
+    assert report["per_step"] >= 1, "the done flags are read every step: the audit counted nothing"
+    assert not report["mixed"]
+    assert base.sensors["eye_in_head"].get_data()["color"].device == base.device
