@@ -94,3 +94,34 @@ def test_the_device_ik_matches_the_cpu_ik(audited: tuple, shift: tuple, yaw: flo
     assert torch.allclose(q_dev.cpu(), q_cpu.cpu(), atol=1e-5)
     if not any(solved):
         assert torch.equal(q_dev, seed)
+
+
+def test_compute_ik_on_the_device_route_restarts_on_the_cpu_what_the_device_left(audited: tuple) -> None:
+    """``robot.compute_ik``'s device route (``part_ik``): the device solves, the envs it left
+    unsolved get ``get_ik``'s restarts on the CPU, and the result is ``get_ik``'s exactly;
+    a solve where every env converges waits for the device once."""
+    from embodichain_core.sim.entities.part_ik import solve_part_ik
+
+    env, audit = audited
+    solver = env.robot.get_solver(PART)
+    limits = solver.chain.limits
+    goal = limits[:, 0] + (limits[:, 1] - limits[:, 0]) * torch.rand(
+        16, len(limits), generator=torch.Generator().manual_seed(0), dtype=torch.float64
+    )
+    target = solver.get_fk(goal)
+    seed = ((limits[:, 0] + limits[:, 1]) / 2).expand(16, -1).clone()
+    first, _ = solver.get_ik_on_device(target, seed)
+    assert first.any(), "some envs must converge on the device"
+    assert not first.all(), "some envs must need the CPU's restarts"
+    ok_host, q_host = solve_part_ik(solver, target, seed, on_device=False)
+    ok_route, q_route = solve_part_ik(solver, target, seed, on_device=True)
+    assert torch.equal(ok_route, ok_host)
+    assert bool(ok_host.all())
+    assert torch.equal(q_route, q_host)
+    converged = (target[first].clone(), seed[first].clone())
+    audit.mark_device(*converged)  # as a GPU run hands them over
+    audit.clear()
+    solve_part_ik(solver, *converged, on_device=True)
+    report = audit.per_step(1)
+    assert report["by_kind"] == {"nonzero": 1.0}, report["sites"]
+    assert "part_ik.py" in report["sites"][0]["site"]

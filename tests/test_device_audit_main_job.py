@@ -33,23 +33,44 @@ WAIT_BUDGET = 2
 STEPS = 5
 
 
-@pytest.fixture(scope="module")
-def audited(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, HostWaitAudit]]:
+def _make_env(work: str) -> Any:
+    """The main job's env on backend warp, Warp's CPU device, 2 envs, 64x36 camera, no recorder."""
     from embodichain_core.cli.run_env import build_parser, prepare
     from embodichain_core.cli.run_loops import make_env
 
-    work = tmp_path_factory.mktemp("main_job")
     args = argparse.Namespace(device="cpu", renderer="warp", encoder_processes="auto", image_size=(64, 36))
-    path, _ = job_config(str(work), 2, 2, args)
+    path, _ = job_config(work, 2, 2, args)
     with open(path, encoding="utf-8") as f:
         cfg = json.load(f)
     cfg["env"].pop("dataset")
     with open(path, "w", encoding="utf-8") as f:
         json.dump(cfg, f)
     argv = ["--gym_config", path, "--headless", "--quiet", "--max_episodes", "2", "--seed", "0"]
+    return make_env(prepare(build_parser().parse_args(argv)))
+
+
+def _plan(env: Any) -> tuple[list, Any]:
+    """The scripted demonstration from a reset with seed 7, and its IK success flags."""
+    env.reset(seed=7, options={"save_data": False})
+    return env.unwrapped.create_demo_action_list(), env.unwrapped.demo_ik_ok
+
+
+@pytest.fixture(scope="module")
+def host_plan(tmp_path_factory: pytest.TempPathFactory) -> tuple[list, Any]:
+    """:func:`_plan` on the host route (built and run before any audit)."""
+    env = _make_env(str(tmp_path_factory.mktemp("host_route")))
+    try:
+        assert env.unwrapped.sim.capabilities.host_arrays
+        return _plan(env)
+    finally:
+        env.close()
+
+
+@pytest.fixture(scope="module")
+def audited(host_plan: tuple, tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, HostWaitAudit]]:
     audit = HostWaitAudit("cpu")
     with audit:
-        env = make_env(prepare(build_parser().parse_args(argv)))
+        env = _make_env(str(tmp_path_factory.mktemp("main_job")))
         try:
             yield env, audit
         finally:
@@ -88,3 +109,16 @@ def test_a_scripted_step_waits_for_the_device_at_most_twice(audited: tuple) -> N
     assert report["per_step"] >= 1, "the done flags are read every step: the audit counted nothing"
     assert not report["mixed"]
     assert base.sensors["eye_in_head"].get_data()["color"].device == base.device
+
+
+def test_the_scripted_plan_is_the_same_on_both_routes(audited: tuple, host_plan: tuple) -> None:
+    """The demonstration planned on the device route (IK started on the device, restarts on
+    the CPU for what it leaves) is the one planned on the host route, from the same reset."""
+    import torch
+
+    env, _ = audited
+    (device_plan, device_ok), (plan, ok) = _plan(env), host_plan
+    assert torch.equal(device_ok.cpu(), ok.cpu())
+    assert len(device_plan) == len(plan) > 50
+    for step, (a, b) in enumerate(zip(device_plan, plan)):
+        assert torch.allclose(a.cpu(), b.cpu(), atol=1e-5), f"step {step}: {(a.cpu() - b.cpu()).abs().max()}"

@@ -36,14 +36,14 @@ import contextlib
 import functools
 import re
 import traceback
-import weakref
 from collections import Counter
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import numpy as np
 import torch
 from torch.overrides import TorchFunctionMode
 
+from embodichain_core.sim.backend.tensor_sides import DEVICE, EITHER, HOST, TensorSides, flat
 from embodichain_core.sim.backend.warp_device import cpu_device_route
 
 #: Reads of device memory by the host.
@@ -71,7 +71,6 @@ _MOVES = {torch.Tensor.to, torch.as_tensor, torch.tensor, torch.Tensor.new_tenso
 _COPIES = {torch.Tensor.copy_}
 #: The kind of an op mixing device tensors with host tensors (not scalars): CUDA raises there.
 MIXED = "mixed_devices"
-_DEVICE, _EITHER, _HOST = "device", "either", "host"
 _WARP_WAITS = ("synchronize", "synchronize_device", "synchronize_stream", "synchronize_event")
 _PROJECT = re.compile(r"(embodichain_\w+)/(.+\.py)$")
 
@@ -91,7 +90,7 @@ def call_site(depth: int = 3) -> str:
     return " <- ".join(sites) if sites else "(outside the project)"
 
 
-class HostWaitAudit(TorchFunctionMode):
+class HostWaitAudit(TensorSides, TorchFunctionMode):
     """Count host waits (device-to-host reads, blocking host-to-device copies) by call site.
 
     Enter it before the env is built, so that the tensors the env makes on its device at
@@ -106,12 +105,9 @@ class HostWaitAudit(TorchFunctionMode):
     """
 
     def __init__(self, device: Any = "cpu"):
-        super().__init__()
-        self.device = torch.device(device)
+        TorchFunctionMode.__init__(self)
+        TensorSides.__init__(self, device)
         self.waits: Counter[tuple[str, str]] = Counter()
-        self._device: dict[int, weakref.ref] = {}
-        self._either: dict[int, weakref.ref] = {}
-        self._storages: set[int] = set()
         self._undo: list[Callable[[], None]] = []
 
     @staticmethod
@@ -129,64 +125,15 @@ class HostWaitAudit(TorchFunctionMode):
         """Forget the waits counted so far (the device tensors stay known)."""
         self.waits.clear()
 
-    # -- which tensors are on the device -----------------------------------------------------------
-    def mark_device(self, *tensors: Any) -> None:
-        """Declare ``tensors`` device tensors (a policy's actions on the GPU, say)."""
-        for t in tensors:
-            if isinstance(t, torch.Tensor):
-                self._device[id(t)] = weakref.ref(t)
-
-    def mark_storage(self, t: Any) -> None:
-        """Declare ``t``'s memory device memory: every tensor viewing it is a device tensor
-        (Warp's arrays, whatever views and subclasses the backend makes of them)."""
-        if isinstance(t, torch.Tensor):
-            self._storages.add(t.untyped_storage().data_ptr())
-
-    def is_device(self, t: Any) -> bool:
-        """Whether ``t`` is a device tensor (see the module docstring)."""
-        if not isinstance(t, torch.Tensor):
-            return False
-        ref = self._device.get(id(t))
-        if ref is not None and ref() is t:
-            return True
-        return bool(self._storages) and t.untyped_storage().data_ptr() in self._storages
-
-    def _names_device(self, device: Any) -> bool:
-        if isinstance(device, str):
-            return device.startswith("cuda")
-        return isinstance(device, torch.device) and (device == self.device or device.type == "cuda")
-
-    def _target(self, args: tuple, kwargs: dict) -> Any:
-        """The device a move/factory call names (``None``: it names none)."""
-        if "device" in kwargs:
-            return kwargs["device"]
-        for a in args:
-            if isinstance(a, (str, torch.device)):
-                return a
-            if isinstance(a, torch.Tensor):
-                return self.device if self.is_device(a) else "cpu"
-        return None
-
     # -- counting ------------------------------------------------------------------------------------
     def record(self, kind: str) -> None:
         """Count one wait of ``kind`` at the current project call site."""
         self.waits[(kind, call_site())] += 1
 
-    def _host_operands(self, values: Iterator[Any]) -> bool:
-        """Whether a host tensor (not a scalar), a numpy array or an index list is among them."""
-        for v in values:
-            if isinstance(v, torch.Tensor) and v.dim() > 0 and not self.is_device(v):
-                return True
-            if isinstance(v, (np.ndarray, list)) and np.ndim(v) > 0:
-                return True
-        return False
-
     def _classify(self, func: Any, args: tuple, kwargs: dict) -> tuple[str | None, str]:
         """``(wait kind or None, the side of the result: device, either or host)``."""
-        sides = [
-            (self._side(a), a.dim()) for a in (*_flat(args), *_flat(kwargs.values())) if isinstance(a, torch.Tensor)
-        ]
-        on_device = any(side != _HOST for side, _ in sides)
+        sides = [(self.side(a), a.dim()) for a in (*flat(args), *flat(kwargs.values())) if isinstance(a, torch.Tensor)]
+        on_device = any(side != HOST for side, _ in sides)
         if func in _MOVES:
             return self._move(func, args, kwargs, on_device, sides)
         if "device" in kwargs:  # a factory: zeros(..., device=sim.device)
@@ -194,67 +141,48 @@ class HostWaitAudit(TorchFunctionMode):
         if func in _INDEXING:
             return self._indexing(func, args)
         if not on_device:
-            return None, _HOST
+            return None, HOST
         if func in _READS:
-            return _READS[func], _HOST
-        certain = any(side == _DEVICE for side, _ in sides)
-        host = any(side == _HOST and dim > 0 for side, dim in sides)
+            return _READS[func], HOST
+        certain = any(side == DEVICE for side, _ in sides)
+        host = any(side == HOST and dim > 0 for side, dim in sides)
         if func in _COPIES:
-            return ("to_device" if self._side(args[1]) == _HOST else None), self._side(args[0])
+            return ("to_device" if self.side(args[1]) == HOST else None), self.side(args[0])
         if certain and host:
-            return MIXED, _DEVICE  # CUDA raises: expected all tensors to be on the same device
-        return None, _DEVICE if certain else (_HOST if host else _EITHER)
+            return MIXED, DEVICE  # CUDA raises: expected all tensors to be on the same device
+        return None, DEVICE if certain else (HOST if host else EITHER)
 
     def _move(self, func: Any, args: tuple, kwargs: dict, on_device: bool, sides: list) -> tuple[str | None, str]:
         """A ``.to()`` / ``as_tensor`` / ``tensor``: a copy to the host or to the device, or none."""
         target = self._target(args[1:] if func is torch.Tensor.to else (), kwargs)
         if target is None:
-            return None, sides[0][0] if sides else _HOST
+            return None, sides[0][0] if sides else HOST
         to_device = self._names_device(target)
         if on_device and not to_device:
-            return "to_host", _HOST
+            return "to_host", HOST
         if to_device and not on_device:
             return "to_device", self._factory_side(target)
-        return None, sides[0][0] if sides else _HOST
-
-    def _factory_side(self, device: Any) -> str:
-        """A factory naming ``device``: on a CPU audit a ``torch.device`` may be a host
-        tensor's (``torch.eye(6, device=q.device)``), so its tensors take either side."""
-        if not self._names_device(device):
-            return _HOST
-        return _EITHER if isinstance(device, torch.device) and device.type == "cpu" else _DEVICE
+        return None, sides[0][0] if sides else HOST
 
     def _indexing(self, func: Any, args: tuple) -> tuple[str | None, str]:
         """The wait kind of ``t[key]`` / ``t[key] = value``, and the side of the result."""
-        base, key = self._side(args[0]), args[1]
+        base, key = self.side(args[0]), args[1]
         keys = key if isinstance(key, tuple) else (key,)
         value = args[2:] if func is torch.Tensor.__setitem__ else ()
         advanced = any(isinstance(k, (torch.Tensor, np.ndarray, list)) for k in keys)
-        if base == _HOST:
-            device_keys = any(self._side(k) == _DEVICE for k in _flat(keys))
-            device_value = any(self._side(v) == _DEVICE and v.dim() > 0 for v in value)
+        if base == HOST:
+            device_keys = any(self.side(k) == DEVICE for k in flat(keys))
+            device_value = any(self.side(v) == DEVICE and v.dim() > 0 for v in value)
             if device_keys or (device_value and advanced):
-                return MIXED, _HOST  # device indices into host memory, or index_put_ of device values
-            return ("to_host" if device_value else None), _HOST
+                return MIXED, HOST  # device indices into host memory, or index_put_ of device values
+            return ("to_host" if device_value else None), HOST
         if any(isinstance(k, torch.Tensor) and k.dtype == torch.bool for k in keys):
             return "bool_mask", base
-        if advanced and base == _DEVICE and self._host_tensors(value):
+        if advanced and base == DEVICE and self._host_tensors(value):
             return MIXED, base  # index_put_ of host values into device memory
-        if self._host_operands(_flat(args[1:])):
+        if self._host_operands(flat(args[1:])):
             return "host_index", base
         return None, base
-
-    def _side(self, t: Any) -> str:
-        """``"device"``, ``"either"`` (a CPU audit's factory named the device: see
-        :meth:`_factory_side`) or ``"host"``."""
-        if not self.is_device(t):
-            return _HOST
-        ref = self._either.get(id(t))
-        return _EITHER if ref is not None and ref() is t else _DEVICE
-
-    def _host_tensors(self, values: Any) -> bool:
-        """Whether a host tensor that is not a scalar is among ``values``."""
-        return any(isinstance(v, torch.Tensor) and v.dim() > 0 and self._side(v) == _HOST for v in values)
 
     def __torch_function__(self, func: Any, types: Any, args: tuple = (), kwargs: Any = None) -> Any:
         kwargs = kwargs or {}
@@ -264,10 +192,10 @@ class HostWaitAudit(TorchFunctionMode):
         out = func(*args, **kwargs)
         if kind in ("cpu", "to_host", "to_device") and any(out is a for a in args):
             out = out.clone()  # on the CPU a move returns its input: keep the copy apart
-        if side != _HOST:
-            self.mark_device(*_flat((out,)))
-        if side == _EITHER:
-            self._either.update((id(t), weakref.ref(t)) for t in _flat((out,)) if isinstance(t, torch.Tensor))
+        if side == EITHER:
+            self.mark_either(out)
+        elif side == DEVICE:
+            self.mark_device(*flat((out,)))
         return out
 
     # -- Warp ----------------------------------------------------------------------------------------
@@ -331,14 +259,3 @@ class HostWaitAudit(TorchFunctionMode):
             "sites": [{"kind": k, "site": s, "per_step": n / steps} for (k, s), n in counted if k != MIXED],
             "mixed": [{"site": s, "count": n} for (k, s), n in counted if k == MIXED],
         }
-
-
-def _flat(values: Any) -> Iterator[Any]:
-    """Tensors and other leaves of (one level of nested) tuples, lists and dicts."""
-    for v in values:
-        if isinstance(v, (tuple, list)):
-            yield from v
-        elif isinstance(v, dict):
-            yield from v.values()
-        else:
-            yield v

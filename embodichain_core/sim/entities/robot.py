@@ -12,7 +12,9 @@ plugins register (:mod:`embodichain_core.sim.entities.solvers`). A solver offers
 * ``get_ik(target (n, 4, 4), qpos_seed (n, k)) -> (success (n,), qpos (n, k))``;
 * optionally ``fk_on_device = True``: ``get_fk`` computes on its input's device and depends
   on nothing but ``qpos``, ``chain`` and ``tcp``; part FK then runs on the sim's device
-  (no host copy), and on the CPU the current pose is reused while those inputs are equal.
+  (no host copy), and on the CPU the current pose is reused while those inputs are equal;
+* optionally ``ik_on_device = True`` and ``get_ik_on_device(target, qpos_seed)``: on the
+  device route IK then starts on the sim's device (:mod:`~embodichain_core.sim.entities.part_ik`).
 
 :meth:`Robot.compute_fk` (with ``name``) and :meth:`Robot.compute_ik` convert
 between the env frame and the root link frame.
@@ -27,6 +29,7 @@ import numpy as np
 import torch
 
 from embodichain_core.sim.entities.articulation import Articulation
+from embodichain_core.sim.entities.part_ik import ik_route, solve_part_ik
 from embodichain_core.config.joint_check import match_part_patterns
 from embodichain_core.utils.math import matrix_to_pose, pose_to_matrix, transform_inverse
 from embodichain_core.utils.suggest import did_you_mean
@@ -241,15 +244,16 @@ class Robot(Articulation):
             ``(success (n,) bool, qpos (n, k))``; ``qpos`` respects the joint limits
             and is in the order of ``robot.get_solver(name).joint_ids``.
         """
-        solver, env = self.get_solver(name), self._ids(env_ids)
-        target = torch.as_tensor(pose).detach().to("cpu", torch.float64)
+        solver = self.get_solver(name)
+        on_device, device = ik_route(solver, self.state_route.host, self.sim.device)
+        target = torch.as_tensor(pose).detach().to(device, torch.float64)
         if target.shape[-1] == 7:
             target = pose_to_matrix(target)
-        target = target.reshape(len(env), 4, 4)
-        seed = self._part_qpos(solver, joint_seed, env)
-        local = transform_inverse(self._base_matrix(solver, None, env)) @ target
-        success, qpos = solver.get_ik(local, qpos_seed=seed)
-        return torch.as_tensor(success, dtype=torch.bool).to(self.device), self._out(torch.as_tensor(qpos))
+        target = target.reshape(len(self._ids(env_ids)), 4, 4)
+        seed = self._part_qpos(solver, joint_seed, env_ids, device)
+        local = transform_inverse(self._base_matrix(solver, None, env_ids, device)) @ target
+        success, qpos = solve_part_ik(solver, local, seed, on_device)
+        return success.to(self.device), self._out(qpos)
 
 
 class PartFKCache:
