@@ -27,12 +27,16 @@ the job's own config under ``changes``.
 ``--case camera``: PushCube-v1 with a 128x128 RGB Warp camera in its observation
 (``sensor`` of the env), env-steps/s at each ``--num-envs`` with zero actions.
 
-``--smoke`` runs both cases with 2 envs on Warp's CPU device, the job's camera at 64x36 (a
+``--case syncs``: the host waits of the main job's scripted plan and of its steps, with their
+call sites (``main_job_syncs.py``; torch's sync check on CUDA).
+
+``--smoke`` runs every case with 2 envs on Warp's CPU device, the job's camera at 64x36 (a
 correctness run of this script, not a measurement).
 
 Usage:
     python benchmarks/gpu_main_job.py --device cuda --num-envs 64 256 1024
     python benchmarks/gpu_main_job.py --case camera --device cuda --num-envs 1024 4096
+    python benchmarks/gpu_main_job.py --case syncs --device cuda --num-envs 1024
     python benchmarks/gpu_main_job.py --smoke
 """
 
@@ -51,6 +55,7 @@ os.environ.setdefault("HF_HUB_OFFLINE", "1")
 os.environ.setdefault("HF_DATASETS_OFFLINE", "1")
 
 from common import machine_info, print_table, write_json  # noqa: E402
+from main_job_syncs import measure_syncs  # noqa: E402
 from record_main_job import main_job_config  # noqa: E402
 
 DEFAULT_OUT = os.path.join("benchmarks", "results", "gpu_main_job.json")
@@ -229,7 +234,7 @@ def measure_camera(num_envs: int, args: argparse.Namespace) -> dict[str, Any]:
 
 def _parse(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--case", choices=("main_job", "camera"), nargs="+", default=["main_job"])
+    p.add_argument("--case", choices=("main_job", "camera", "syncs"), nargs="+", default=["main_job"])
     p.add_argument("--device", default="cuda", help="cuda, cuda:N or cpu (Warp's CPU device)")
     p.add_argument("--num-envs", type=int, nargs="+", default=[64, 256, 1024])
     p.add_argument("--episodes-per-env", type=int, default=1)
@@ -238,7 +243,7 @@ def _parse(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument(
         "--image-size", type=int, nargs=2, metavar=("W", "H"), help="the job's camera size (its own: 320x180)"
     )
-    p.add_argument("--steps", type=int, default=50, help="timed env steps per camera row")
+    p.add_argument("--steps", type=int, default=50, help="timed env steps per camera row, counted steps per syncs row")
     p.add_argument(
         "--encoder-processes",
         default="auto",
@@ -249,7 +254,7 @@ def _parse(argv: Optional[list[str]] = None) -> argparse.Namespace:
     p.add_argument("--smoke", action="store_true", help="2 envs on Warp's CPU device, both cases, few steps")
     args = p.parse_args(argv)
     if args.smoke:  # a small job camera: Warp's CPU device traces rays on one thread
-        args.case, args.device, args.num_envs, args.steps = ["main_job", "camera"], "cpu", [2], 2
+        args.case, args.device, args.num_envs, args.steps = ["main_job", "camera", "syncs"], "cpu", [2], 2
         args.image_size = args.image_size or [64, 36]
     return args
 
@@ -263,6 +268,8 @@ def main(argv: Optional[list[str]] = None) -> dict[str, Any]:
                 rows.append(measure_main_job(n, args, workdir))
             if "camera" in args.case:
                 rows.append(measure_camera(n, args))
+            if "syncs" in args.case:
+                rows.append(measure_syncs(n, args, workdir))
     payload = {"settings": vars(args), "machine": machine_info(), "rows": rows}
     write_json(args.out, payload)
     _print(rows)
@@ -285,6 +292,13 @@ def _print(rows: list[dict[str, Any]]) -> None:
             camera,
             [("num_envs", "envs", "d"), ("env_steps_per_s", "env-steps/s", ".0f")],
             title="PushCube-v1 with a Warp camera",
+        )
+    syncs = [r for r in rows if r["case"] == "syncs"]
+    if syncs:
+        print_table(
+            syncs,
+            [("num_envs", "envs", "d"), ("per_step", "waits/step", ".2f"), ("plan_syncs", "waits/plan", ".0f")],
+            title="Host waits of the main job (torch's sync check on CUDA, Warp's waits)",
         )
 
 
