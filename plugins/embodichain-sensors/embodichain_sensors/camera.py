@@ -28,7 +28,6 @@ Example:
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from typing import Any, Optional
 
 import mujoco
@@ -37,11 +36,11 @@ import torch
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.rendering import THREADED_BACKENDS, gl_backend
-from embodichain_core.sim.entities.base import env_index
 from embodichain_core.sim.sensor_base import BaseSensor
-from embodichain_core.utils.math import compose_frames, quat_normalize, quat_to_matrix
+from embodichain_core.utils.math import compose_frames
 from embodichain_sensors import geometry as geo
-from embodichain_sensors.camera_arrays import _add_spec_camera, _alloc, _host, _pose_out, _tensor, _trailing
+from embodichain_sensors.camera_arrays import _add_spec_camera, _alloc, _host, _tensor, _trailing
+from embodichain_sensors.camera_poses import CameraPoses, View
 from embodichain_sensors.device_poses import DevicePoses
 from embodichain_sensors.envs import EnvReader
 from embodichain_sensors.ids import EntityIds
@@ -52,25 +51,7 @@ from embodichain_sensors.renderer_choice import choose_renderer
 from embodichain_sensors.warp_renderer import WarpCameraRenderer
 
 
-@dataclass
-class View:
-    """One rendered viewpoint of a sensor: output key ``suffix``, per-env
-    ``intrinsics (N, 4)``, its pose in the sensor (rig) frame, its spec camera."""
-
-    suffix: str
-    intrinsics: np.ndarray
-    pos: np.ndarray
-    rot: np.ndarray
-    camera: str = ""
-    camera_id: int = -1
-
-    @property
-    def is_identity(self) -> bool:
-        """The view is the sensor frame itself (a mono camera)."""
-        return not self.pos.any() and np.array_equal(self.rot, np.eye(3))
-
-
-class Camera(BaseSensor):
+class Camera(CameraPoses, BaseSensor):
     """A camera of the scene (see the module docstring for its outputs)."""
 
     image_dims: dict[str, int] = {"depth": 0, "mask": 0}  # extra trailing dims of HxW outputs
@@ -92,17 +73,6 @@ class Camera(BaseSensor):
         self._envs = EnvReader(scene)
 
     # -- construction ---------------------------------------------------------------------
-    def _initial_local_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        ext = self.cfg.extrinsics
-        if ext.eye is not None:
-            pos, rot = geo.look_at(
-                np.asarray(ext.eye), np.asarray(ext.target), None if ext.up is None else np.asarray(ext.up)
-            )
-        else:
-            pos, rot = np.asarray(ext.pos, dtype=np.float64), quat_to_matrix(quat_normalize(np.asarray(ext.quat)))
-        n = self.num_envs
-        return np.repeat(pos[None], n, 0), np.repeat(rot[None], n, 0)
-
     def _make_views(self) -> list[View]:
         intr = np.tile(np.asarray(self.cfg.intrinsics, dtype=np.float64), (self.num_envs, 1))
         return [View("", intr, np.zeros(3), np.eye(3))]
@@ -293,53 +263,6 @@ class Camera(BaseSensor):
             self.update()
         return self._data
 
-    # -- poses and intrinsics ------------------------------------------------------------------
-    def get_view_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per view, ``(pos (N, 3), rot (N, 3, 3))`` in the env frame (current state)."""
-        mpos, mrot = self.mount.body_poses(self.scene.sim)
-        rig = compose_frames(mpos, mrot, self._local_pos, self._local_rot)
-        return [rig if v.is_identity else compose_frames(*rig, v.pos, v.rot) for v in self.views]
-
-    def get_arena_pose(self, to_matrix: bool = False) -> torch.Tensor:
-        """The camera (rig) pose in the env frame: ``(N, 7)`` (xyz, wxyz) or ``(N, 4, 4)``."""
-        mpos, mrot = self.mount.body_poses(self.scene.sim)
-        return _pose_out(*compose_frames(mpos, mrot, self._local_pos, self._local_rot), to_matrix)
-
-    def get_local_pose(self, to_matrix: bool = False) -> torch.Tensor:
-        """The camera pose in its parent frame (the env frame without a parent)."""
-        return _pose_out(self._local_pos, self._local_rot, to_matrix)
-
-    def set_local_pose(self, pose: Any, env_ids: Any = None) -> None:
-        """Set the pose in the parent frame: ``(n, 7)`` (xyz, wxyz) or ``(n, 4, 4)``."""
-        ids = env_index(env_ids, self.num_envs).cpu().numpy()
-        p = np.asarray(pose.detach().cpu() if isinstance(pose, torch.Tensor) else pose, dtype=np.float64)
-        if p.shape[-2:] == (4, 4):
-            pos, rot = p[..., :3, 3], p[..., :3, :3]
-        else:
-            pos, rot = p[..., :3], quat_to_matrix(quat_normalize(p[..., 3:7]))
-        self._local_pos[ids], self._local_rot[ids] = pos, rot
-        self._device_poses.invalidate()
-
-    def look_at(self, eye: Any, target: Any, up: Any = None, env_ids: Any = None) -> None:
-        """Point the camera from ``eye`` at ``target`` (parent frame), for ``env_ids``."""
-        ids = env_index(env_ids, self.num_envs).cpu().numpy()
-        eye, target = (
-            np.broadcast_to(np.asarray(eye, float), (len(ids), 3)),
-            np.broadcast_to(np.asarray(target, float), (len(ids), 3)),
-        )
-        self._local_pos[ids], self._local_rot[ids] = geo.look_at(
-            eye, target, None if up is None else np.asarray(up, float)
-        )
-        self._device_poses.invalidate()
-
-    def get_intrinsics(self) -> torch.Tensor:
-        """``(N, 3, 3)`` intrinsic matrices (float32)."""
-        return torch.from_numpy(geo.intrinsic_matrix(self.views[0].intrinsics).astype(np.float32))
-
-    def set_intrinsics(self, intrinsics: Any, env_ids: Any = None) -> None:
-        """Set ``(fx, fy, cx, cy)`` (or ``(n, 3, 3)`` matrices) for ``env_ids``."""
-        _set_intrinsics(self.views[0], intrinsics, env_index(env_ids, self.num_envs).cpu().numpy())
-
     # -- ids and lifecycle ------------------------------------------------------------------------
     @property
     def mask_id_table(self) -> dict[int, str]:
@@ -370,12 +293,3 @@ class Camera(BaseSensor):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-
-
-def _set_intrinsics(view: View, intrinsics: Any, ids: np.ndarray) -> None:
-    k = np.asarray(intrinsics.detach().cpu() if isinstance(intrinsics, torch.Tensor) else intrinsics, dtype=np.float64)
-    if k.shape[-2:] == (3, 3):
-        k = np.stack([k[..., 0, 0], k[..., 1, 1], k[..., 0, 2], k[..., 1, 2]], axis=-1)
-    if np.any(k[..., :2] <= 0):
-        raise ValueError(f"fx and fy must be > 0, got {k.tolist()}")
-    view.intrinsics[ids] = k

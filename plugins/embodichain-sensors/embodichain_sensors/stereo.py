@@ -30,7 +30,9 @@ import torch
 from embodichain_core.sim.entities.base import env_index
 from embodichain_core.utils.math import euler_xyz_to_quat, quat_to_matrix
 from embodichain_sensors import geometry as geo
-from embodichain_sensors.camera import Camera, View, _host, _pose_out, _set_intrinsics
+from embodichain_sensors.camera import Camera
+from embodichain_sensors.camera_arrays import _host, _pose_out
+from embodichain_sensors.camera_poses import View, _set_intrinsics
 
 
 class StereoCamera(Camera):
