@@ -88,9 +88,10 @@ class Source:
 
     def convert(self, value: Any, num_envs: int) -> np.ndarray:
         """The batch ``(N, ...)`` as an owned array of the feature dtype and shape."""
+        fresh = isinstance(value, torch.Tensor) and value.device.type != "cpu"  # .cpu() copies it off the GPU
         arr = to_numpy(value)
         if self.kind == "image":
-            return _rgb(arr)
+            return _rgb(arr, owned=fresh)
         if self.kind == "depth":
             return pack_depth(arr)
         if self.kind == "mask":
@@ -109,15 +110,17 @@ class Source:
         return {"dtype": self.dtype, "shape": self.shape, "names": self.names}
 
 
-def _rgb(arr: np.ndarray) -> np.ndarray:
+def _rgb(arr: np.ndarray, owned: bool = False) -> np.ndarray:
     """``(N, H, W, C)`` colour as owned uint8 RGB (alpha dropped, grey repeated).
 
     uint8 RGBA (what cameras give) is copied whole, a plain memory copy, and the alpha
     dropped as a view of that copy: the 4-to-3 channel gather costs ~40x the copy, and
-    it then happens once, off the stepping loop, where the frame is encoded.
+    it then happens once, off the stepping loop, where the frame is encoded. ``owned``:
+    ``arr`` is already a fresh copy nothing else holds (a GPU's frames copied to the host),
+    so the alpha is dropped as a view of it, without a second copy.
     """
     if arr.dtype == np.uint8 and arr.ndim == 4 and arr.shape[-1] == 4:
-        return np.array(arr, copy=True)[..., :3]
+        return (arr if owned else np.array(arr, copy=True))[..., :3]
     if arr.ndim == 3:
         arr = arr[..., None]
     if np.issubdtype(arr.dtype, np.floating):

@@ -56,3 +56,18 @@ def test_dataset_readers_take_device_tensors():
     assert np.allclose(depth_metres(on_device(packed)), depth, atol=1e-3)
     chw = np.full((3, 2, 2), 0.5, dtype=np.float32)
     assert _to_hwc_uint8(on_device(chw)).shape == (2, 2, 3)
+
+
+def test_colour_frames_copied_off_a_gpu_are_not_copied_again():
+    """A GPU's frames reach the host as a fresh copy: the RGB frame is a view of it. A CPU
+    tensor (the camera's own buffer on the CPU) is still copied, so the recorded frame never
+    aliases memory the next render overwrites."""
+    from embodichain_lerobot.features import _rgb
+
+    rgba = np.random.default_rng(0).integers(0, 256, size=(2, 6, 8, 4), dtype=np.uint8)
+    assert np.shares_memory(_rgb(rgba, owned=True), rgba)
+    assert not np.shares_memory(_rgb(rgba), rgba)
+    image = Source("sensor/cam/color", "observation.images.cam", "image", "uint8", (6, 8, 3))
+    frame = torch.from_numpy(rgba)
+    assert not np.shares_memory(image.convert(frame, 2), rgba)
+    assert np.array_equal(image.convert(frame, 2), rgba[..., :3])
