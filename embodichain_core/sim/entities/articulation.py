@@ -14,7 +14,7 @@ import torch
 
 from embodichain_core.config.errors import ConfigError
 from embodichain_core.sim.entities.base import Entity, StateSlices, as_array, as_values, find_names
-from embodichain_core.sim.entities.model_fields import JointModelFields, per_env_values
+from embodichain_core.sim.entities.joint_fields import JointModelFields
 from embodichain_core.utils.math import pose_to_matrix
 
 
@@ -230,44 +230,6 @@ class Articulation(JointModelFields, Entity):
         values = as_values(qf, len(ids), len(jids))
         self.state_route.write("qfrc_applied", (ids[:, None], self.dof_adr[jids][None, :]), values)
 
-    # -- limits ---------------------------------------------------------------------------------
-    def get_qpos_limits(self) -> torch.Tensor:
-        """(N, dof, 2) joint position limits (+-inf where unlimited)."""
-        return self._out(torch.from_numpy(self.qpos_limits_array()))
-
-    def qpos_limits_array(self, env_ids: Any = None, joint_ids: Any = None) -> np.ndarray:
-        """(n, k, 2) float64 position limits of ``env_ids`` x ``joint_ids`` (+-inf where
-        unlimited), as numpy: the cheap form for hot paths (a new array each call)."""
-        cols = self._jids_np(joint_ids)
-        n = self.num_envs if env_ids is None else len(self._ids(env_ids))
-        if not self.sim.is_per_env("jnt_range"):
-            if self._shared_limits is None:  # one value for every env, until randomized per env
-                jnt = np.asarray(self._joint_ids)
-                rng = np.array(self.scene.model.jnt_range[jnt])
-                rng[~self.scene.model.jnt_limited[jnt].astype(bool)] = [-np.inf, np.inf]
-                self._shared_limits = rng
-            return np.repeat(self._shared_limits[None, cols], n, axis=0)
-        jnt = np.asarray(self._joint_ids)[cols]
-        rows = np.arange(self.num_envs) if env_ids is None else self._ids(env_ids).numpy()
-        rng = np.array(self.sim.model_field("jnt_range")[rows[:, None], jnt[None, :]])
-        rng[:, ~self.scene.model.jnt_limited[jnt].astype(bool)] = [-np.inf, np.inf]
-        return rng
-
-    def get_qvel_limits(self) -> torch.Tensor:
-        """(N, dof) velocity limits from the drive config (``max_velocity``)."""
-        from embodichain_core.sim.scene_build.drive_values import joint_value
-
-        vals = [joint_value(self.cfg.drive_pros.max_velocity, j, "drive_pros.max_velocity") for j in self.joint_names]
-        vals = [v if np.isfinite(v) else 1e10 for v in vals]
-        return self._out(torch.as_tensor(vals).expand(self.num_envs, self.dof))
-
-    def get_qf_limits(self) -> torch.Tensor:
-        """(N, dof) effort limits (``max_effort``; 1e10 where unlimited)."""
-        jnt = np.asarray(self._joint_ids)
-        rng = np.array(self.sim.model_field("jnt_actfrcrange")[:, jnt, 1])
-        rng[:, ~self.scene.model.jnt_actfrclimited[jnt].astype(bool)] = 1e10
-        return self._out(torch.as_tensor(rng))
-
     # -- links and root -------------------------------------------------------------------------------
     def get_link_pose(self, link_name: str, env_ids: Any = None, to_matrix: bool = False) -> torch.Tensor:
         """Pose of one link in the env frame, (n, 7) or (n, 4, 4)."""
@@ -303,41 +265,7 @@ class Articulation(JointModelFields, Entity):
         """The qpos columns of a floating root (position, then wxyz quaternion)."""
         return slice(self.root_qpos_adr, self.root_qpos_adr + 7)
 
-    # -- drives and masses ----------------------------------------------------------------------------
-    def set_joint_drive(
-        self,
-        stiffness: Any = None,
-        damping: Any = None,
-        max_effort: Any = None,
-        joint_ids: Any = None,
-        env_ids: Any = None,
-    ) -> None:
-        """Change per-env drive gains and effort limits of the driven joints among ``joint_ids``.
-
-        Args:
-            stiffness: drive ``kp`` (N*m/rad or N/m); None leaves it.
-            damping: drive ``kv`` (N*m*s/rad or N*s/m); None leaves it.
-            max_effort: symmetric actuator force limit (N*m or N); None leaves it.
-            joint_ids: joints (all when None); joints without a drive are skipped.
-            env_ids: envs (all when None).
-
-        Each value follows the shape contract of :mod:`~embodichain_core.sim.entities.model_fields`
-        (``n`` envs x ``k`` joints: a number, ``(k,)``, ``(n, k)``, ``(n, 1)`` or ``(n,)`` per env).
-        """
-        self._write_drive(stiffness, damping, max_effort, joint_ids, env_ids)
-
-    def get_mass(self, link_names: Any = None) -> torch.Tensor:
-        """(N, n_links) link masses."""
-        ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
-        return self._out(torch.as_tensor(np.array(self.sim.model_field("body_mass")[:, ids.numpy()])))
-
-    def set_mass(self, mass: Any, link_names: Any = None, env_ids: Any = None) -> None:
-        """Set link masses (kg) per env and link (``(n, k)``, broadcast like
-        :func:`~embodichain_core.sim.entities.model_fields.per_env_values`); inertias scale along."""
-        env = self._ids(env_ids)
-        ids = self.body_ids if link_names is None else self.body_ids[self.find_bodies(link_names)[0]]
-        self.sim.set_body_masses(env, ids.numpy(), per_env_values(mass, len(env), len(ids), f"{self.uid}: mass"))
-
+    # -- dynamics -------------------------------------------------------------------------------------
     def clear_dynamics(self, env_ids: Any = None) -> None:
         """Zero joint velocities and applied efforts of ``env_ids``."""
         rows, route = self._ids(env_ids).numpy(), self.state_route
