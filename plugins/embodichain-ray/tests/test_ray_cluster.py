@@ -126,15 +126,21 @@ def test_a_node_lost_mid_run_has_its_batches_run_again_on_another_node(
     head, nodes = cluster([{SCRATCH_ENV: str(s)} for s in scratch])  # 3 nodes for 2 workers: one to restart on
     out, shards, lost = tmp_path / "merged", tmp_path / "driver-shards", []
 
-    def remove(node_id: str) -> None:
+    def remove(node_id: str, worker_pid: int) -> None:
         index = next(i for i, n in enumerate(nodes) if n.node_id == node_id)
         head.remove_node(nodes[index], allow_graceful=False)
-        shutil.rmtree(scratch[index], ignore_errors=True)  # the lost machine's disk goes with it
+        # the lost machine's processes and disk go together: on one machine the worker would
+        # outlive its raylet for a moment and see its scratch folder vanish (a disk error)
+        try:
+            os.kill(worker_pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        shutil.rmtree(scratch[index], ignore_errors=True)
         lost.append(index)
 
     def on_start(actors: list) -> None:
-        node_id = ray.get(actors[0].node_id.remote())
-        _when(lambda: _driver_episodes(shards, "worker-000") >= 1, lambda: remove(node_id))
+        node_id, pid = ray.get([actors[0].node_id.remote(), actors[0].pid.remote()])
+        _when(lambda: _driver_episodes(shards, "worker-000") >= 1, lambda: remove(node_id, pid))
 
     config = tiny_config(max_episode_steps=40)  # ~1 s episodes: the node goes mid-run
     argv = _argv(config, out, head.address, "--transport", "ray", "--shards", str(shards))
