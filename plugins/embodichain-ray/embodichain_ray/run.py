@@ -18,6 +18,7 @@ import contextlib
 import sys
 import time
 import traceback
+from typing import Any
 from collections.abc import Callable
 
 from embodichain_ray.driver import (
@@ -114,8 +115,6 @@ def _run_workers(
     on_start: Callable[[list], None] | None,
 ) -> int:
     """Start Ray and the workers, run every episode, end the workers and Ray; the exit code so far."""
-    import ray
-
     from embodichain_core.cli.run_env import _interrupt_code
 
     actors: list = []
@@ -125,7 +124,7 @@ def _run_workers(
         print(f"{prog}: {len(done)} episode(s) of this run are already in {spec.shards}; running the rest")
     try:
         reaper = init_ray(spec)
-        flag = ray.remote(num_cpus=0)(StopFlag).remote() if spec.transport != SHARED else None
+        flag = start_stop_flag() if spec.transport != SHARED else None
         actors = start_workers(spec, flag)
         if on_start is not None:
             on_start(actors)
@@ -156,6 +155,17 @@ def _run_workers(
         _shutdown(reaper)
         state.close_s = time.perf_counter() - state.start_s - state.run_s
     return code
+
+
+def start_stop_flag() -> Any:
+    """The :class:`StopFlag` actor, on the driver's own node: the workers take a flag they
+    cannot reach for a driver that is gone and stop, so it must not live on a worker node a
+    run can lose (its loss would stop every other worker, their episodes unrun)."""
+    import ray
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+    here = NodeAffinitySchedulingStrategy(node_id=ray.get_runtime_context().get_node_id(), soft=False)
+    return ray.remote(num_cpus=0)(StopFlag).options(scheduling_strategy=here).remote()
 
 
 def _shutdown(reaper: Reaper | None) -> None:
