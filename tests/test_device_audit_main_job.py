@@ -14,7 +14,6 @@ W1 scene and the renderer compile once (about a minute cold).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from typing import Any, Iterator
@@ -27,7 +26,7 @@ pytest.importorskip("embodichain_tasks")
 pytest.importorskip("embodichain_sensors")
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), os.pardir, "benchmarks"))
-from gpu_main_job import job_config  # noqa: E402
+from main_job_syncs import main_job_env  # noqa: E402
 
 WAIT_BUDGET = 2
 STEPS = 5
@@ -35,18 +34,8 @@ STEPS = 5
 
 def _make_env(work: str) -> Any:
     """The main job's env on backend warp, Warp's CPU device, 2 envs, 64x36 camera, no recorder."""
-    from embodichain_core.cli.run_env import build_parser, prepare
-    from embodichain_core.cli.run_loops import make_env
-
     args = argparse.Namespace(device="cpu", renderer="warp", encoder_processes="auto", image_size=(64, 36))
-    path, _ = job_config(work, 2, 2, args)
-    with open(path, encoding="utf-8") as f:
-        cfg = json.load(f)
-    cfg["env"].pop("dataset")
-    with open(path, "w", encoding="utf-8") as f:
-        json.dump(cfg, f)
-    argv = ["--gym_config", path, "--headless", "--quiet", "--max_episodes", "2", "--seed", "0"]
-    return make_env(prepare(build_parser().parse_args(argv)))
+    return main_job_env(2, args, work)
 
 
 def _plan(env: Any) -> tuple[list, Any]:
